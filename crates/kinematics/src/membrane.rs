@@ -1,0 +1,305 @@
+//! Membrane kinematics at one integration point: F, C, U, R, Δε̄, P and
+//! nodal forces.
+
+use nalgebra::{Matrix2, Matrix3x2, Vector2, Vector3};
+
+use crate::KinematicsError;
+
+/// Relative threshold under which det C counts as zero: a point squeezed to
+/// a sliver this thin has no trustworthy rotation, and a NaN would follow.
+const DEGENERATE_DET_C: f64 = 1e-14;
+
+/// The membrane deformation gradient F = Σₐ xₐ ⊗ ∂Nₐ/∂X (3×2).
+///
+/// `x` are the current nodal positions and `grad_n` the reference
+/// shape-function gradients ∂Nₐ/∂X in the point's local reference frame
+/// (see [`crate::reference`]). Both slices have one entry per node.
+#[inline]
+pub fn deformation_gradient(x: &[Vector3<f64>], grad_n: &[Vector2<f64>]) -> Matrix3x2<f64> {
+    debug_assert_eq!(x.len(), grad_n.len());
+    let mut f = Matrix3x2::zeros();
+    for (xa, ga) in x.iter().zip(grad_n) {
+        f += xa * ga.transpose();
+    }
+    f
+}
+
+/// The right Cauchy–Green tensor C = FᵀF (2×2, symmetric).
+#[inline]
+pub fn right_cauchy_green(f: &Matrix3x2<f64>) -> Matrix2<f64> {
+    f.tr_mul(f)
+}
+
+/// The right stretch U = √C and its inverse U⁻¹, in closed form
+/// (SPEC §3): √C = (C + √det C·I)/√(tr C + 2√det C).
+///
+/// Errors when det C is not positive relative to (tr C)², i.e. the point has
+/// collapsed.
+#[inline]
+pub fn right_stretch(c: &Matrix2<f64>) -> Result<(Matrix2<f64>, Matrix2<f64>), KinematicsError> {
+    let det_c = c[(0, 0)] * c[(1, 1)] - c[(0, 1)] * c[(1, 0)];
+    let tr_c = c[(0, 0)] + c[(1, 1)];
+    if !(det_c.is_finite() && tr_c.is_finite()) {
+        return Err(KinematicsError::NonFinite {
+            what: "right Cauchy–Green tensor C",
+        });
+    }
+    if det_c <= DEGENERATE_DET_C * tr_c * tr_c {
+        return Err(KinematicsError::DegenerateMembrane { det_c });
+    }
+    let det_u = det_c.sqrt();
+    let u = (c + Matrix2::identity() * det_u) / (tr_c + 2.0 * det_u).sqrt();
+    // For a 2×2 matrix adj(U) = tr(U)·I − U, and det U = √det C.
+    let u_inv = (Matrix2::identity() * (u[(0, 0)] + u[(1, 1)]) - u) / det_u;
+    Ok((u, u_inv))
+}
+
+/// The Green–Naghdi decomposition F = R·U of a 3×2 membrane gradient.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PolarDecomposition {
+    /// The rotation: a 3×2 matrix with orthonormal columns, the current
+    /// images of the reference local axes (the rotated frame).
+    pub r: Matrix3x2<f64>,
+    /// The right stretch U = √(FᵀF), symmetric positive definite.
+    pub u: Matrix2<f64>,
+    /// U⁻¹.
+    pub u_inv: Matrix2<f64>,
+}
+
+impl PolarDecomposition {
+    /// The area stretch det U = J of the membrane's mid-surface.
+    #[inline]
+    pub fn area_stretch(&self) -> f64 {
+        self.u.determinant()
+    }
+
+    /// The current unit normal of the membrane, r₁ × r₂.
+    #[inline]
+    pub fn normal(&self) -> Vector3<f64> {
+        self.r.column(0).cross(&self.r.column(1))
+    }
+}
+
+/// The polar decomposition F = R·U with the closed-form √C (SPEC §3).
+///
+/// Unlike nalgebra's `polar()` this is the right decomposition of a
+/// rectangular F and never returns a reflection.
+#[inline]
+pub fn polar_decomposition(f: &Matrix3x2<f64>) -> Result<PolarDecomposition, KinematicsError> {
+    if !f.iter().all(|v| v.is_finite()) {
+        return Err(KinematicsError::NonFinite {
+            what: "deformation gradient F",
+        });
+    }
+    let (u, u_inv) = right_stretch(&right_cauchy_green(f))?;
+    Ok(PolarDecomposition {
+        r: f * u_inv,
+        u,
+        u_inv,
+    })
+}
+
+/// The rotated (Green–Naghdi) strain increment with the midpoint rule,
+/// Δε̄ = sym((Uₙ₊₁ − Uₙ)·Uₙ₊½⁻¹), Uₙ₊½ = ½(Uₙ + Uₙ₊₁).
+///
+/// Symmetric, written in the reference local frame. Zero for any rigid motion
+/// between the two states, whatever the rotation.
+#[inline]
+pub fn rotated_strain_increment(u_n: &Matrix2<f64>, u_next: &Matrix2<f64>) -> Matrix2<f64> {
+    let mid = (u_n + u_next) * 0.5;
+    // U_n and U_{n+1} are s.p.d., so their mean is too: the inverse exists.
+    let det = mid[(0, 0)] * mid[(1, 1)] - mid[(0, 1)] * mid[(1, 0)];
+    let mid_inv = (Matrix2::identity() * (mid[(0, 0)] + mid[(1, 1)]) - mid) / det;
+    let l = (u_next - u_n) * mid_inv;
+    (l + l.transpose()) * 0.5
+}
+
+/// The first Piola stress P = R·τ̄·U⁻¹ from the rotated Kirchhoff stress τ̄.
+#[inline]
+pub fn first_piola(
+    r: &Matrix3x2<f64>,
+    tau_bar: &Matrix2<f64>,
+    u_inv: &Matrix2<f64>,
+) -> Matrix3x2<f64> {
+    r * (tau_bar * u_inv)
+}
+
+/// Adds the nodal internal forces fₐ += V₀·P·∂Nₐ/∂X of one integration point
+/// of reference volume `volume` (area × thickness × weight) into `forces`.
+#[inline]
+pub fn add_nodal_forces(
+    p: &Matrix3x2<f64>,
+    grad_n: &[Vector2<f64>],
+    volume: f64,
+    forces: &mut [Vector3<f64>],
+) {
+    debug_assert_eq!(grad_n.len(), forces.len());
+    for (fa, ga) in forces.iter_mut().zip(grad_n) {
+        *fa += (p * ga) * volume;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Rotation3, Unit};
+    use proptest::prelude::*;
+
+    fn rel(a: f64, scale: f64) -> f64 {
+        a / scale.max(1e-300)
+    }
+
+    /// A well-conditioned F: a rotation of a stretch with principal stretches
+    /// in [0.5, 2] along a random direction, plus an in-plane shear.
+    fn well_conditioned_f() -> impl Strategy<Value = Matrix3x2<f64>> {
+        (
+            0.5f64..2.0,
+            0.5f64..2.0,
+            -3.2f64..3.2,
+            -0.5f64..0.5,
+            prop::array::uniform3(-1.0f64..1.0),
+            -3.2f64..3.2,
+        )
+            .prop_filter_map(
+                "axis",
+                |(l1, l2, phi, shear, axis, angle)| {
+                    let axis = Vector3::from(axis);
+                    if axis.norm() < 1e-3 {
+                        return None;
+                    }
+                    let (s, c) = phi.sin_cos();
+                    let q = Matrix2::new(c, -s, s, c);
+                    let u = q * Matrix2::new(l1, 0.0, 0.0, l2) * q.transpose()
+                        + Matrix2::new(0.0, shear, 0.0, 0.0);
+                    let rot = Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle);
+                    let embed = Matrix3x2::new(1.0, 0.0, 0.0, 1.0, 0.0, 0.0);
+                    Some(rot.matrix() * embed * u)
+                },
+            )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(512))]
+
+        #[test]
+        fn polar_reproduces_f_with_orthonormal_r_and_spd_u(f in well_conditioned_f()) {
+            let p = polar_decomposition(&f).unwrap();
+            prop_assert!(rel((p.r * p.u - f).norm(), f.norm()) < 1e-12);
+            prop_assert!((p.r.tr_mul(&p.r) - Matrix2::identity()).norm() < 1e-12);
+            prop_assert!((p.u - p.u.transpose()).norm() < 1e-14 * p.u.norm());
+            let eig = p.u.symmetric_eigenvalues();
+            prop_assert!(eig.min() > 0.0);
+            prop_assert!((p.u * p.u_inv - Matrix2::identity()).norm() < 1e-12);
+        }
+
+        #[test]
+        fn polar_agrees_with_svd(f in well_conditioned_f()) {
+            let p = polar_decomposition(&f).unwrap();
+            let svd = f.svd(true, true);
+            let (w, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
+            let r_svd = w * vt;
+            let u_svd = vt.transpose() * Matrix2::from_diagonal(&svd.singular_values) * vt;
+            prop_assert!((p.r - r_svd).norm() < 1e-11, "R {} vs {}", p.r, r_svd);
+            prop_assert!(rel((p.u - u_svd).norm(), u_svd.norm()) < 1e-11);
+        }
+
+        #[test]
+        fn rigid_rotation_gives_zero_increment_and_objective_piola(
+            f in well_conditioned_f(),
+            axis in prop::array::uniform3(-1.0f64..1.0),
+            angle in -3.2f64..3.2,
+            t11 in -10.0f64..10.0, t22 in -10.0f64..10.0, t12 in -10.0f64..10.0,
+        ) {
+            let axis = Vector3::from(axis);
+            prop_assume!(axis.norm() > 1e-3);
+            let q = *Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle).matrix();
+            let before = polar_decomposition(&f).unwrap();
+            let after = polar_decomposition(&(q * f)).unwrap();
+            // U is unchanged by the rotation, so the strain increment vanishes.
+            prop_assert!((after.u - before.u).norm() < 1e-12 * before.u.norm());
+            let d_eps = rotated_strain_increment(&before.u, &after.u);
+            prop_assert!(d_eps.norm() < 1e-12);
+            // The same τ̄ gives a P that rotates with the body.
+            let tau = Matrix2::new(t11, t12, t12, t22);
+            let p0 = first_piola(&before.r, &tau, &before.u_inv);
+            let p1 = first_piola(&after.r, &tau, &after.u_inv);
+            prop_assert!((p1 - q * p0).norm() < 1e-11 * (1.0 + p0.norm()));
+            prop_assert!((after.r - q * before.r).norm() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn pure_rotation_gives_identity_stretch() {
+        let q = Rotation3::from_euler_angles(0.3, -1.2, 2.0);
+        let f = q.matrix() * Matrix3x2::new(1.0, 0.0, 0.0, 1.0, 0.0, 0.0);
+        let p = polar_decomposition(&f).unwrap();
+        assert!((p.u - Matrix2::identity()).norm() < 1e-15);
+        assert!((p.area_stretch() - 1.0).abs() < 1e-15);
+        assert!((p.normal() - q * Vector3::z()).norm() < 1e-15);
+    }
+
+    #[test]
+    fn strain_increment_of_uniaxial_stretch_integrates_to_log_strain() {
+        // Summing midpoint increments of a monotone uniaxial stretch converges
+        // to ln λ with second order in the increment size.
+        let lambda = 1.5f64;
+        let error = |n: usize| {
+            let mut sum = 0.0;
+            let mut u_n = Matrix2::identity();
+            for k in 1..=n {
+                let l = 1.0 + (lambda - 1.0) * k as f64 / n as f64;
+                let u = Matrix2::new(l, 0.0, 0.0, 1.0);
+                sum += rotated_strain_increment(&u_n, &u)[(0, 0)];
+                u_n = u;
+            }
+            (sum - lambda.ln()).abs()
+        };
+        let (e1, e2) = (error(50), error(100));
+        assert!(e2 < 1e-5);
+        let order = (e1 / e2).log2();
+        assert!((order - 2.0).abs() < 0.05, "observed order {order}");
+    }
+
+    #[test]
+    fn collapsed_point_is_a_typed_error() {
+        let f = Matrix3x2::new(1.0, 2.0, 0.0, 0.0, 1.0, 2.0);
+        assert!(matches!(
+            polar_decomposition(&f),
+            Err(KinematicsError::DegenerateMembrane { .. })
+        ));
+        let f = Matrix3x2::new(f64::NAN, 0.0, 0.0, 1.0, 0.0, 0.0);
+        assert!(matches!(
+            polar_decomposition(&f),
+            Err(KinematicsError::NonFinite { .. })
+        ));
+    }
+
+    #[test]
+    fn nodal_forces_of_constant_stress_sum_to_zero() {
+        let grad = [
+            Vector2::new(-1.0, -1.0),
+            Vector2::new(1.0, 0.0),
+            Vector2::new(0.0, 1.0),
+        ];
+        let p = Matrix3x2::new(3.0, 1.0, -2.0, 0.5, 0.7, 4.0);
+        let mut f = [Vector3::zeros(); 3];
+        add_nodal_forces(&p, &grad, 0.5, &mut f);
+        assert!((f[0] + f[1] + f[2]).norm() < 1e-15);
+        assert_eq!(f[1], Vector3::new(1.5, -1.0, 0.35));
+    }
+
+    #[test]
+    fn deformation_gradient_of_affine_map_is_exact() {
+        let a = Matrix3x2::new(1.2, 0.1, -0.3, 0.9, 0.2, 0.05);
+        let b = Vector3::new(3.0, -1.0, 2.0);
+        let xs = [Vector2::new(0.0, 0.0), Vector2::new(2.0, 0.0), Vector2::new(0.0, 1.0)];
+        // Linear triangle gradients for that reference triangle (area 1).
+        let grad = [
+            Vector2::new(-0.5, -1.0),
+            Vector2::new(0.5, 0.0),
+            Vector2::new(0.0, 1.0),
+        ];
+        let x: Vec<_> = xs.iter().map(|p| a * p + b).collect();
+        assert!((deformation_gradient(&x, &grad) - a).norm() < 1e-15);
+    }
+}

@@ -105,8 +105,12 @@ mod tests {
             assert!((k.stretch - lambda).abs() < 1e-15);
             assert!((k.log_strain - f64::ln(lambda)).abs() < 1e-15);
             assert_eq!(k.direction, Vector3::x());
-            let t = truss_stretch(&Vector3::new(1.0, 2.0, 3.0), &Vector3::new(1.0, 2.0 + 3.0 * lambda, 3.0), 3.0)
-                .unwrap();
+            let t = truss_stretch(
+                &Vector3::new(1.0, 2.0, 3.0),
+                &Vector3::new(1.0, 2.0 + 3.0 * lambda, 3.0),
+                3.0,
+            )
+            .unwrap();
             assert!((t.stretch - lambda).abs() < 1e-15);
             assert_eq!(t.direction, Vector3::y());
         }

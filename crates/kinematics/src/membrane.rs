@@ -160,22 +160,19 @@ mod tests {
             prop::array::uniform3(-1.0f64..1.0),
             -3.2f64..3.2,
         )
-            .prop_filter_map(
-                "axis",
-                |(l1, l2, phi, shear, axis, angle)| {
-                    let axis = Vector3::from(axis);
-                    if axis.norm() < 1e-3 {
-                        return None;
-                    }
-                    let (s, c) = phi.sin_cos();
-                    let q = Matrix2::new(c, -s, s, c);
-                    let u = q * Matrix2::new(l1, 0.0, 0.0, l2) * q.transpose()
-                        + Matrix2::new(0.0, shear, 0.0, 0.0);
-                    let rot = Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle);
-                    let embed = Matrix3x2::new(1.0, 0.0, 0.0, 1.0, 0.0, 0.0);
-                    Some(rot.matrix() * embed * u)
-                },
-            )
+            .prop_filter_map("axis", |(l1, l2, phi, shear, axis, angle)| {
+                let axis = Vector3::from(axis);
+                if axis.norm() < 1e-3 {
+                    return None;
+                }
+                let (s, c) = phi.sin_cos();
+                let q = Matrix2::new(c, -s, s, c);
+                let u = q * Matrix2::new(l1, 0.0, 0.0, l2) * q.transpose()
+                    + Matrix2::new(0.0, shear, 0.0, 0.0);
+                let rot = Rotation3::from_axis_angle(&Unit::new_normalize(axis), angle);
+                let embed = Matrix3x2::new(1.0, 0.0, 0.0, 1.0, 0.0, 0.0);
+                Some(rot.matrix() * embed * u)
+            })
     }
 
     proptest! {
@@ -292,7 +289,11 @@ mod tests {
     fn deformation_gradient_of_affine_map_is_exact() {
         let a = Matrix3x2::new(1.2, 0.1, -0.3, 0.9, 0.2, 0.05);
         let b = Vector3::new(3.0, -1.0, 2.0);
-        let xs = [Vector2::new(0.0, 0.0), Vector2::new(2.0, 0.0), Vector2::new(0.0, 1.0)];
+        let xs = [
+            Vector2::new(0.0, 0.0),
+            Vector2::new(2.0, 0.0),
+            Vector2::new(0.0, 1.0),
+        ];
         // Linear triangle gradients for that reference triangle (area 1).
         let grad = [
             Vector2::new(-0.5, -1.0),

@@ -1,0 +1,260 @@
+//! A fabric material: fibres, resin, thickness, fibre volume fraction,
+//! density; its validation and the paper's presets.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{FibreLaw, PronyTerm, ResinLaw};
+
+/// An invalid material parameter: which field, its value, what is allowed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("invalid material field `{field}` = {value}: expected {expected}")]
+pub struct MaterialError {
+    /// Dotted path of the field, e.g. `resin.prony[2].tau`.
+    pub field: String,
+    /// The offending value (for a sum, the sum).
+    pub value: f64,
+    /// What the field accepts.
+    pub expected: &'static str,
+}
+
+impl MaterialError {
+    pub(crate) fn check(
+        path: &str,
+        field: &str,
+        value: f64,
+        ok: bool,
+        expected: &'static str,
+    ) -> Result<(), Self> {
+        // NaN fails every comparison, so `ok` is false for it as well.
+        if ok && value.is_finite() {
+            Ok(())
+        } else {
+            Err(Self {
+                field: if path.is_empty() {
+                    field.to_owned()
+                } else {
+                    format!("{path}.{field}")
+                },
+                value,
+                expected,
+            })
+        }
+    }
+
+    pub(crate) fn check_positive(path: &str, field: &str, value: f64) -> Result<(), Self> {
+        Self::check(path, field, value, value > 0.0, "a positive finite number")
+    }
+}
+
+/// A woven fabric: two identical yarn families (warp and weft) in a resin.
+///
+/// The fibres take V_f of the volume, V_f/2 per family; the resin membrane
+/// has thickness h_m = (1 − V_f)·h (SPEC §2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// A name for reports.
+    pub name: String,
+    /// The yarns' law (both families).
+    pub fibre: FibreLaw,
+    /// The resin's law.
+    pub resin: ResinLaw,
+    /// h, the fabric thickness (mm).
+    pub thickness: f64,
+    /// V_f, the fibre volume fraction, in (0, 1).
+    pub fibre_volume_fraction: f64,
+    /// ρ, the fabric's density (t/mm³).
+    pub density: f64,
+}
+
+/// The names [`Material::preset`] knows.
+pub const PRESET_NAMES: [&str; 2] = ["carbon-prepreg-2x2", "glass-serge-4x3"];
+
+impl Material {
+    /// A named preset of the paper (SPEC §4):
+    ///
+    /// - `carbon-prepreg-2x2`, paper Table 1: E_f = 230 GPa, ε_sh = 0.005,
+    ///   E_m = 45 MPa, ν_m = 0.45 and the six-term Prony series of the
+    ///   table. Not given by the paper and chosen here: h = 0.3 mm (a typical
+    ///   2×2 twill carbon prepreg ply), V_f = 0.5, ρ = 1.5e-9 t/mm³
+    ///   (1500 kg/m³, carbon/epoxy at V_f = 0.5).
+    /// - `glass-serge-4x3`, paper Table 3: E_f = 75 GPa, ε_sh = 0.012,
+    ///   E_m = 30 MPa, ν_m = 0.41, h = 0.57 mm, elastic resin. Chosen here:
+    ///   V_f = 0.5, ρ = 1.3e-9 t/mm³ (glass fabric with a low resin
+    ///   content). Its yarn density, 2.2 yarns/cm, is a property of the mesh
+    ///   a user builds, not of the material.
+    ///
+    /// Both have no compression stiffness in the yarns.
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "carbon-prepreg-2x2" => {
+                let taus = [0.01, 0.1, 1.0, 10.0, 100.0, 1000.0];
+                let gs = [0.02332, 0.023332, 0.083509, 0.11723, 0.14423, 0.178];
+                Some(Self {
+                    name: name.to_owned(),
+                    fibre: FibreLaw {
+                        modulus: 230_000.0,
+                        crimp_strain: 0.005,
+                        compression_factor: 0.0,
+                    },
+                    resin: ResinLaw {
+                        young: 45.0,
+                        poisson: 0.45,
+                        prony: gs
+                            .iter()
+                            .zip(taus)
+                            .map(|(&g, tau)| PronyTerm { g, tau })
+                            .collect(),
+                    },
+                    thickness: 0.3,
+                    fibre_volume_fraction: 0.5,
+                    density: 1.5e-9,
+                })
+            }
+            "glass-serge-4x3" => Some(Self {
+                name: name.to_owned(),
+                fibre: FibreLaw {
+                    modulus: 75_000.0,
+                    crimp_strain: 0.012,
+                    compression_factor: 0.0,
+                },
+                resin: ResinLaw {
+                    young: 30.0,
+                    poisson: 0.41,
+                    prony: Vec::new(),
+                },
+                thickness: 0.57,
+                fibre_volume_fraction: 0.5,
+                density: 1.3e-9,
+            }),
+            _ => None,
+        }
+    }
+
+    /// Checks every parameter, naming the first invalid field.
+    pub fn validate(&self) -> Result<(), MaterialError> {
+        self.fibre.validate("fibre")?;
+        self.resin.validate("resin")?;
+        MaterialError::check_positive("", "thickness", self.thickness)?;
+        MaterialError::check(
+            "",
+            "fibre_volume_fraction",
+            self.fibre_volume_fraction,
+            self.fibre_volume_fraction > 0.0 && self.fibre_volume_fraction < 1.0,
+            "a volume fraction in the open interval (0, 1)",
+        )?;
+        MaterialError::check_positive("", "density", self.density)
+    }
+
+    /// h_m = (1 − V_f)·h, the resin membrane's thickness.
+    #[inline]
+    pub fn resin_thickness(&self) -> f64 {
+        (1.0 - self.fibre_volume_fraction) * self.thickness
+    }
+
+    /// The fibre thickness of one family, V_f/2·h: times a strip width it is
+    /// a truss section A₀ (SPEC §2), times an area the fibre volume.
+    #[inline]
+    pub fn family_thickness(&self) -> f64 {
+        0.5 * self.fibre_volume_fraction * self.thickness
+    }
+
+    /// ρ·h, the mass per unit area (t/mm²).
+    #[inline]
+    pub fn areal_density(&self) -> f64 {
+        self.density * self.thickness
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_are_valid_and_carry_the_papers_values() {
+        for name in PRESET_NAMES {
+            let m = Material::preset(name).unwrap();
+            m.validate().unwrap();
+            assert_eq!(m.name, name);
+        }
+        let c = Material::preset("carbon-prepreg-2x2").unwrap();
+        assert_eq!(c.resin.prony.len(), 6);
+        assert_eq!(
+            c.resin.prony[5],
+            PronyTerm {
+                g: 0.178,
+                tau: 1000.0
+            }
+        );
+        assert!((c.resin_thickness() - 0.15).abs() < 1e-15);
+        let g = Material::preset("glass-serge-4x3").unwrap();
+        assert!(!g.resin.is_viscoelastic());
+        assert_eq!(g.fibre.crimp_strain, 0.012);
+        assert!(Material::preset("kevlar").is_none());
+    }
+
+    #[test]
+    fn toml_round_trip_and_unknown_keys() {
+        let c = Material::preset("carbon-prepreg-2x2").unwrap();
+        let text = toml::to_string(&c).unwrap();
+        let back: Material = toml::from_str(&text).unwrap();
+        assert_eq!(back, c);
+
+        let typo = text.replace("crimp_strain", "crimp_stran");
+        let err = toml::from_str::<Material>(&typo).unwrap_err().to_string();
+        assert!(err.contains("crimp_stran"), "{err}");
+
+        let elastic = r#"
+            name = "x"
+            thickness = 0.5
+            fibre_volume_fraction = 0.4
+            density = 1e-9
+            fibre = { modulus = 1000.0, crimp_strain = 0.01 }
+            resin = { young = 10.0, poisson = 0.3 }
+        "#;
+        let m: Material = toml::from_str(elastic).unwrap();
+        assert_eq!(m.fibre.compression_factor, 0.0);
+        assert!(m.resin.prony.is_empty());
+    }
+
+    #[test]
+    fn invalid_values_name_their_field() {
+        let base = Material::preset("carbon-prepreg-2x2").unwrap();
+        let field = |m: Material| m.validate().unwrap_err().field;
+        assert_eq!(
+            field(Material {
+                thickness: -0.3,
+                ..base.clone()
+            }),
+            "thickness"
+        );
+        assert_eq!(
+            field(Material {
+                fibre_volume_fraction: 1.0,
+                ..base.clone()
+            }),
+            "fibre_volume_fraction"
+        );
+        assert_eq!(
+            field(Material {
+                density: 0.0,
+                ..base.clone()
+            }),
+            "density"
+        );
+        let mut m = base.clone();
+        m.resin.young = -45.0;
+        assert_eq!(field(m), "resin.young");
+        let mut m = base.clone();
+        m.fibre.crimp_strain = -0.005;
+        let err = m.validate().unwrap_err();
+        assert_eq!(err.field, "fibre.crimp_strain");
+        assert_eq!(
+            err.to_string(),
+            "invalid material field `fibre.crimp_strain` = -0.005: expected a crimp strain in [0, 1)"
+        );
+        let mut m = base;
+        m.resin.prony[0].g = 0.6;
+        assert_eq!(field(m), "resin.prony");
+    }
+}

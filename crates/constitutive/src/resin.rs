@@ -215,6 +215,33 @@ impl ResinLaw {
         tau_bar[(1, 0)] = shear;
     }
 
+    /// The elastic energy per unit reference volume stored at stress τ̄ with
+    /// the Prony `history`: ½τ̄ₙ:C⁻¹:τ̄ₙ for the normal part, and for the
+    /// shear ½(1 − Σg)·s₀²/G₀ + Σ q_k²/(2·g_k·G₀), the energy of the Maxwell
+    /// springs (½τ̄₁₂²/G₀ when elastic). What the resin has taken beyond this
+    /// was dissipated by relaxation.
+    pub fn stored_energy(&self, tau_bar: &Matrix2<f64>, history: &[f64]) -> f64 {
+        let (e, nu) = (self.young, self.poisson);
+        let (t11, t22) = (tau_bar[(0, 0)], tau_bar[(1, 1)]);
+        // The compliance of plane stress: ε₁₁ = (τ₁₁ − ν τ₂₂)/E, …
+        let normal = 0.5 * (t11 * t11 + t22 * t22 - 2.0 * nu * t11 * t22) / e;
+        let g0 = self.shear_modulus();
+        let shear = match history.split_first() {
+            None => 0.5 * tau_bar[(0, 1)] * tau_bar[(0, 1)] / g0,
+            Some((s0, q)) => {
+                let sum_g: f64 = self.prony.iter().map(|p| p.g).sum();
+                let springs: f64 = q
+                    .iter()
+                    .zip(&self.prony)
+                    .filter(|(_, p)| p.g > 0.0)
+                    .map(|(qk, p)| qk * qk / p.g)
+                    .sum();
+                0.5 * ((1.0 - sum_g) * s0 * s0 + springs) / g0
+            }
+        };
+        normal + shear
+    }
+
     /// The through-thickness stretch λ₃ of the resin for an area stretch
     /// J = det U, from plane stress: dε₃ = −ν/(1 − ν)·(dε₁₁ + dε₂₂),
     /// integrated as λ₃ = J^(−ν/(1−ν)) **[choice: the elastic relation is used
@@ -358,6 +385,31 @@ mod tests {
         assert_eq!(law.algorithmic_shear_modulus(0.0), g0);
         // A very slow step sees only the long-term modulus.
         assert!((law.algorithmic_shear_modulus(1e12) - 0.4 * g0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn stored_energy_is_the_work_of_an_elastic_path_and_drops_by_relaxation() {
+        // Elastic: the work of a proportional path equals the stored energy.
+        let law = ResinLaw::elastic(30.0, 0.3).unwrap();
+        let total = Matrix2::new(2e-3, 1e-3, 1e-3, -1e-3);
+        let (mut tau, mut work) = (Matrix2::zeros(), 0.0);
+        let n = 1000;
+        for _ in 0..n {
+            let before = tau;
+            law.update_stress(&mut tau, &mut [], &(total / n as f64), 0.0);
+            work += ((before + tau) * 0.5).component_mul(&(total / n as f64)).sum();
+        }
+        assert!((law.stored_energy(&tau, &[]) - work).abs() < 1e-12 * work);
+        // Viscoelastic: a held shear loses stored energy to the dashpots.
+        let law = prony_resin();
+        let mut tau = Matrix2::zeros();
+        let mut h = vec![0.0; law.history_len()];
+        law.update_stress(&mut tau, &mut h, &shear(0.005), 0.0);
+        let g0 = law.shear_modulus();
+        let e0 = law.stored_energy(&tau, &h);
+        assert!((e0 - 0.5 * g0 * 0.01 * 0.01).abs() < 1e-15);
+        law.update_stress(&mut tau, &mut h, &Matrix2::zeros(), 1.0);
+        assert!(law.stored_energy(&tau, &h) < e0);
     }
 
     #[test]

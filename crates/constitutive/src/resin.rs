@@ -172,6 +172,16 @@ impl ResinLaw {
         c
     }
 
+    /// The elastic update of the normal components τ̄₁₁, τ̄₂₂.
+    #[inline]
+    fn update_normal(&self, tau_bar: &mut Matrix2<f64>, d_eps: &Matrix2<f64>) {
+        let nu = self.poisson;
+        let k = self.wave_modulus();
+        let (d11, d22) = (d_eps[(0, 0)], d_eps[(1, 1)]);
+        tau_bar[(0, 0)] += k * (d11 + nu * d22);
+        tau_bar[(1, 1)] += k * (nu * d11 + d22);
+    }
+
     /// Advances the rotated stress τ̄ (symmetric, in the reference local
     /// frame) by the rotated strain increment Δε̄ over a step `dt`.
     ///
@@ -188,12 +198,8 @@ impl ResinLaw {
         d_eps: &Matrix2<f64>,
         dt: f64,
     ) {
-        let (e, nu) = (self.young, self.poisson);
-        let k = e / (1.0 - nu * nu);
-        let (d11, d22) = (d_eps[(0, 0)], d_eps[(1, 1)]);
+        self.update_normal(tau_bar, d_eps);
         let d_gamma = d_eps[(0, 1)] + d_eps[(1, 0)];
-        tau_bar[(0, 0)] += k * (d11 + nu * d22);
-        tau_bar[(1, 1)] += k * (nu * d11 + d22);
         let d_s0 = self.shear_modulus() * d_gamma;
         let shear = if self.prony.is_empty() {
             tau_bar[(0, 1)] + d_s0
@@ -213,6 +219,39 @@ impl ResinLaw {
         };
         tau_bar[(0, 1)] = shear;
         tau_bar[(1, 0)] = shear;
+    }
+
+    /// The stress [`Self::update_stress`] would reach, without writing the
+    /// history: for trial states (a Newton iteration, a finite difference).
+    pub fn stress_after(
+        &self,
+        tau_bar: &Matrix2<f64>,
+        history: &[f64],
+        d_eps: &Matrix2<f64>,
+        dt: f64,
+    ) -> Matrix2<f64> {
+        let mut tau = *tau_bar;
+        self.update_normal(&mut tau, d_eps);
+        if self.prony.is_empty() {
+            let shear = tau[(0, 1)] + self.shear_modulus() * (d_eps[(0, 1)] + d_eps[(1, 0)]);
+            tau[(0, 1)] = shear;
+            tau[(1, 0)] = shear;
+            return tau;
+        }
+        // Only the shear depends on the history: run the update with the
+        // history's s₀ and q_k on the stack, term by term.
+        let d_s0 = self.shear_modulus() * (d_eps[(0, 1)] + d_eps[(1, 0)]);
+        let mut shear = 0.0;
+        let mut long_term = 1.0;
+        for (qk, p) in history[1..].iter().zip(&self.prony) {
+            let x = dt / p.tau;
+            shear += (-x).exp() * qk + p.g * ramp_weight(x) * d_s0;
+            long_term -= p.g;
+        }
+        shear += long_term * (history[0] + d_s0);
+        tau[(0, 1)] = shear;
+        tau[(1, 0)] = shear;
+        tau
     }
 
     /// The elastic energy per unit reference volume stored at stress τ̄ with
@@ -350,6 +389,20 @@ mod tests {
     }
 
     #[test]
+    fn trial_stress_equals_the_committed_update() {
+        for law in [prony_resin(), ResinLaw::elastic(30.0, 0.41).unwrap()] {
+            let tau0 = Matrix2::new(0.3, -0.2, -0.2, 0.1);
+            let mut h = vec![0.5, 0.1, -0.03, 0.1];
+            h.truncate(law.history_len());
+            let d = Matrix2::new(1e-3, -4e-4, -4e-4, 2e-4);
+            let trial = law.stress_after(&tau0, &h, &d, 0.3);
+            let mut tau = tau0;
+            law.update_stress(&mut tau, &mut h, &d, 0.3);
+            assert!((trial - tau).norm() <= 1e-15 * tau.norm());
+        }
+    }
+
+    #[test]
     fn elastic_resin_skips_history_and_uses_plane_stress() {
         let law = ResinLaw::elastic(30.0, 0.41).unwrap();
         assert_eq!(law.history_len(), 0);
@@ -397,7 +450,9 @@ mod tests {
         for _ in 0..n {
             let before = tau;
             law.update_stress(&mut tau, &mut [], &(total / n as f64), 0.0);
-            work += ((before + tau) * 0.5).component_mul(&(total / n as f64)).sum();
+            work += ((before + tau) * 0.5)
+                .component_mul(&(total / n as f64))
+                .sum();
         }
         assert!((law.stored_energy(&tau, &[]) - work).abs() < 1e-12 * work);
         // Viscoelastic: a held shear loses stored energy to the dashpots.

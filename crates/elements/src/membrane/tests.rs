@@ -1,0 +1,419 @@
+use super::*;
+use crate::TrussBatch;
+use crate::test_support::{assert_tangent_matches, random_rotation};
+use drape_constitutive::FibreLaw;
+
+fn carbon() -> Material {
+    Material::preset("carbon-prepreg-2x2").unwrap()
+}
+
+fn glass() -> Material {
+    Material::preset("glass-serge-4x3").unwrap()
+}
+
+/// A single element of each shape on a slightly non-planar, distorted
+/// reference, with the warp at 30° to x.
+fn single(
+    shape: MembraneShape,
+    material: Material,
+    embedded: bool,
+) -> (MembraneBatch, Vec<Vector3<f64>>) {
+    let section = FabricSection::new(material, embedded);
+    let warp = [Vector3::new(
+        30f64.to_radians().cos(),
+        30f64.to_radians().sin(),
+        0.0,
+    )];
+    match shape {
+        MembraneShape::Triangle => {
+            let x0 = vec![
+                Vector3::new(0.0, 0.0, 0.0),
+                Vector3::new(5.0, 0.4, 0.1),
+                Vector3::new(1.0, 4.5, -0.2),
+            ];
+            (
+                MembraneBatch::triangles(section, &x0, vec![[0, 1, 2]], &warp).unwrap(),
+                x0,
+            )
+        }
+        MembraneShape::Quad => {
+            let x0 = vec![
+                Vector3::new(0.0, 0.0, 0.0),
+                Vector3::new(5.0, 0.4, 0.2),
+                Vector3::new(5.6, 4.8, -0.1),
+                Vector3::new(-0.3, 4.2, 0.1),
+            ];
+            (
+                MembraneBatch::quads(section, &x0, vec![[0, 1, 2, 3]], &warp).unwrap(),
+                x0,
+            )
+        }
+    }
+}
+
+/// x = Q·(A·X) + c with A a 3×3 in-plane-ish stretch: a general deformed state.
+fn deform(x0: &[Vector3<f64>], a: &nalgebra::Matrix3<f64>, seed: u64) -> Vec<Vector3<f64>> {
+    let q = random_rotation(seed);
+    x0.iter()
+        .enumerate()
+        .map(|(i, p)| {
+            q * (a * p) + Vector3::new(1.0, -2.0, 0.5) + Vector3::new(0.0, 0.0, 0.05 * i as f64)
+        })
+        .collect()
+}
+
+fn force(b: &MembraneBatch, x: &[Vector3<f64>], h: &[f64], dt: f64) -> Vec<Vector3<f64>> {
+    let mut out = vec![0.0; h.len()];
+    let mut f = vec![Vector3::zeros(); b.shape().nodes()];
+    b.element_force(0, x, h, &mut out, dt, &mut f).unwrap();
+    f
+}
+
+/// The history after one step from the reference state to `x`.
+fn step_to(b: &MembraneBatch, x: &[Vector3<f64>], dt: f64) -> Vec<f64> {
+    let h0 = b.initial_history();
+    let mut h1 = h0.clone();
+    let mut f = vec![Vector3::zeros(); b.shape().nodes()];
+    b.element_force(0, x, &h0, &mut h1, dt, &mut f).unwrap();
+    h1
+}
+
+#[test]
+fn tangent_matches_finite_differences_for_every_kind() {
+    // Stretch states: fibres stretched, one family compressed, both compressed.
+    let stretches = [
+        nalgebra::Matrix3::new(1.02, 0.05, 0.0, 0.03, 1.01, 0.0, 0.0, 0.0, 1.0),
+        nalgebra::Matrix3::new(1.03, 0.2, 0.0, -0.1, 0.96, 0.0, 0.0, 0.0, 1.0),
+        nalgebra::Matrix3::new(0.97, 0.3, 0.0, 0.25, 0.95, 0.0, 0.0, 0.0, 1.0),
+    ];
+    let mut seed = 0;
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        for material in [carbon(), glass()] {
+            for embedded in [false, true] {
+                let (b, x0) = single(shape, material.clone(), embedded);
+                let nodes: Vec<usize> = (0..shape.nodes()).collect();
+                for a in &stretches {
+                    seed += 1;
+                    // A committed state that is not the reference, then a trial step from it.
+                    let h1 = step_to(&b, &deform(&x0, &(a * 0.99), seed), 0.01);
+                    let x2 = deform(&x0, a, seed + 100);
+                    let dt = 0.37;
+                    let mut k = DMatrix::zeros(3 * shape.nodes(), 3 * shape.nodes());
+                    b.element_tangent(0, &x2, &h1, dt, &mut k).unwrap();
+                    assert_tangent_matches(&k, &x2, |x| force(&b, x, &h1, dt), &nodes);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn rigid_motion_rotates_forces_and_undeformed_is_force_free() {
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        let (b, x0) = single(shape, carbon(), true);
+        let a = nalgebra::Matrix3::new(1.02, 0.15, 0.0, 0.1, 0.98, 0.0, 0.0, 0.0, 1.0);
+        let x1 = deform(&x0, &a, 3);
+        let h1 = step_to(&b, &x1, 0.0);
+        let f1 = force(&b, &x1, &h1, 0.0);
+        let q = random_rotation(11);
+        let c = Vector3::new(-40.0, 7.0, 3.0);
+        let x2: Vec<_> = x1.iter().map(|p| q * p + c).collect();
+        let f2 = force(&b, &x2, &h1, 0.0);
+        let scale = f1.iter().map(|f| f.norm()).fold(0.0, f64::max);
+        assert!(scale > 1.0);
+        // Undeformed, the forces vanish to round-off.
+        let f0 = force(&b, &x0, &b.initial_history(), 0.1);
+        assert!(f0.iter().all(|f| f.norm() < 1e-12 * scale), "{f0:?}");
+        for (a, b) in f1.iter().zip(&f2) {
+            assert!((q * a - b).norm() < 1e-12 * scale, "{a} vs {b}");
+        }
+        // The history does not change under a rigid motion either.
+        let mut h2 = h1.clone();
+        let mut f = vec![Vector3::zeros(); shape.nodes()];
+        b.element_force(0, &x2, &h1, &mut h2, 0.0, &mut f).unwrap();
+        for (u, v) in h1.iter().zip(&h2) {
+            assert!((u - v).abs() < 1e-12 * (1.0 + u.abs()));
+        }
+    }
+}
+
+/// A 3×3 patch of distorted quads (or 18 triangles) in the xy plane on
+/// [0, 3]², with the inner nodes moved off the grid.
+fn patch(shape: MembraneShape, embedded: bool) -> (MembraneBatch, Vec<Vector3<f64>>, Vec<usize>) {
+    let mut x0 = Vec::new();
+    let mut inner = Vec::new();
+    for j in 0..4 {
+        for i in 0..4 {
+            let mut p = Vector3::new(i as f64, j as f64, 0.0);
+            if (1..3).contains(&i) && (1..3).contains(&j) {
+                p += Vector3::new(
+                    0.23 * (i as f64 - 1.4),
+                    -0.17 * (j as f64 - 1.6) + 0.1 * i as f64,
+                    0.0,
+                );
+                inner.push(x0.len());
+            }
+            x0.push(p);
+        }
+    }
+    let id = |i: usize, j: usize| (j * 4 + i) as u32;
+    let mut quads = Vec::new();
+    for j in 0..3 {
+        for i in 0..3 {
+            quads.push([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let section = FabricSection::new(carbon(), embedded);
+    let warp_dir = Vector3::new(0.6, 0.8, 0.0);
+    let b = match shape {
+        MembraneShape::Quad => {
+            let warp = vec![warp_dir; quads.len()];
+            MembraneBatch::quads(section, &x0, quads, &warp).unwrap()
+        }
+        MembraneShape::Triangle => {
+            let tris: Vec<[u32; 3]> = quads
+                .iter()
+                .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+                .collect();
+            let warp = vec![warp_dir; tris.len()];
+            MembraneBatch::triangles(section, &x0, tris, &warp).unwrap()
+        }
+    };
+    (b, x0, inner)
+}
+
+#[test]
+fn patch_test_uniform_strain_gives_uniform_stress() {
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        for embedded in [false, true] {
+            let (b, x0, inner) = patch(shape, embedded);
+            let a = nalgebra::Matrix3::new(1.05, 0.12, 0.0, 0.04, 0.97, 0.0, 0.0, 0.0, 1.0);
+            let x: Vec<_> = x0.iter().map(|p| a * p).collect();
+            let h0 = b.initial_history();
+            let mut h1 = h0.clone();
+            let mut slots = vec![Vector3::zeros(); b.len() * shape.nodes()];
+            b.forces_into(&x, &h0, &mut h1, 0.01, &mut slots).unwrap();
+            // Every point's history (U and τ̄ in fibre axes) is the same.
+            let stride = b.history_stride();
+            let first = &h1[..stride];
+            let scale = first.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for point in h1.chunks(stride) {
+                for (u, v) in point.iter().zip(first) {
+                    assert!((u - v).abs() <= 1e-13 * scale, "{shape:?}: {u} vs {v}");
+                }
+            }
+            // Inner nodes are in equilibrium.
+            let mut net = vec![Vector3::zeros(); x.len()];
+            for e in 0..b.len() {
+                for (k, &n) in b.element_nodes(e).iter().enumerate() {
+                    net[n as usize] += slots[e * shape.nodes() + k];
+                }
+            }
+            let f_scale = net.iter().map(|f| f.norm()).fold(0.0, f64::max);
+            for &n in &inner {
+                assert!(
+                    net[n].norm() <= 1e-12 * f_scale,
+                    "{shape:?}: node {n} has {}",
+                    net[n]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn embedded_fibres_equal_trusses_on_an_aligned_patch() {
+    // A 4×3 grid of 2.5 × 2 cells aligned with the fibres, stretched
+    // uniformly: the fibre part of the embedded membrane (with minus without
+    // fibres) equals the trusses' forces, with A₀ = t_f·s (half on the edges).
+    let material = carbon();
+    let (nx, ny, dx, dy) = (4usize, 3usize, 2.5, 2.0);
+    let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    let x0: Vec<_> = (0..=ny)
+        .flat_map(|j| (0..=nx).map(move |i| Vector3::new(i as f64 * dx, j as f64 * dy, 0.0)))
+        .collect();
+    let quads: Vec<[u32; 4]> = (0..ny)
+        .flat_map(|j| {
+            (0..nx).map(move |i| [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+        })
+        .collect();
+    let warp = vec![Vector3::x(); quads.len()];
+    let with = MembraneBatch::quads(
+        FabricSection::new(material.clone(), true),
+        &x0,
+        quads.clone(),
+        &warp,
+    )
+    .unwrap();
+    let without = MembraneBatch::quads(
+        FabricSection::new(material.clone(), false),
+        &x0,
+        quads,
+        &warp,
+    )
+    .unwrap();
+    let t_f = material.family_thickness();
+    let (mut nodes, mut section) = (Vec::new(), Vec::new());
+    for j in 0..=ny {
+        for i in 0..nx {
+            nodes.push([id(i, j), id(i + 1, j)]);
+            section.push(t_f * dy * if j == 0 || j == ny { 0.5 } else { 1.0 });
+        }
+    }
+    for i in 0..=nx {
+        for j in 0..ny {
+            nodes.push([id(i, j), id(i, j + 1)]);
+            section.push(t_f * dx * if i == 0 || i == nx { 0.5 } else { 1.0 });
+        }
+    }
+    let mass = vec![1.0; nodes.len()];
+    let trusses = TrussBatch::new(material.fibre, &x0, nodes, section, mass).unwrap();
+
+    let x: Vec<_> = x0
+        .iter()
+        .map(|p| Vector3::new(1.013 * p.x, 1.021 * p.y, 0.0))
+        .collect();
+    let gather = |slots: &[Vector3<f64>], conn: &dyn Fn(usize) -> Vec<u32>, per: usize| {
+        let mut net = vec![Vector3::zeros(); x.len()];
+        for (s, f) in slots.iter().enumerate() {
+            net[conn(s / per)[s % per] as usize] += f;
+        }
+        net
+    };
+    let membrane_net = |b: &MembraneBatch| {
+        let h0 = b.initial_history();
+        let mut h1 = h0.clone();
+        let mut slots = vec![Vector3::zeros(); 4 * b.len()];
+        b.forces_into(&x, &h0, &mut h1, 0.0, &mut slots).unwrap();
+        gather(&slots, &|e| b.element_nodes(e).to_vec(), 4)
+    };
+    let (fw, fo) = (membrane_net(&with), membrane_net(&without));
+    let mut slots = vec![Vector3::zeros(); 2 * trusses.len()];
+    trusses.forces_into(&x, &mut slots).unwrap();
+    let ft = gather(&slots, &|e| trusses.nodes[e].to_vec(), 2);
+    let scale = ft.iter().map(|f| f.norm()).fold(0.0, f64::max);
+    assert!(scale > 1.0);
+    for n in 0..x.len() {
+        let fibre_part = fw[n] - fo[n];
+        assert!(
+            (fibre_part - ft[n]).norm() <= 1e-10 * scale,
+            "node {n}: {fibre_part} vs {}",
+            ft[n]
+        );
+    }
+}
+
+#[test]
+fn stable_time_step_bounds_the_element_frequency() {
+    // Element eigenvalue inequality: the global ω_max is at most the largest
+    // element's, so Δt ≤ 2/ω_max(element, lumped mass) is sufficient.
+    // Linear in tension and compression: at the reference ε = ±round-off,
+    // and a yarn that buckles would have no stiffness on one side.
+    let linear = Material {
+        fibre: FibreLaw {
+            compression_factor: 1.0,
+            ..FibreLaw::new(230_000.0, 0.0).unwrap()
+        },
+        ..carbon()
+    };
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        for embedded in [false, true] {
+            let (b, x0) = single(shape, linear.clone(), embedded);
+            let n = 3 * shape.nodes();
+            let mut k = DMatrix::zeros(n, n);
+            b.element_tangent(0, &x0, &b.initial_history(), 0.0, &mut k)
+                .unwrap();
+            let rho_h = linear.areal_density();
+            let mut m_inv_sqrt = DMatrix::zeros(n, n);
+            for (a, area) in b.nodal_areas(0).iter().enumerate() {
+                for j in 0..3 {
+                    m_inv_sqrt[(3 * a + j, 3 * a + j)] = 1.0 / (rho_h * area).sqrt();
+                }
+            }
+            let sym = &m_inv_sqrt * (&k + k.transpose()) * 0.5 * &m_inv_sqrt;
+            let omega_max = sym.symmetric_eigenvalues().max().sqrt();
+            let dt = b.element_stable_time_step(0, &x0);
+            let exact = 2.0 / omega_max;
+            assert!(
+                dt <= exact,
+                "{shape:?} embedded={embedded}: estimate {dt:e} > 2/ω {exact:e}"
+            );
+            assert!(
+                dt >= 0.6 * exact,
+                "{shape:?} embedded={embedded}: estimate {dt:e} ≪ 2/ω {exact:e}"
+            );
+        }
+    }
+}
+
+/// Largest deviation of the total energy of a free triangle (embedded linear
+/// fibres, glass resin) released from a stretched state and integrated by
+/// central differences with `fraction` of its stable step for `periods`
+/// periods of its fastest mode, relative to the initial energy.
+fn free_oscillation_energy_error(fraction: f64, periods: f64) -> f64 {
+    let linear = Material {
+        fibre: FibreLaw {
+            compression_factor: 1.0,
+            ..FibreLaw::new(75_000.0, 0.0).unwrap()
+        },
+        ..glass()
+    };
+    let (b, x0) = single(MembraneShape::Triangle, linear.clone(), true);
+    let mass: Vec<f64> = b
+        .nodal_areas(0)
+        .iter()
+        .map(|a| a * linear.areal_density())
+        .collect();
+    let mut x: Vec<_> = x0
+        .iter()
+        .map(|p| Vector3::new(1.002 * p.x, 0.999 * p.y, p.z))
+        .collect();
+    let mut v = vec![Vector3::zeros(); 3];
+    let dt_stable = b.element_stable_time_step(0, &x0);
+    let dt = fraction * dt_stable;
+    // The stable step is 2/ω_max at best, so a period is at least π·dt_stable.
+    let steps = (periods * std::f64::consts::PI * dt_stable / dt) as usize;
+    let (mut h, mut h_next) = (b.initial_history(), b.initial_history());
+    let mut f = vec![Vector3::zeros(); 3];
+    b.element_force(0, &x, &h, &mut h_next, dt, &mut f).unwrap();
+    std::mem::swap(&mut h, &mut h_next);
+    let energy = |x: &[Vector3<f64>], v: &[Vector3<f64>], h: &[f64]| {
+        let kinetic: f64 = v
+            .iter()
+            .zip(&mass)
+            .map(|(v, m)| 0.5 * m * v.norm_squared())
+            .sum();
+        kinetic + b.element_energy(0, x, h).unwrap()
+    };
+    let e0 = energy(&x, &v, &h);
+    let mut worst = 0.0f64;
+    for step in 0..steps {
+        // Half-step velocities, then positions, then forces at the new positions.
+        for a in 0..3 {
+            v[a] -= f[a] / mass[a] * (if step == 0 { 0.5 } else { 1.0 }) * dt;
+            x[a] += v[a] * dt;
+        }
+        b.element_force(0, &x, &h, &mut h_next, dt, &mut f).unwrap();
+        std::mem::swap(&mut h, &mut h_next);
+        // Synchronise velocities to the full step for the kinetic energy.
+        let v_full: Vec<_> = (0..3).map(|a| v[a] - f[a] / mass[a] * 0.5 * dt).collect();
+        worst = worst.max((energy(&x, &v_full, &h) - e0).abs());
+    }
+    worst / e0
+}
+
+#[test]
+fn free_element_keeps_its_energy() {
+    // Central differences conserve a nearby energy: the measured one
+    // oscillates by O((ω·Δt)²) without drift. Over 200 periods the error is
+    // small and falls with the square of the step, so the element adds no
+    // error of its own.
+    let coarse = free_oscillation_energy_error(0.05, 200.0);
+    let fine = free_oscillation_energy_error(0.025, 200.0);
+    assert!(fine < 1e-3, "energy error {fine:e}");
+    let order = (coarse / fine).log2();
+    assert!(
+        (order - 2.0).abs() < 0.2,
+        "energy error order {order} ({coarse:e}, {fine:e})"
+    );
+}

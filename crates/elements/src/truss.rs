@@ -1,0 +1,285 @@
+//! Two-node fibre trusses (T3D2-like).
+
+use drape_constitutive::FibreLaw;
+use drape_kinematics::{FibreKinematics, truss_stretch};
+use nalgebra::{DMatrix, Matrix3, Vector3};
+use rayon::prelude::*;
+
+use crate::{ElementError, KinematicsError, MIN_CHUNK, lowest_error};
+
+/// A batch of trusses of one fibre law.
+///
+/// Each truss carries the yarns of a strip of fabric: section A₀ and mass
+/// per unit length are the strip's (SPEC §2), given by the mesher.
+#[derive(Debug, Clone)]
+pub struct TrussBatch {
+    /// The yarns' law.
+    pub law: FibreLaw,
+    /// The two nodes of each truss.
+    pub nodes: Vec<[u32; 2]>,
+    /// Reference length L₀.
+    pub length: Vec<f64>,
+    /// Fibre section A₀.
+    pub section: Vec<f64>,
+    /// Fabric mass per unit length of the strip (for the stable time step).
+    pub mass_per_length: Vec<f64>,
+}
+
+/// Output fields of one truss.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrussOutput {
+    /// λ = l/L₀.
+    pub stretch: f64,
+    /// The fibre stress τ(ln λ) (MPa).
+    pub stress: f64,
+    /// The axial force N = A₀·τ/λ (N).
+    pub tension: f64,
+}
+
+impl TrussBatch {
+    /// Trusses between `nodes` of the reference positions `x0`, each with
+    /// its fibre section and fabric mass per length.
+    pub fn new(
+        law: FibreLaw,
+        x0: &[Vector3<f64>],
+        nodes: Vec<[u32; 2]>,
+        section: Vec<f64>,
+        mass_per_length: Vec<f64>,
+    ) -> Result<Self, ElementError> {
+        assert_eq!(nodes.len(), section.len());
+        assert_eq!(nodes.len(), mass_per_length.len());
+        let mut length = Vec::with_capacity(nodes.len());
+        for (e, &[i, j]) in nodes.iter().enumerate() {
+            let l = (x0[j as usize] - x0[i as usize]).norm();
+            if !(l > 0.0 && l.is_finite()) {
+                return Err(ElementError {
+                    element: e,
+                    point: 0,
+                    cause: KinematicsError::DegenerateReference { size: l },
+                });
+            }
+            length.push(l);
+        }
+        Ok(Self {
+            law,
+            nodes,
+            length,
+            section,
+            mass_per_length,
+        })
+    }
+
+    /// Number of trusses.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Whether the batch is empty.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    #[inline]
+    fn kinematics(&self, e: usize, x: &[Vector3<f64>]) -> Result<FibreKinematics, ElementError> {
+        let [i, j] = self.nodes[e];
+        truss_stretch(&x[i as usize], &x[j as usize], self.length[e]).map_err(|cause| {
+            ElementError {
+                element: e,
+                point: 0,
+                cause,
+            }
+        })
+    }
+
+    /// The nodal forces [f₁, f₂] of truss `e`: f₂ = −f₁ = N·n.
+    #[inline]
+    pub fn element_force(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+    ) -> Result<[Vector3<f64>; 2], ElementError> {
+        let k = self.kinematics(e, x)?;
+        let n = self.section[e] * self.law.stress(k.log_strain) / k.stretch;
+        let f = k.direction * n;
+        Ok([-f, f])
+    }
+
+    /// The 6×6 tangent ∂f/∂x of truss `e` (material + geometric):
+    /// K₂₂ = A₀/(λ²L₀)·((E_t − 2τ)·n⊗n + τ·I), K₁₁ = K₂₂ = −K₁₂.
+    pub fn element_tangent(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+        k_out: &mut DMatrix<f64>,
+    ) -> Result<(), ElementError> {
+        let k = self.kinematics(e, x)?;
+        let (tau, e_t) = self.law.stress_and_tangent(k.log_strain);
+        let scale = self.section[e] / (k.stretch * k.stretch * self.length[e]);
+        let nn = k.direction * k.direction.transpose();
+        let block: Matrix3<f64> = (nn * (e_t - 2.0 * tau) + Matrix3::identity() * tau) * scale;
+        k_out.fill(0.0);
+        for (a, b, sign) in [(0, 0, 1.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 1.0)] {
+            k_out
+                .fixed_view_mut::<3, 3>(3 * a, 3 * b)
+                .copy_from(&(block * sign));
+        }
+        Ok(())
+    }
+
+    /// Writes every truss's two nodal forces into `slots` (2 per truss, in
+    /// truss order), in parallel.
+    pub fn forces_into(
+        &self,
+        x: &[Vector3<f64>],
+        slots: &mut [Vector3<f64>],
+    ) -> Result<(), ElementError> {
+        assert_eq!(slots.len(), 2 * self.len());
+        lowest_error(
+            slots
+                .par_chunks_mut(2)
+                .with_min_len(MIN_CHUNK)
+                .enumerate()
+                .map(|(e, out)| {
+                    let f = self.element_force(e, x)?;
+                    out.copy_from_slice(&f);
+                    Ok(())
+                }),
+        )
+    }
+
+    /// Strain energy A₀·L₀·w(ln λ) of truss `e`.
+    pub fn element_energy(&self, e: usize, x: &[Vector3<f64>]) -> Result<f64, ElementError> {
+        let k = self.kinematics(e, x)?;
+        Ok(self.section[e] * self.length[e] * self.law.energy(k.log_strain))
+    }
+
+    /// Total strain energy of the batch.
+    pub fn energy(&self, x: &[Vector3<f64>]) -> Result<f64, ElementError> {
+        (0..self.len()).map(|e| self.element_energy(e, x)).sum()
+    }
+
+    /// The stable time step of truss `e` in its current length, l/c with
+    /// c² = E_f·A₀/(mass per length): exact for a chain of equal trusses
+    /// between lumped masses.
+    pub fn element_stable_time_step(&self, e: usize, x: &[Vector3<f64>]) -> f64 {
+        let [i, j] = self.nodes[e];
+        let l = (x[j as usize] - x[i as usize]).norm();
+        l * (self.mass_per_length[e] / (self.law.wave_modulus() * self.section[e])).sqrt()
+    }
+
+    /// The smallest stable time step of the batch (∞ when empty).
+    pub fn stable_time_step(&self, x: &[Vector3<f64>]) -> f64 {
+        (0..self.len())
+            .into_par_iter()
+            .with_min_len(MIN_CHUNK)
+            .map(|e| self.element_stable_time_step(e, x))
+            .reduce(|| f64::INFINITY, f64::min)
+    }
+
+    /// Output fields of truss `e`.
+    pub fn element_output(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+    ) -> Result<TrussOutput, ElementError> {
+        let k = self.kinematics(e, x)?;
+        let stress = self.law.stress(k.log_strain);
+        Ok(TrussOutput {
+            stretch: k.stretch,
+            stress,
+            tension: self.section[e] * stress / k.stretch,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::{assert_tangent_matches, random_rotation};
+
+    fn batch(law: FibreLaw) -> (TrussBatch, Vec<Vector3<f64>>) {
+        let x0 = vec![Vector3::new(0.0, 0.0, 0.0), Vector3::new(4.0, 0.0, 0.0)];
+        let t = TrussBatch::new(law, &x0, vec![[0, 1]], vec![0.3], vec![1e-9]).unwrap();
+        (t, x0)
+    }
+
+    #[test]
+    fn tangent_matches_finite_differences_stretched_and_compressed() {
+        let laws = [
+            FibreLaw::new(230_000.0, 0.005).unwrap(),
+            FibreLaw {
+                compression_factor: 0.2,
+                ..FibreLaw::new(75_000.0, 0.012).unwrap()
+            },
+        ];
+        for law in laws {
+            let (t, _) = batch(law);
+            for (stretch, seed) in [(1.003, 1), (1.02, 2), (0.97, 3), (1.0001, 4)] {
+                let q = random_rotation(seed);
+                let x = vec![
+                    Vector3::new(1.0, 2.0, 3.0),
+                    Vector3::new(1.0, 2.0, 3.0) + q * Vector3::new(4.0 * stretch, 0.0, 0.0),
+                ];
+                let mut k = DMatrix::zeros(6, 6);
+                t.element_tangent(0, &x, &mut k).unwrap();
+                assert_tangent_matches(
+                    &k,
+                    &x,
+                    |x| t.element_force(0, x).unwrap().to_vec(),
+                    &[0, 1],
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn force_is_the_gradient_of_energy_and_rotates_with_the_body() {
+        let (t, _) = batch(FibreLaw::new(230_000.0, 0.005).unwrap());
+        let x = vec![Vector3::new(0.0, 0.0, 0.0), Vector3::new(4.05, 0.1, -0.2)];
+        let f = t.element_force(0, &x).unwrap();
+        let h = 1e-7;
+        for d in 0..3 {
+            let mut xp = x.clone();
+            let mut xm = x.clone();
+            xp[1][d] += h;
+            xm[1][d] -= h;
+            let fd =
+                (t.element_energy(0, &xp).unwrap() - t.element_energy(0, &xm).unwrap()) / (2.0 * h);
+            assert!(
+                (fd - f[1][d]).abs() <= 1e-6 * f[1].norm(),
+                "{fd} vs {}",
+                f[1][d]
+            );
+        }
+        let q = random_rotation(7);
+        let xr: Vec<_> = x
+            .iter()
+            .map(|p| q * p + Vector3::new(5.0, -3.0, 1.0))
+            .collect();
+        let fr = t.element_force(0, &xr).unwrap();
+        assert!((fr[1] - q * f[1]).norm() < 1e-12 * f[1].norm());
+        let (t, x0) = batch(FibreLaw::new(230_000.0, 0.005).unwrap());
+        assert_eq!(t.element_force(0, &x0).unwrap(), [Vector3::zeros(); 2]);
+    }
+
+    #[test]
+    fn stable_time_step_is_the_chain_frequency() {
+        // A long chain of these trusses has nodal masses m = (mass/length)·L
+        // and springs k = E·A/L, so ω_max = 2√(k/m): the estimate is 2/ω_max.
+        let (t, x0) = batch(FibreLaw::new(1000.0, 0.0).unwrap());
+        let dt = t.element_stable_time_step(0, &x0);
+        let (m, k): (f64, f64) = (1e-9 * 4.0, 1000.0 * 0.3 / 4.0);
+        let omega_chain = 2.0 * (k / m).sqrt();
+        assert!((dt - 2.0 / omega_chain).abs() < 1e-15 * dt);
+    }
+
+    #[test]
+    fn collapsed_truss_is_reported_with_its_index() {
+        let (t, _) = batch(FibreLaw::new(1000.0, 0.0).unwrap());
+        let x = vec![Vector3::zeros(); 2];
+        let mut slots = vec![Vector3::zeros(); 2];
+        let err = t.forces_into(&x, &mut slots).unwrap_err();
+        assert_eq!(err.element, 0);
+        assert!(matches!(err.cause, KinematicsError::DegenerateFibre { .. }));
+    }
+}

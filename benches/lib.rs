@@ -1,1 +1,2 @@
-//! criterion benches live in benches/; this library is empty.
+//! drape's criterion benches live in `benches/` (see `benches/kernels.rs`);
+//! this library only gives the bench crate a target and is empty.

@@ -1,0 +1,654 @@
+//! # drape-model
+//!
+//! The discretised forming problem, ready for a time integrator: reference
+//! nodes and lumped masses, element batches (fibre trusses, resin membranes,
+//! holding springs), node sets, boundary conditions with amplitudes,
+//! gravity, the node→slot adjacency for a lock-free deterministic force
+//! gather, the record of [`Features`] a scene uses, the [`State`]
+//! (positions, velocities, histories) and the derived measures of SPEC §8
+//! (maximum shear and where, shear profiles, draw-in, area above a locking
+//! angle, maximum fibre tension).
+//!
+//! What it is not: no time stepping (`drape-time`), no file formats
+//! (`drape-io`).
+//!
+//! ```
+//! use drape_constitutive::Material;
+//! use drape_model::{Amplitude, BoundaryCondition, Model, Motion};
+//! use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
+//! use nalgebra::Vector3;
+//!
+//! let blank = RectangleBlank {
+//!     width: 100.0,
+//!     height: 50.0,
+//!     center: Vector3::zeros(),
+//!     orientation_deg: 0.0,
+//!     element: ElementKind::Quad,
+//!     meshing: Meshing::Cells([10, 5]),
+//!     fibres: FibreRepresentation::Trusses,
+//! };
+//! let glass = Material::preset("glass-serge-4x3").unwrap();
+//! let mut model = Model::from_blank(&blank, &glass).unwrap();
+//! let left = model.node_set("left").unwrap().to_vec();
+//! model.boundary.push(BoundaryCondition::fixed(left));
+//! assert_eq!(model.node_count(), 66);
+//! assert!(model.features().trusses && !model.features().viscoelastic);
+//! ```
+
+pub mod blank;
+pub mod measures;
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::sync::Arc;
+
+use drape_constitutive::{Material, MaterialError};
+use drape_elements::{ElementError, FabricSection, MembraneBatch, SpringBatch, TrussBatch};
+use nalgebra::Vector3;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use blank::{BlankFrame, BlankMesh, FibreRepresentation, MeshError, RectangleBlank};
+use measures::{DrawIn, ProfileLine, ProfilePoint};
+
+/// What can go wrong while building a model.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    /// The blank cannot be meshed.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// The material is invalid.
+    #[error(transparent)]
+    Material(#[from] MaterialError),
+    /// An element is degenerate in the reference configuration.
+    #[error("{kind}: {error}")]
+    Element {
+        /// Which batch kind.
+        kind: &'static str,
+        /// What is wrong.
+        error: ElementError,
+    },
+    /// A node set does not exist.
+    #[error("unknown node set `{0}`")]
+    UnknownNodeSet(String),
+    /// A node index is out of range.
+    #[error("node {node} does not exist (the model has {count} nodes)")]
+    NoSuchNode {
+        /// The index.
+        node: u32,
+        /// Number of nodes.
+        count: usize,
+    },
+}
+
+/// A time function a(t) scaling a prescribed motion.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Amplitude {
+    /// a = 1.
+    Constant,
+    /// a = t/T, then 1.
+    Ramp {
+        /// T (s).
+        duration: f64,
+    },
+    /// a = ξ³(10 − 15ξ + 6ξ²), ξ = t/T, then 1: zero velocity and
+    /// acceleration at both ends (SPEC §7).
+    SmoothStep {
+        /// T (s).
+        duration: f64,
+    },
+    /// Piecewise linear through (t, a) points, constant beyond the ends.
+    Table {
+        /// (t, a) points with increasing t.
+        points: Vec<[f64; 2]>,
+    },
+}
+
+impl Amplitude {
+    /// a(t).
+    pub fn value(&self, t: f64) -> f64 {
+        match self {
+            Self::Constant => 1.0,
+            Self::Ramp { duration } => (t / duration).clamp(0.0, 1.0),
+            Self::SmoothStep { duration } => {
+                let xi = (t / duration).clamp(0.0, 1.0);
+                xi * xi * xi * (10.0 - 15.0 * xi + 6.0 * xi * xi)
+            }
+            Self::Table { points } => {
+                let (first, last) = (points[0], points[points.len() - 1]);
+                if t <= first[0] {
+                    return first[1];
+                }
+                if t >= last[0] {
+                    return last[1];
+                }
+                let i = points.partition_point(|p| p[0] <= t);
+                let (p0, p1) = (points[i - 1], points[i]);
+                p0[1] + (p1[1] - p0[1]) * (t - p0[0]) / (p1[0] - p0[0])
+            }
+        }
+    }
+}
+
+/// A prescribed displacement u(x₀, t) of a node from its reference position
+/// x₀, for motions no amplitude describes (a picture frame's arms).
+pub type Trajectory = Arc<dyn Fn(&Vector3<f64>, f64) -> Vector3<f64> + Send + Sync>;
+
+/// How constrained components move.
+#[derive(Clone)]
+pub enum Motion {
+    /// Held at the reference position.
+    Fixed,
+    /// u(t) = value·a(t).
+    Displacement {
+        /// Displacement at a = 1 (mm).
+        value: Vector3<f64>,
+        /// a(t).
+        amplitude: Amplitude,
+    },
+    /// v(t) = value·a(t).
+    Velocity {
+        /// Velocity at a = 1 (mm/s).
+        value: Vector3<f64>,
+        /// a(t).
+        amplitude: Amplitude,
+    },
+    /// u = f(x₀, t), per node.
+    Trajectory(Trajectory),
+}
+
+impl fmt::Debug for Motion {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Fixed => write!(f, "Fixed"),
+            Self::Displacement { value, amplitude } => {
+                write!(f, "Displacement({value:?}, {amplitude:?})")
+            }
+            Self::Velocity { value, amplitude } => write!(f, "Velocity({value:?}, {amplitude:?})"),
+            Self::Trajectory(_) => write!(f, "Trajectory(..)"),
+        }
+    }
+}
+
+/// Constrained components of a set of nodes and their motion. Where
+/// conditions overlap, the later one wins for the components it names.
+#[derive(Debug, Clone)]
+pub struct BoundaryCondition {
+    /// The nodes.
+    pub nodes: Vec<u32>,
+    /// Which of x, y, z are constrained.
+    pub components: [bool; 3],
+    /// How they move.
+    pub motion: Motion,
+}
+
+impl BoundaryCondition {
+    /// All components of `nodes` held fixed.
+    pub fn fixed(nodes: Vec<u32>) -> Self {
+        Self {
+            nodes,
+            components: [true; 3],
+            motion: Motion::Fixed,
+        }
+    }
+
+    /// The prescribed displacement of a node at reference `x0` at time `t`,
+    /// or None for a velocity condition.
+    pub fn displacement(&self, x0: &Vector3<f64>, t: f64) -> Option<Vector3<f64>> {
+        match &self.motion {
+            Motion::Fixed => Some(Vector3::zeros()),
+            Motion::Displacement { value, amplitude } => Some(value * amplitude.value(t)),
+            Motion::Velocity { .. } => None,
+            Motion::Trajectory(f) => Some(f(x0, t)),
+        }
+    }
+}
+
+/// The features a model uses, so that a driver runs only their passes
+/// (SPEC §7, "skip what a scene doesn't need").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub struct Features {
+    /// Fibre trusses.
+    pub trusses: bool,
+    /// Fibres embedded in membranes.
+    pub embedded_fibres: bool,
+    /// A resin with Prony relaxation.
+    pub viscoelastic: bool,
+    /// Holding springs.
+    pub springs: bool,
+    /// Gravity.
+    pub gravity: bool,
+    /// Prescribed motions other than fixed.
+    pub prescribed_motion: bool,
+}
+
+/// Where each element batch writes its nodal forces in the global slot
+/// array, and which slots each node gathers, in a fixed order (CSR).
+#[derive(Debug, Clone, Default)]
+pub struct SlotLayout {
+    /// First slot of each truss batch.
+    pub truss_offsets: Vec<usize>,
+    /// First slot of each membrane batch.
+    pub membrane_offsets: Vec<usize>,
+    /// First slot of each spring batch.
+    pub spring_offsets: Vec<usize>,
+    /// Total number of slots.
+    pub len: usize,
+    node_ptr: Vec<usize>,
+    node_slots: Vec<u32>,
+}
+
+impl SlotLayout {
+    /// fₙ = Σ of node n's slots, in ascending slot order: the same sums in
+    /// the same order whatever the number of threads.
+    pub fn gather(&self, slots: &[Vector3<f64>], forces: &mut [Vector3<f64>]) {
+        forces
+            .par_iter_mut()
+            .with_min_len(1024)
+            .enumerate()
+            .for_each(|(n, f)| {
+                let mut sum = Vector3::zeros();
+                for &s in &self.node_slots[self.node_ptr[n]..self.node_ptr[n + 1]] {
+                    sum += slots[s as usize];
+                }
+                *f = sum;
+            });
+    }
+}
+
+/// What a blank-based model knows about its blank, for derived measures.
+#[derive(Debug, Clone)]
+pub struct BlankInfo {
+    /// The blank's reference frame.
+    pub frame: BlankFrame,
+    /// Edge midpoint nodes [left, right, bottom, top].
+    pub midpoints: [u32; 4],
+    /// Corner nodes [bottom-left, bottom-right, top-right, top-left].
+    pub corners: [u32; 4],
+    /// Typical element size (for profile bands).
+    pub cell_size: f64,
+}
+
+/// The discretised problem.
+#[derive(Debug, Clone, Default)]
+pub struct Model {
+    /// Reference node positions.
+    pub x0: Vec<Vector3<f64>>,
+    /// Lumped nodal masses (t).
+    pub mass: Vec<f64>,
+    /// Fibre truss batches.
+    pub trusses: Vec<TrussBatch>,
+    /// Membrane batches.
+    pub membranes: Vec<MembraneBatch>,
+    /// Holding spring batches.
+    pub springs: Vec<SpringBatch>,
+    /// Boundary conditions, applied in order.
+    pub boundary: Vec<BoundaryCondition>,
+    /// Gravity acceleration (mm/s²), zero for none.
+    pub gravity: Vector3<f64>,
+    /// Named node sets.
+    pub node_sets: BTreeMap<String, Vec<u32>>,
+    /// The blank, when the model was meshed from one.
+    pub blank: Option<BlankInfo>,
+}
+
+/// The evolving state of a model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct State {
+    /// Time (s).
+    pub time: f64,
+    /// Completed steps.
+    pub step: u64,
+    /// Current positions.
+    pub x: Vec<Vector3<f64>>,
+    /// Velocities (mid-step for an explicit run).
+    pub v: Vec<Vector3<f64>>,
+    /// Committed history of each membrane batch.
+    pub history: Vec<Vec<f64>>,
+}
+
+/// Output fields of every membrane element (all batches, in batch order).
+#[derive(Debug, Clone, Default)]
+pub struct ElementFields {
+    /// Shear angle (rad).
+    pub shear: Vec<f64>,
+    /// Warp and weft stretch.
+    pub fibre_stretch: Vec<[f64; 2]>,
+    /// Fibre stress τ of the embedded families (MPa); zero when trusses
+    /// carry the fibres (their tension is a truss output).
+    pub fibre_stress: Vec<[f64; 2]>,
+    /// Rotated resin stress [11, 22, 12] in fibre axes (MPa).
+    pub resin_stress: Vec<[f64; 3]>,
+    /// Thickness (mm).
+    pub thickness: Vec<f64>,
+    /// Reference centroid.
+    pub centroid0: Vec<Vector3<f64>>,
+    /// Current centroid.
+    pub centroid: Vec<Vector3<f64>>,
+    /// Reference area.
+    pub area: Vec<f64>,
+}
+
+/// The derived measures of a state (SPEC §8).
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Measures {
+    /// Largest |shear angle| (degrees).
+    pub max_shear_deg: f64,
+    /// Current centroid of the element where it occurs.
+    pub max_shear_at: [f64; 3],
+    /// Draw-in (mm), for a rectangular blank.
+    pub draw_in: Option<DrawIn>,
+    /// Shear along the diagonal.
+    pub profile_diagonal: Vec<ProfilePoint>,
+    /// Shear along the median parallel to x.
+    pub profile_median: Vec<ProfilePoint>,
+    /// Reference area above the locking angle (mm²).
+    pub area_above_locking: f64,
+    /// Largest truss tension (N), 0 without trusses.
+    pub max_fibre_tension_n: f64,
+}
+
+impl Model {
+    /// A model of a meshed rectangular blank of `material`: membranes
+    /// (with embedded fibres or not), trusses from the mesh, lumped masses
+    /// from the areal density, node sets.
+    pub fn from_blank(blank: &RectangleBlank, material: &Material) -> Result<Self, ModelError> {
+        material.validate()?;
+        let mesh = blank.mesh()?;
+        let mut model = Self::from_mesh(&mesh, material, blank.fibres)?;
+        let set = |name: &str| -> [u32; 4] {
+            let s = &mesh.node_sets[name];
+            [s[0], s[1], s[2], s[3]]
+        };
+        let cells = (mesh.quads.len() + mesh.triangles.len()).max(1) as f64;
+        model.blank = Some(BlankInfo {
+            frame: blank.frame(),
+            midpoints: set("edge_midpoints"),
+            corners: set("corners"),
+            cell_size: (blank.width * blank.height / cells).sqrt(),
+        });
+        Ok(model)
+    }
+
+    /// A model of any blank mesh.
+    pub fn from_mesh(
+        mesh: &BlankMesh,
+        material: &Material,
+        fibres: FibreRepresentation,
+    ) -> Result<Self, ModelError> {
+        material.validate()?;
+        let embedded = fibres == FibreRepresentation::Embedded;
+        let section = FabricSection::new(material.clone(), embedded);
+        let element = |kind| move |error| ModelError::Element { kind, error };
+        let mut membranes = Vec::new();
+        if !mesh.quads.is_empty() {
+            let warp = vec![mesh.warp; mesh.quads.len()];
+            membranes.push(
+                MembraneBatch::quads(section.clone(), &mesh.x0, mesh.quads.clone(), &warp)
+                    .map_err(element("quad"))?,
+            );
+        }
+        if !mesh.triangles.is_empty() {
+            let warp = vec![mesh.warp; mesh.triangles.len()];
+            membranes.push(
+                MembraneBatch::triangles(section, &mesh.x0, mesh.triangles.clone(), &warp)
+                    .map_err(element("triangle"))?,
+            );
+        }
+        let mut trusses = Vec::new();
+        if !mesh.trusses.is_empty() {
+            let nodes: Vec<[u32; 2]> = mesh.trusses.iter().map(|t| t.nodes).collect();
+            let length: Vec<f64> = nodes
+                .iter()
+                .map(|&[i, j]| (mesh.x0[j as usize] - mesh.x0[i as usize]).norm())
+                .collect();
+            let section: Vec<f64> = mesh
+                .trusses
+                .iter()
+                .zip(&length)
+                .map(|(t, l)| material.family_thickness() * t.strip_area / l)
+                .collect();
+            let mass_per_length = mesh
+                .trusses
+                .iter()
+                .zip(&length)
+                .map(|(t, l)| material.areal_density() * t.strip_area / l)
+                .collect();
+            trusses.push(
+                TrussBatch::new(material.fibre, &mesh.x0, nodes, section, mass_per_length)
+                    .map_err(element("truss"))?,
+            );
+        }
+        let mut mass = vec![0.0; mesh.x0.len()];
+        for b in &membranes {
+            for e in 0..b.len() {
+                for (&n, a) in b.element_nodes(e).iter().zip(b.nodal_areas(e)) {
+                    mass[n as usize] += material.areal_density() * a;
+                }
+            }
+        }
+        Ok(Self {
+            x0: mesh.x0.clone(),
+            mass,
+            trusses,
+            membranes,
+            springs: Vec::new(),
+            boundary: Vec::new(),
+            gravity: Vector3::zeros(),
+            node_sets: mesh.node_sets.clone(),
+            blank: None,
+        })
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.x0.len()
+    }
+
+    /// Number of membrane elements over all batches.
+    pub fn membrane_count(&self) -> usize {
+        self.membranes.iter().map(|b| b.len()).sum()
+    }
+
+    /// A named node set.
+    pub fn node_set(&self, name: &str) -> Result<&[u32], ModelError> {
+        self.node_sets
+            .get(name)
+            .map(Vec::as_slice)
+            .ok_or_else(|| ModelError::UnknownNodeSet(name.to_owned()))
+    }
+
+    /// Checks that every node index used exists.
+    pub fn check(&self) -> Result<(), ModelError> {
+        let count = self.node_count();
+        let bad = |node: u32| ModelError::NoSuchNode { node, count };
+        for bc in &self.boundary {
+            if let Some(&n) = bc.nodes.iter().find(|&&n| n as usize >= count) {
+                return Err(bad(n));
+            }
+        }
+        for s in &self.springs {
+            if let Some(&n) = s.nodes.iter().find(|&&n| n as usize >= count) {
+                return Err(bad(n));
+            }
+        }
+        Ok(())
+    }
+
+    /// The features in use.
+    pub fn features(&self) -> Features {
+        Features {
+            trusses: self.trusses.iter().any(|b| !b.is_empty()),
+            embedded_fibres: self
+                .membranes
+                .iter()
+                .any(|b| b.section.embedded_fibres && !b.is_empty()),
+            viscoelastic: self
+                .membranes
+                .iter()
+                .any(|b| b.section.material.resin.is_viscoelastic()),
+            springs: self.springs.iter().any(|b| !b.is_empty()),
+            gravity: self.gravity != Vector3::zeros(),
+            prescribed_motion: self
+                .boundary
+                .iter()
+                .any(|b| !matches!(b.motion, Motion::Fixed)),
+        }
+    }
+
+    /// The slot layout of the current batches and its node adjacency.
+    pub fn slot_layout(&self) -> SlotLayout {
+        let mut layout = SlotLayout::default();
+        let mut owners: Vec<u32> = Vec::new();
+        for b in &self.trusses {
+            layout.truss_offsets.push(owners.len());
+            owners.extend(b.nodes.iter().flatten());
+        }
+        for b in &self.membranes {
+            layout.membrane_offsets.push(owners.len());
+            for e in 0..b.len() {
+                owners.extend(b.element_nodes(e));
+            }
+        }
+        for b in &self.springs {
+            layout.spring_offsets.push(owners.len());
+            owners.extend(&b.nodes);
+        }
+        layout.len = owners.len();
+        // Counting sort by node keeps each node's slots in ascending order.
+        let n = self.node_count();
+        let mut ptr = vec![0usize; n + 1];
+        for &o in &owners {
+            ptr[o as usize + 1] += 1;
+        }
+        for i in 0..n {
+            ptr[i + 1] += ptr[i];
+        }
+        let mut fill = ptr.clone();
+        let mut slots = vec![0u32; owners.len()];
+        for (s, &o) in owners.iter().enumerate() {
+            slots[fill[o as usize]] = s as u32;
+            fill[o as usize] += 1;
+        }
+        layout.node_ptr = ptr;
+        layout.node_slots = slots;
+        layout
+    }
+
+    /// The undeformed state at rest at t = 0.
+    pub fn initial_state(&self) -> State {
+        State {
+            time: 0.0,
+            step: 0,
+            x: self.x0.clone(),
+            v: vec![Vector3::zeros(); self.node_count()],
+            history: self.membranes.iter().map(|b| b.initial_history()).collect(),
+        }
+    }
+
+    /// Output fields of every membrane element at `state`.
+    pub fn element_fields(&self, state: &State) -> Result<ElementFields, ElementError> {
+        let mut out = ElementFields::default();
+        for (b, h) in self.membranes.iter().zip(&state.history) {
+            let eh = b.element_history_len();
+            for e in 0..b.len() {
+                let o = b.element_output(e, &state.x, &h[e * eh..(e + 1) * eh])?;
+                out.shear.push(o.shear_angle);
+                out.fibre_stretch.push(o.fibre_stretch);
+                out.fibre_stress.push(o.fibre_stress);
+                out.resin_stress.push(o.resin_stress);
+                out.thickness.push(o.thickness);
+                let nodes = b.element_nodes(e);
+                let k = nodes.len() as f64;
+                out.centroid0.push(
+                    nodes
+                        .iter()
+                        .map(|&n| self.x0[n as usize])
+                        .sum::<Vector3<f64>>()
+                        / k,
+                );
+                out.centroid.push(
+                    nodes
+                        .iter()
+                        .map(|&n| state.x[n as usize])
+                        .sum::<Vector3<f64>>()
+                        / k,
+                );
+                out.area.push(b.element_area(e));
+            }
+        }
+        Ok(out)
+    }
+
+    /// The largest truss tension (N) at positions `x`.
+    pub fn max_truss_tension(&self, x: &[Vector3<f64>]) -> Result<f64, ElementError> {
+        let mut max = 0.0f64;
+        for b in &self.trusses {
+            for e in 0..b.len() {
+                max = max.max(b.element_output(e, x)?.tension);
+            }
+        }
+        Ok(max)
+    }
+
+    /// The derived measures of `state`, with `locking_deg` the locking
+    /// angle for the area at risk of wrinkling.
+    pub fn measures(&self, state: &State, locking_deg: f64) -> Result<Measures, ElementError> {
+        let fields = self.element_fields(state)?;
+        let mut m = Measures::default();
+        if let Some((i, g)) = fields
+            .shear
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        {
+            m.max_shear_deg = g.abs().to_degrees();
+            m.max_shear_at = fields.centroid[i].into();
+        }
+        m.area_above_locking =
+            measures::area_above(&fields.shear, &fields.area, locking_deg.to_radians());
+        m.max_fibre_tension_n = self.max_truss_tension(&state.x)?;
+        if let Some(info) = &self.blank {
+            m.draw_in = Some(measures::draw_in(
+                &info.frame,
+                &self.x0,
+                &state.x,
+                info.midpoints,
+                info.corners,
+            ));
+            let band = 0.5 * info.cell_size;
+            let profile = |line| {
+                measures::shear_profile(&info.frame, &fields.centroid0, &fields.shear, line, band)
+            };
+            m.profile_diagonal = profile(ProfileLine::Diagonal);
+            m.profile_median = profile(ProfileLine::MedianX);
+        }
+        Ok(m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn amplitudes() {
+        assert_eq!(Amplitude::Constant.value(3.0), 1.0);
+        assert_eq!(Amplitude::Ramp { duration: 2.0 }.value(1.0), 0.5);
+        assert_eq!(Amplitude::Ramp { duration: 2.0 }.value(5.0), 1.0);
+        let s = Amplitude::SmoothStep { duration: 2.0 };
+        assert_eq!(s.value(0.0), 0.0);
+        assert_eq!(s.value(1.0), 0.5);
+        assert_eq!(s.value(2.0), 1.0);
+        // Zero slope at both ends.
+        assert!(s.value(1e-4) < 1e-10 && 1.0 - s.value(2.0 - 1e-4) < 1e-10);
+        let t = Amplitude::Table {
+            points: vec![[0.0, 0.0], [1.0, 2.0], [3.0, 1.0]],
+        };
+        assert_eq!(t.value(-1.0), 0.0);
+        assert_eq!(t.value(0.5), 1.0);
+        assert_eq!(t.value(2.0), 1.5);
+        assert_eq!(t.value(9.0), 1.0);
+    }
+}

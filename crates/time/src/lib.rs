@@ -1,0 +1,836 @@
+//! # drape-time
+//!
+//! Time integration of a [`drape_model::Model`]. Today: the explicit
+//! central-difference driver [`Explicit`] with lumped mass (what the paper
+//! ran in Abaqus/Explicit): stable Δt from the elements with a safety
+//! factor, optional selective mass scaling to a target Δt, optional
+//! mass-proportional damping, prescribed motions with amplitudes, gravity,
+//! an energy balance, and an [`Observer`] that receives frames and progress
+//! and may ask the run to stop. No file formats live here.
+//!
+//! Element passes run in parallel with rayon; every node sums its element
+//! slots in a fixed order, so positions are bit-identical for any number
+//! of threads.
+//!
+//! A diverging run stops with a [`RunError`] that says the step, the time,
+//! the element or node and what went wrong; the state passed in keeps the
+//! last good step.
+//!
+//! ```
+//! use drape_constitutive::Material;
+//! use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
+//! use drape_model::{Amplitude, BoundaryCondition, Model, Motion};
+//! use drape_time::{Explicit, ExplicitSettings, NoObserver};
+//! use nalgebra::Vector3;
+//!
+//! // A 40 × 10 mm glass strip, clamped on the left, pulled 0.1 mm on the right.
+//! let blank = RectangleBlank {
+//!     width: 40.0, height: 10.0, center: Vector3::zeros(), orientation_deg: 0.0,
+//!     element: ElementKind::Quad, meshing: Meshing::Cells([8, 2]),
+//!     fibres: FibreRepresentation::Trusses,
+//! };
+//! let mut model = Model::from_blank(&blank, &Material::preset("glass-serge-4x3").unwrap()).unwrap();
+//! model.boundary.push(BoundaryCondition::fixed(model.node_set("left").unwrap().to_vec()));
+//! model.boundary.push(BoundaryCondition {
+//!     nodes: model.node_set("right").unwrap().to_vec(),
+//!     components: [true, true, true],
+//!     motion: Motion::Displacement {
+//!         value: Vector3::new(0.1, 0.0, 0.0),
+//!         amplitude: Amplitude::SmoothStep { duration: 1e-3 },
+//!     },
+//! });
+//! let mut state = model.initial_state();
+//! let settings = ExplicitSettings { end_time: 1e-3, ..ExplicitSettings::default() };
+//! let summary = Explicit::new(&model, settings).unwrap().run(&mut state, &mut NoObserver).unwrap();
+//! assert!(summary.steps > 10);
+//! assert!((state.x[model.node_set("right").unwrap()[0] as usize].x - 20.1).abs() < 1e-9);
+//! ```
+
+use std::time::Instant;
+
+use drape_elements::ElementError;
+use drape_model::{Model, Motion, SlotLayout, State};
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+/// Settings of an explicit run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExplicitSettings {
+    /// Time to reach (s).
+    pub end_time: f64,
+    /// Fraction of the stable step used.
+    pub safety_factor: f64,
+    /// A fixed Δt instead of the stable estimate (not checked: the user's
+    /// responsibility).
+    pub time_step: Option<f64>,
+    /// Target Δt for selective mass scaling: nodes of elements whose stable
+    /// step is smaller get mass until it is reached.
+    pub mass_scaling: Option<f64>,
+    /// α of the mass-proportional damping force −α·m·v (1/s).
+    pub damping: f64,
+    /// Number of output frames after the initial one, equally spaced in time.
+    pub frames: usize,
+    /// Steps between stable-Δt re-estimates.
+    pub time_step_interval: u64,
+    /// Stop when |energy balance error| exceeds this fraction of the largest
+    /// energy, checked at frames.
+    pub max_energy_error: Option<f64>,
+    /// Stop after this many steps.
+    pub max_steps: Option<u64>,
+}
+
+impl Default for ExplicitSettings {
+    fn default() -> Self {
+        Self {
+            end_time: 1.0,
+            safety_factor: 0.9,
+            time_step: None,
+            mass_scaling: None,
+            damping: 0.0,
+            frames: 10,
+            time_step_interval: 20,
+            max_energy_error: None,
+            max_steps: None,
+        }
+    }
+}
+
+/// The energy balance (mJ = N·mm).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Energies {
+    /// ½·m·v² at the current step.
+    pub kinetic: f64,
+    /// Elastic energy stored in the elements.
+    pub strain: f64,
+    /// Work of the internal forces, ∫f_int·dx.
+    pub internal_work: f64,
+    /// Internal work not stored: the resin's relaxation (and integration error).
+    pub viscous: f64,
+    /// Work of the damping forces.
+    pub damping: f64,
+    /// Work of gravity.
+    pub external_work: f64,
+    /// Work of the prescribed motions on the body (their reactions).
+    pub boundary_work: f64,
+    /// kinetic + internal + damping − external − boundary − initial kinetic.
+    pub balance_error: f64,
+}
+
+impl Energies {
+    /// |balance error| over the largest energy term (0 when all vanish).
+    pub fn relative_error(&self) -> f64 {
+        let scale = [
+            self.kinetic,
+            self.internal_work.abs(),
+            self.external_work.abs(),
+            self.boundary_work.abs(),
+        ]
+        .into_iter()
+        .fold(0.0, f64::max);
+        if scale > 0.0 {
+            self.balance_error.abs() / scale
+        } else {
+            0.0
+        }
+    }
+
+    /// E_kin/E_int: small for a quasi-static run.
+    pub fn kinetic_to_internal(&self) -> f64 {
+        if self.internal_work.abs() > 0.0 {
+            self.kinetic / self.internal_work.abs()
+        } else {
+            0.0
+        }
+    }
+}
+
+/// One output frame.
+pub struct Frame<'a> {
+    /// 0 for the initial state.
+    pub index: usize,
+    /// The model.
+    pub model: &'a Model,
+    /// The state at the frame.
+    pub state: &'a State,
+    /// The energies there.
+    pub energy: &'a Energies,
+    /// Reaction forces at the constrained nodes (zero elsewhere), N.
+    pub reactions: &'a [Vector3<f64>],
+}
+
+/// Progress of a run, for an observer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Completed steps.
+    pub step: u64,
+    /// Simulated time.
+    pub time: f64,
+    /// Time to reach.
+    pub end_time: f64,
+    /// Current Δt.
+    pub dt: f64,
+}
+
+/// What an observer asks of the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Control {
+    /// Go on.
+    Continue,
+    /// Stop after this step (the state stays consistent).
+    Stop,
+}
+
+/// Receives frames and progress from a run.
+pub trait Observer {
+    /// An output frame.
+    fn frame(&mut self, _frame: &Frame<'_>) {}
+    /// Called every few steps; return [`Control::Stop`] to stop.
+    fn progress(&mut self, _progress: &Progress) -> Control {
+        Control::Continue
+    }
+}
+
+/// An observer that does nothing.
+pub struct NoObserver;
+impl Observer for NoObserver {}
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunError {
+    /// An element collapsed or inverted.
+    #[error("step {step}, t = {time:.6e} s: {batch} {error}")]
+    Element {
+        /// The step that failed.
+        step: u64,
+        /// Its time.
+        time: f64,
+        /// Which batch kind and index.
+        batch: String,
+        /// The element and what happened.
+        error: ElementError,
+    },
+    /// A NaN or infinite value appeared.
+    #[error("step {step}, t = {time:.6e} s: non-finite {what} at node {node}")]
+    NonFinite {
+        /// The step that failed.
+        step: u64,
+        /// Its time.
+        time: f64,
+        /// The node.
+        node: usize,
+        /// What was not finite.
+        what: &'static str,
+    },
+    /// The energy balance drifted beyond the allowed bound.
+    #[error(
+        "step {step}, t = {time:.6e} s: energy balance error {relative:.3e} exceeds {bound:.3e} of the largest energy"
+    )]
+    EnergyBalance {
+        /// The step.
+        step: u64,
+        /// Its time.
+        time: f64,
+        /// |error|/largest energy.
+        relative: f64,
+        /// The bound.
+        bound: f64,
+    },
+    /// The settings or the model cannot run.
+    #[error("cannot run: {0}")]
+    Setup(String),
+}
+
+/// What a finished run reports.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSummary {
+    /// Steps taken in this run.
+    pub steps: u64,
+    /// Smallest and largest Δt used.
+    pub dt_range: (f64, f64),
+    /// Mass added by mass scaling (t).
+    pub added_mass: f64,
+    /// Total mass after scaling (t).
+    pub total_mass: f64,
+    /// Final energies.
+    pub energy: Energies,
+    /// Whether an observer asked to stop before the end.
+    pub stopped: bool,
+    /// Wall-clock seconds.
+    pub wall_seconds: f64,
+    /// Threads in rayon's pool.
+    pub threads: usize,
+}
+
+/// A constrained component: node, component, which boundary condition.
+#[derive(Debug, Clone, Copy)]
+struct Constraint {
+    node: u32,
+    component: u8,
+    bc: u32,
+}
+
+/// The explicit central-difference driver with its scratch buffers.
+pub struct Explicit<'m> {
+    model: &'m Model,
+    settings: ExplicitSettings,
+    layout: SlotLayout,
+    mass: Vec<f64>,
+    /// √(mass scale) per element of each truss batch, then membrane batch.
+    truss_scale: Vec<Vec<f64>>,
+    membrane_scale: Vec<Vec<f64>>,
+    constraints: Vec<Constraint>,
+    constrained: Vec<[bool; 3]>,
+    added_mass: f64,
+    slots: Vec<Vector3<f64>>,
+    f_int: Vec<Vector3<f64>>,
+    f_ext: Vec<Vector3<f64>>,
+    x_new: Vec<Vector3<f64>>,
+    v_new: Vec<Vector3<f64>>,
+    reactions: Vec<Vector3<f64>>,
+    history_new: Vec<Vec<f64>>,
+}
+
+/// Nodes summed per rayon task in energy sums: fixed chunks make the sums
+/// independent of the thread count.
+const SUM_CHUNK: usize = 4096;
+
+fn chunked_sum<F>(n: usize, term: F) -> f64
+where
+    F: Fn(usize) -> f64 + Sync,
+{
+    chunked_sums(n, |i| [term(i)])[0]
+}
+
+/// K sums over nodes at once, in fixed chunks.
+fn chunked_sums<const K: usize, F>(n: usize, term: F) -> [f64; K]
+where
+    F: Fn(usize) -> [f64; K] + Sync,
+{
+    let partial: Vec<[f64; K]> = (0..n.div_ceil(SUM_CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut acc = [0.0; K];
+            for i in c * SUM_CHUNK..((c + 1) * SUM_CHUNK).min(n) {
+                for (a, t) in acc.iter_mut().zip(term(i)) {
+                    *a += t;
+                }
+            }
+            acc
+        })
+        .collect();
+    let mut total = [0.0; K];
+    for p in &partial {
+        for (t, v) in total.iter_mut().zip(p) {
+            *t += v;
+        }
+    }
+    total
+}
+
+impl<'m> Explicit<'m> {
+    /// Prepares a run of `model`: checks it, builds the slot layout and the
+    /// constraint list, applies mass scaling.
+    pub fn new(model: &'m Model, settings: ExplicitSettings) -> Result<Self, RunError> {
+        model.check().map_err(|e| RunError::Setup(e.to_string()))?;
+        if !(settings.end_time.is_finite() && settings.end_time >= 0.0) {
+            return Err(RunError::Setup(format!(
+                "end time {} must be a non-negative number",
+                settings.end_time
+            )));
+        }
+        if !(settings.safety_factor > 0.0 && settings.safety_factor <= 1.0) {
+            return Err(RunError::Setup(format!(
+                "safety factor {} must be in (0, 1]",
+                settings.safety_factor
+            )));
+        }
+        let n = model.node_count();
+        if let Some(node) = (0..n).find(|&i| model.mass[i].is_nan() || model.mass[i] <= 0.0) {
+            return Err(RunError::Setup(format!(
+                "node {node} has no mass (it belongs to no membrane element)"
+            )));
+        }
+        let mut constrained = vec![[false; 3]; n];
+        let mut owner = vec![[u32::MAX; 3]; n];
+        for (b, bc) in model.boundary.iter().enumerate() {
+            for &node in &bc.nodes {
+                for c in 0..3 {
+                    if bc.components[c] {
+                        constrained[node as usize][c] = true;
+                        owner[node as usize][c] = b as u32;
+                    }
+                }
+            }
+        }
+        let mut constraints = Vec::new();
+        for (node, o) in owner.iter().enumerate() {
+            for (c, &bc) in o.iter().enumerate() {
+                if bc != u32::MAX {
+                    constraints.push(Constraint {
+                        node: node as u32,
+                        component: c as u8,
+                        bc,
+                    });
+                }
+            }
+        }
+        let layout = model.slot_layout();
+        let mut driver = Self {
+            model,
+            settings,
+            slots: vec![Vector3::zeros(); layout.len],
+            layout,
+            mass: model.mass.clone(),
+            truss_scale: model.trusses.iter().map(|b| vec![1.0; b.len()]).collect(),
+            membrane_scale: model.membranes.iter().map(|b| vec![1.0; b.len()]).collect(),
+            constraints,
+            constrained,
+            added_mass: 0.0,
+            f_int: vec![Vector3::zeros(); n],
+            f_ext: vec![Vector3::zeros(); n],
+            x_new: vec![Vector3::zeros(); n],
+            v_new: vec![Vector3::zeros(); n],
+            reactions: vec![Vector3::zeros(); n],
+            history_new: model
+                .membranes
+                .iter()
+                .map(|b| b.initial_history())
+                .collect(),
+        };
+        if let Some(target) = driver.settings.mass_scaling {
+            driver.scale_mass(target);
+        }
+        Ok(driver)
+    }
+
+    /// Selective mass scaling at the reference shape: an element whose step
+    /// is below `target` asks for mass factor (target/Δt_e)² on its nodes;
+    /// each node takes the largest factor asked. An element's step then grows
+    /// with the square root of the smallest factor of its nodes.
+    fn scale_mass(&mut self, target: f64) {
+        let model = self.model;
+        let x = &model.x0;
+        let safety = self.settings.safety_factor;
+        let mut factor = vec![1.0f64; model.node_count()];
+        let mut ask = |nodes: &[u32], dt: f64| {
+            let f = (target / (safety * dt)).powi(2);
+            if f > 1.0 {
+                for &n in nodes {
+                    factor[n as usize] = factor[n as usize].max(f);
+                }
+            }
+        };
+        for b in &model.trusses {
+            for e in 0..b.len() {
+                ask(&b.nodes[e], b.element_stable_time_step(e, x));
+            }
+        }
+        for b in &model.membranes {
+            for e in 0..b.len() {
+                ask(b.element_nodes(e), b.element_stable_time_step(e, x));
+            }
+        }
+        let smallest = |nodes: &[u32]| {
+            nodes
+                .iter()
+                .map(|&n| factor[n as usize])
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        };
+        for (b, s) in model.trusses.iter().zip(&mut self.truss_scale) {
+            for (e, se) in s.iter_mut().enumerate() {
+                *se = smallest(&b.nodes[e]);
+            }
+        }
+        for (b, s) in model.membranes.iter().zip(&mut self.membrane_scale) {
+            for (e, se) in s.iter_mut().enumerate() {
+                *se = smallest(b.element_nodes(e));
+            }
+        }
+        let before: f64 = self.mass.iter().sum();
+        for (m, f) in self.mass.iter_mut().zip(&factor) {
+            *m *= f;
+        }
+        self.added_mass = self.mass.iter().sum::<f64>() - before;
+    }
+
+    /// The stable step (times the safety factor) at positions `x`.
+    pub fn stable_time_step(&self, x: &[Vector3<f64>]) -> f64 {
+        if let Some(dt) = self.settings.time_step {
+            return dt;
+        }
+        let model = self.model;
+        let mut dt = f64::INFINITY;
+        for (b, s) in model.trusses.iter().zip(&self.truss_scale) {
+            dt = dt.min(
+                (0..b.len())
+                    .into_par_iter()
+                    .with_min_len(1024)
+                    .map(|e| b.element_stable_time_step(e, x) * s[e])
+                    .reduce(|| f64::INFINITY, f64::min),
+            );
+        }
+        for (b, s) in model.membranes.iter().zip(&self.membrane_scale) {
+            dt = dt.min(
+                (0..b.len())
+                    .into_par_iter()
+                    .with_min_len(1024)
+                    .map(|e| b.element_stable_time_step(e, x) * s[e])
+                    .reduce(|| f64::INFINITY, f64::min),
+            );
+        }
+        for b in &model.springs {
+            for &n in &b.nodes {
+                dt = dt.min(b.stable_time_step(self.mass[n as usize]));
+            }
+        }
+        dt * self.settings.safety_factor
+    }
+
+    /// The internal forces at `x` into `self.f_int`, the new histories into
+    /// `self.history_new`.
+    fn internal_forces(
+        &mut self,
+        x: &[Vector3<f64>],
+        history: &[Vec<f64>],
+        dt: f64,
+        step: u64,
+        time: f64,
+    ) -> Result<(), RunError> {
+        let model = self.model;
+        let fail = |batch: String, error| RunError::Element {
+            step,
+            time,
+            batch,
+            error,
+        };
+        for (i, b) in model.trusses.iter().enumerate() {
+            let start = self.layout.truss_offsets[i];
+            b.forces_into(x, &mut self.slots[start..start + 2 * b.len()])
+                .map_err(|e| fail(format!("truss batch {i}"), e))?;
+        }
+        for (i, b) in model.membranes.iter().enumerate() {
+            let start = self.layout.membrane_offsets[i];
+            let n = b.shape().nodes() * b.len();
+            b.forces_into(
+                x,
+                &history[i],
+                &mut self.history_new[i],
+                dt,
+                &mut self.slots[start..start + n],
+            )
+            .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
+        }
+        for (i, b) in model.springs.iter().enumerate() {
+            let start = self.layout.spring_offsets[i];
+            b.forces_into(x, &mut self.slots[start..start + b.len()]);
+        }
+        self.layout.gather(&self.slots, &mut self.f_int);
+        Ok(())
+    }
+
+    /// Stored strain energy at `state`.
+    fn strain_energy(&self, state: &State) -> f64 {
+        let model = self.model;
+        let mut e = 0.0;
+        for b in &model.trusses {
+            e += (0..b.len())
+                .map(|i| b.element_energy(i, &state.x).unwrap_or(f64::NAN))
+                .sum::<f64>();
+        }
+        for (b, h) in model.membranes.iter().zip(&state.history) {
+            e += b.energy(&state.x, h).unwrap_or(f64::NAN);
+        }
+        for b in &model.springs {
+            e += (0..b.len())
+                .map(|i| b.element_energy(i, &state.x))
+                .sum::<f64>();
+        }
+        e
+    }
+
+    fn prescribed_displacement(&self, c: &Constraint, t: f64) -> Option<f64> {
+        let bc = &self.model.boundary[c.bc as usize];
+        bc.displacement(&self.model.x0[c.node as usize], t)
+            .map(|u| u[c.component as usize])
+    }
+
+    fn prescribed_velocity(&self, c: &Constraint, t: f64) -> f64 {
+        match &self.model.boundary[c.bc as usize].motion {
+            Motion::Velocity { value, amplitude } => {
+                value[c.component as usize] * amplitude.value(t)
+            }
+            _ => unreachable!("velocity asked of a displacement condition"),
+        }
+    }
+
+    /// Runs from `state` to the end time. On error `state` holds the last
+    /// good step.
+    pub fn run(
+        &mut self,
+        state: &mut State,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary, RunError> {
+        let started = Instant::now();
+        let model = self.model;
+        let n = model.node_count();
+        let end = self.settings.end_time;
+        let damping = self.settings.damping;
+        if state.x.len() != n || state.history.len() != model.membranes.len() {
+            return Err(RunError::Setup(
+                "the state does not belong to this model".into(),
+            ));
+        }
+        for (b, g) in self.f_ext.iter_mut().zip(&self.mass) {
+            *b = model.gravity * *g;
+        }
+        // Forces at the start, with no time passing so no relaxation.
+        let history = std::mem::take(&mut state.history);
+        let first = self.internal_forces(&state.x, &history, 0.0, state.step, state.time);
+        state.history = history;
+        first?;
+        let mut energy = Energies::default();
+        let kinetic0: f64 = chunked_sum(n, |i| 0.5 * self.mass[i] * state.v[i].norm_squared());
+        let frame_dt = if self.settings.frames > 0 {
+            end / self.settings.frames as f64
+        } else {
+            f64::INFINITY
+        };
+        let mut next_frame = (state.time / frame_dt).floor() as usize + 1;
+        if state.step == 0 {
+            energy.kinetic = kinetic0;
+            energy.strain = self.strain_energy(state);
+            observer.frame(&Frame {
+                index: 0,
+                model,
+                state,
+                energy: &energy,
+                reactions: &self.reactions,
+            });
+        }
+        let mut dt = self.stable_time_step(&state.x);
+        let mut dt_prev = if state.step == 0 { 0.0 } else { dt };
+        let (mut dt_min, mut dt_max) = (f64::INFINITY, 0.0f64);
+        let mut steps = 0u64;
+        let mut stopped = false;
+        let mut last_progress = Instant::now();
+        while state.time < end * (1.0 - 1e-12) {
+            if self.settings.max_steps.is_some_and(|m| steps >= m) {
+                stopped = true;
+                break;
+            }
+            if steps > 0 && steps % self.settings.time_step_interval.max(1) == 0 {
+                dt = self.stable_time_step(&state.x);
+            }
+            if !(dt > 0.0 && dt.is_finite()) {
+                return Err(RunError::Setup(format!(
+                    "stable time step {dt:e} at step {} is not positive",
+                    state.step
+                )));
+            }
+            let h = dt.min(end - state.time);
+            let t_new = state.time + h;
+            let dt_avg = 0.5 * (dt_prev + h);
+            // Velocities to n+½ and positions to n+1 for free components;
+            // mass-proportional damping taken at the mid-step velocity.
+            let (c1, c2) = (
+                1.0 - 0.5 * damping * dt_avg,
+                1.0 / (1.0 + 0.5 * damping * dt_avg),
+            );
+            {
+                let (x, v, m, f_int, f_ext) =
+                    (&state.x, &state.v, &self.mass, &self.f_int, &self.f_ext);
+                self.x_new
+                    .par_iter_mut()
+                    .zip(self.v_new.par_iter_mut())
+                    .with_min_len(1024)
+                    .enumerate()
+                    .for_each(|(i, (xn, vn))| {
+                        let a = (f_ext[i] - f_int[i]) / m[i];
+                        *vn = (v[i] * c1 + a * dt_avg) * c2;
+                        *xn = x[i] + *vn * h;
+                    });
+            }
+            // Prescribed components.
+            for c in &self.constraints {
+                let (i, k) = (c.node as usize, c.component as usize);
+                match self.prescribed_displacement(c, t_new) {
+                    Some(u) => self.x_new[i][k] = model.x0[i][k] + u,
+                    None => {
+                        let vel = self.prescribed_velocity(c, state.time + 0.5 * h);
+                        self.x_new[i][k] = state.x[i][k] + vel * h;
+                    }
+                }
+                self.v_new[i][k] = (self.x_new[i][k] - state.x[i][k]) / h;
+            }
+            // Work of step n over the centred increment (x_{n+1} − x_{n−1})/2.
+            {
+                let (x, v, m) = (&state.x, &state.v, &self.mass);
+                let (xn, vn, fi, fe) = (&self.x_new, &self.v_new, &self.f_int, &self.f_ext);
+                let constrained = &self.constrained;
+                let terms = |i: usize| -> [f64; 4] {
+                    let dx = v[i] * (0.5 * dt_prev) + (xn[i] - x[i]) * 0.5;
+                    let v_mid = (v[i] + vn[i]) * 0.5;
+                    let damp = v_mid * (damping * m[i]);
+                    let mut w_bc = 0.0;
+                    if constrained[i].iter().any(|&c| c) && dt_avg > 0.0 {
+                        // The force the constraint applies: m·a − (f_ext − f_int − damping).
+                        let r = (vn[i] - v[i]) * (m[i] / dt_avg) - (fe[i] - fi[i] - damp);
+                        for k in 0..3 {
+                            if constrained[i][k] {
+                                w_bc += r[k] * dx[k];
+                            }
+                        }
+                    }
+                    [fi[i].dot(&dx), fe[i].dot(&dx), damp.dot(&dx), w_bc]
+                };
+                let [w_int, w_ext, w_damp, w_bc] = chunked_sums(n, terms);
+                energy.internal_work += w_int;
+                energy.external_work += w_ext;
+                energy.damping += w_damp;
+                energy.boundary_work += w_bc;
+            }
+            // Forces at n+1 from the committed history.
+            let history = std::mem::take(&mut state.history);
+            let x_new = std::mem::take(&mut self.x_new);
+            let result = self.internal_forces(&x_new, &history, h, state.step + 1, t_new);
+            self.x_new = x_new;
+            state.history = history;
+            result?;
+            if let Some(i) = (0..n).find(|&i| {
+                !(self.x_new[i].iter().all(|v| v.is_finite())
+                    && self.f_int[i].iter().all(|v| v.is_finite()))
+            }) {
+                return Err(RunError::NonFinite {
+                    step: state.step + 1,
+                    time: t_new,
+                    node: i,
+                    what: "position or force",
+                });
+            }
+            // Commit.
+            std::mem::swap(&mut state.x, &mut self.x_new);
+            std::mem::swap(&mut state.v, &mut self.v_new);
+            std::mem::swap(&mut state.history, &mut self.history_new);
+            state.time = t_new;
+            state.step += 1;
+            steps += 1;
+            dt_prev = h;
+            dt_min = dt_min.min(h);
+            dt_max = dt_max.max(h);
+            let at_end = state.time >= end * (1.0 - 1e-12);
+            let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
+            if at_frame || at_end {
+                let report = self.energies_at(state, &energy, kinetic0, h);
+                if at_frame {
+                    self.compute_reactions();
+                    observer.frame(&Frame {
+                        index: next_frame,
+                        model,
+                        state,
+                        energy: &report,
+                        reactions: &self.reactions,
+                    });
+                    while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
+                        next_frame += 1;
+                    }
+                }
+                if let Some(bound) = self.settings.max_energy_error {
+                    let relative = report.relative_error();
+                    if relative > bound {
+                        return Err(RunError::EnergyBalance {
+                            step: state.step,
+                            time: state.time,
+                            relative,
+                            bound,
+                        });
+                    }
+                }
+            }
+            if last_progress.elapsed().as_millis() >= 100 || at_end {
+                last_progress = Instant::now();
+                let p = Progress {
+                    step: state.step,
+                    time: state.time,
+                    end_time: end,
+                    dt: h,
+                };
+                if observer.progress(&p) == Control::Stop && !at_end {
+                    stopped = true;
+                    break;
+                }
+            }
+        }
+        let energy = self.energies_at(state, &energy, kinetic0, dt_prev);
+        Ok(RunSummary {
+            steps,
+            dt_range: (dt_min, dt_max),
+            added_mass: self.added_mass,
+            total_mass: self.mass.iter().sum(),
+            energy,
+            stopped,
+            wall_seconds: started.elapsed().as_secs_f64(),
+            threads: rayon::current_num_threads(),
+        })
+    }
+
+    /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`.
+    fn full_step_velocity(&self, state: &State, i: usize, h: f64) -> Vector3<f64> {
+        let mut v = state.v[i];
+        for k in 0..3 {
+            if !self.constrained[i][k] {
+                v[k] += 0.5 * h * (self.f_ext[i][k] - self.f_int[i][k]) / self.mass[i];
+            }
+        }
+        v
+    }
+
+    /// The energies at step n+1: the works accumulated to n+½ plus the
+    /// half increment (x_{n+1} − x_n)/2 at the forces of n+1 (reactions
+    /// taken quasi-static there), so that they match the full-step kinetic
+    /// energy to O(Δt²).
+    fn energies_at(&self, state: &State, acc: &Energies, kinetic0: f64, h: f64) -> Energies {
+        let n = self.model.node_count();
+        let damping = self.settings.damping;
+        let [kinetic, w_int, w_ext, w_damp, w_bc] = chunked_sums(n, |i| {
+            let half = state.v[i] * (0.5 * h);
+            let (fi, fe) = (self.f_int[i], self.f_ext[i]);
+            let mut w_bc = 0.0;
+            for k in 0..3 {
+                if self.constrained[i][k] {
+                    w_bc += (fi[k] - fe[k]) * half[k];
+                }
+            }
+            [
+                0.5 * self.mass[i] * self.full_step_velocity(state, i, h).norm_squared(),
+                fi.dot(&half),
+                fe.dot(&half),
+                damping * self.mass[i] * state.v[i].dot(&half),
+                w_bc,
+            ]
+        });
+        let mut e = *acc;
+        e.kinetic = kinetic;
+        e.internal_work += w_int;
+        e.external_work += w_ext;
+        e.damping += w_damp;
+        e.boundary_work += w_bc;
+        e.strain = self.strain_energy(state);
+        e.viscous = e.internal_work - e.strain;
+        e.balance_error =
+            e.kinetic + e.internal_work + e.damping - e.external_work - e.boundary_work - kinetic0;
+        e
+    }
+
+    /// Reactions at the constrained components, quasi-static part
+    /// f_int − f_ext (the inertia of a prescribed node is the user's motion).
+    fn compute_reactions(&mut self) {
+        for r in self.reactions.iter_mut() {
+            *r = Vector3::zeros();
+        }
+        for c in &self.constraints {
+            let (i, k) = (c.node as usize, c.component as usize);
+            self.reactions[i][k] = self.f_int[i][k] - self.f_ext[i][k];
+        }
+    }
+}

@@ -1,0 +1,355 @@
+//! Derived measures of a formed blank (SPEC §8): shear profiles, draw-in,
+//! area above a locking angle, maxima.
+//!
+//! These are the numbers the paper compares with experiments: shear along
+//! the diagonal and medians (its Figs. 7 and 12), the draw-in or
+//! "shrinkage" of edge midpoints and corners (its Table 4), and the area
+//! sheared past a locking angle as a wrinkle-risk indicator. They are pure
+//! functions of reference and current positions and per-element shear, so
+//! they can be evaluated on any frame of a result.
+//!
+//! Conventions:
+//! - Lines and directions live in the blank's reference plane (x, y); z is
+//!   dropped, so a blank drawn into a die measures its in-plane pull-in.
+//! - A profile's `distance` is the signed coordinate along the line from
+//!   the blank centre, positive towards +x (medians along x, diagonal) or
+//!   +y (median along y).
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::blank::BlankFrame;
+
+/// A line of the blank along which a shear profile is read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProfileLine {
+    /// From the bottom-left to the top-right corner.
+    Diagonal,
+    /// The median parallel to x (y = centre).
+    MedianX,
+    /// The median parallel to y (x = centre).
+    MedianY,
+}
+
+impl ProfileLine {
+    /// The unit in-plane direction (x, y) of the line on a blank `frame`.
+    pub fn direction(self, frame: &BlankFrame) -> [f64; 2] {
+        match self {
+            ProfileLine::Diagonal => {
+                let length = frame.width.hypot(frame.height);
+                [frame.width / length, frame.height / length]
+            }
+            ProfileLine::MedianX => [1.0, 0.0],
+            ProfileLine::MedianY => [0.0, 1.0],
+        }
+    }
+}
+
+/// One point of a shear profile.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ProfilePoint {
+    /// Signed initial distance from the blank centre along the line (mm).
+    pub distance: f64,
+    /// Shear angle there (degrees).
+    pub shear_deg: f64,
+}
+
+/// Draw-in (the paper's "shrinkage", Table 4), mm.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct DrawIn {
+    /// Mean inward in-plane displacement of the midpoints of the two edges normal to x.
+    pub dx: f64,
+    /// The same for the edges normal to y.
+    pub dy: f64,
+    /// Mean inward in-plane displacement of the four corners along the diagonals.
+    pub dd: f64,
+}
+
+/// The shear profile along `line`: every element whose reference centroid
+/// lies within `band` of the line, sorted by signed distance from the centre.
+///
+/// `band` is a perpendicular distance, inclusive up to a rounding tolerance
+/// of 1e-9 of the blank's size: on a grid with an even number of rows the
+/// centroids next to a median sit exactly half a cell away, and a band of
+/// half a cell must take both rows, not whichever rounding favours. Equal
+/// distances keep element order, so the result is deterministic.
+pub fn shear_profile(
+    frame: &BlankFrame,
+    centroids0: &[Vector3<f64>],
+    shear_rad: &[f64],
+    line: ProfileLine,
+    band: f64,
+) -> Vec<ProfilePoint> {
+    debug_assert_eq!(centroids0.len(), shear_rad.len());
+    let [ux, uy] = line.direction(frame);
+    let reach = band + 1e-9 * frame.width.max(frame.height);
+    let mut points: Vec<ProfilePoint> = centroids0
+        .iter()
+        .zip(shear_rad)
+        .filter_map(|(c, &gamma)| {
+            let (rx, ry) = (c.x - frame.center.x, c.y - frame.center.y);
+            let across = (rx * uy - ry * ux).abs();
+            (across <= reach).then_some(ProfilePoint {
+                distance: rx * ux + ry * uy,
+                shear_deg: gamma.to_degrees(),
+            })
+        })
+        .collect();
+    // Stable sort: elements at the same distance stay in element order.
+    points.sort_by(|a, b| a.distance.total_cmp(&b.distance));
+    points
+}
+
+/// Draw-in from reference `x0` and current `x` positions, given the edge
+/// midpoint nodes [left, right, bottom, top] and the corner nodes
+/// [bottom-left, bottom-right, top-right, top-left].
+///
+/// Each displacement is projected on the blank plane (z dropped) and then on
+/// the inward direction: +x, −x, +y, −y for the midpoints, and the unit
+/// vector from the corner's reference position towards the blank centre for
+/// the corners. Positive values mean the blank was pulled in.
+pub fn draw_in(
+    frame: &BlankFrame,
+    x0: &[Vector3<f64>],
+    x: &[Vector3<f64>],
+    midpoints: [u32; 4],
+    corners: [u32; 4],
+) -> DrawIn {
+    let displacement = |n: u32| {
+        let n = n as usize;
+        [x[n].x - x0[n].x, x[n].y - x0[n].y]
+    };
+    let inward = |n: u32, [ix, iy]: [f64; 2]| {
+        let [ux, uy] = displacement(n);
+        ux * ix + uy * iy
+    };
+    let [left, right, bottom, top] = midpoints;
+    let dx = 0.5 * (inward(left, [1.0, 0.0]) + inward(right, [-1.0, 0.0]));
+    let dy = 0.5 * (inward(bottom, [0.0, 1.0]) + inward(top, [0.0, -1.0]));
+    let dd = corners
+        .iter()
+        .map(|&n| {
+            let p = &x0[n as usize];
+            let (tx, ty) = (frame.center.x - p.x, frame.center.y - p.y);
+            let length = tx.hypot(ty);
+            // A corner at the centre (a degenerate blank) has no inward
+            // direction; it contributes nothing rather than a NaN.
+            if length > 0.0 {
+                inward(n, [tx / length, ty / length])
+            } else {
+                0.0
+            }
+        })
+        .sum::<f64>()
+        / 4.0;
+    DrawIn { dx, dy, dd }
+}
+
+/// Total reference area of the elements whose |shear| exceeds `locking_rad`.
+pub fn area_above(shear_rad: &[f64], areas: &[f64], locking_rad: f64) -> f64 {
+    debug_assert_eq!(shear_rad.len(), areas.len());
+    shear_rad
+        .iter()
+        .zip(areas)
+        .filter(|(gamma, _)| gamma.abs() > locking_rad)
+        .map(|(_, a)| a)
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
+
+    fn frame() -> BlankFrame {
+        BlankFrame {
+            center: Vector3::new(5.0, -3.0, 2.0),
+            width: 100.0,
+            height: 80.0,
+        }
+    }
+
+    /// Hand-made nodes: midpoints left, right, bottom, top, then corners
+    /// bottom-left, bottom-right, top-right, top-left.
+    fn nodes(f: &BlankFrame) -> Vec<Vector3<f64>> {
+        let (c, w, h) = (f.center, 0.5 * f.width, 0.5 * f.height);
+        [
+            (-w, 0.0),
+            (w, 0.0),
+            (0.0, -h),
+            (0.0, h),
+            (-w, -h),
+            (w, -h),
+            (w, h),
+            (-w, h),
+        ]
+        .iter()
+        .map(|&(x, y)| c + Vector3::new(x, y, 0.0))
+        .collect()
+    }
+
+    const MID: [u32; 4] = [0, 1, 2, 3];
+    const CORNERS: [u32; 4] = [4, 5, 6, 7];
+
+    #[test]
+    fn uniform_inward_translation_of_edges() {
+        let f = frame();
+        let x0 = nodes(&f);
+        let (dx, dy, dd) = (7.0, 4.0, 3.0);
+        let (w, h) = (f.width, f.height);
+        let diag = w.hypot(h);
+        // Each node moves inward by its amount, plus an out-of-plane lift
+        // and (for midpoints) a tangential slide that must not count.
+        let moves = [
+            Vector3::new(dx, 1.0, 9.0),
+            Vector3::new(-dx, -2.0, 9.0),
+            Vector3::new(0.5, dy, -4.0),
+            Vector3::new(0.0, -dy, 30.0),
+            Vector3::new(w, h, 0.0) * (dd / diag) + Vector3::new(0.0, 0.0, 12.0),
+            Vector3::new(-w, h, 0.0) * (dd / diag),
+            Vector3::new(-w, -h, 0.0) * (dd / diag),
+            Vector3::new(w, -h, 0.0) * (dd / diag),
+        ];
+        let x: Vec<_> = x0.iter().zip(moves).map(|(p, m)| p + m).collect();
+        let d = draw_in(&f, &x0, &x, MID, CORNERS);
+        assert!((d.dx - dx).abs() < 1e-12, "{d:?}");
+        assert!((d.dy - dy).abs() < 1e-12, "{d:?}");
+        assert!((d.dd - dd).abs() < 1e-12, "{d:?}");
+        // No motion, no draw-in; outward motion is negative.
+        assert_eq!(draw_in(&f, &x0, &x0, MID, CORNERS), DrawIn::default());
+        let out: Vec<_> = x0.iter().zip(&x).map(|(p, q)| p - (q - p)).collect();
+        let d = draw_in(&f, &x0, &out, MID, CORNERS);
+        assert!(
+            (d.dx + dx).abs() < 1e-12 && (d.dy + dy).abs() < 1e-12 && (d.dd + dd).abs() < 1e-12
+        );
+    }
+
+    #[test]
+    fn rigid_translation_is_no_draw_in() {
+        let f = frame();
+        let x0 = nodes(&f);
+        let x: Vec<_> = x0
+            .iter()
+            .map(|p| p + Vector3::new(3.0, -8.0, 50.0))
+            .collect();
+        let d = draw_in(&f, &x0, &x, MID, CORNERS);
+        assert!(
+            d.dx.abs() < 1e-12 && d.dy.abs() < 1e-12 && d.dd.abs() < 1e-12,
+            "{d:?}"
+        );
+    }
+
+    #[test]
+    fn uniform_shrink_of_a_meshed_blank() {
+        let b = RectangleBlank {
+            width: 100.0,
+            height: 80.0,
+            center: Vector3::new(5.0, -3.0, 2.0),
+            orientation_deg: 0.0,
+            element: ElementKind::Quad,
+            meshing: Meshing::Cells([4, 4]),
+            fibres: FibreRepresentation::Trusses,
+        };
+        let m = b.mesh().unwrap();
+        let s = 0.9;
+        let x: Vec<_> = m.x0.iter().map(|p| b.center + (p - b.center) * s).collect();
+        let set = |name: &str| -> [u32; 4] { m.node_sets[name].clone().try_into().unwrap() };
+        let d = draw_in(&b.frame(), &m.x0, &x, set("edge_midpoints"), set("corners"));
+        assert!((d.dx - 0.1 * 50.0).abs() < 1e-12, "{d:?}");
+        assert!((d.dy - 0.1 * 40.0).abs() < 1e-12, "{d:?}");
+        assert!((d.dd - 0.1 * 50.0f64.hypot(40.0)).abs() < 1e-12, "{d:?}");
+    }
+
+    #[test]
+    fn profile_picks_the_right_elements_in_order() {
+        let f = frame();
+        let c = f.center;
+        let at = |x: f64, y: f64| c + Vector3::new(x, y, 0.0);
+        // Diagonal direction (100, 80)/|..|; a point at t along it, offset n across.
+        let l = 100.0f64.hypot(80.0);
+        let (ux, uy) = (100.0 / l, 80.0 / l);
+        let on_diag = |t: f64, n: f64| at(t * ux - n * uy, t * uy + n * ux);
+        let centroids = vec![
+            on_diag(20.0, 0.5),           // 0: diagonal, +20
+            at(-30.0, 0.0),               // 1: median x, −30
+            on_diag(-10.0, -0.9),         // 2: diagonal, −10
+            at(0.0, 25.0),                // 3: median y, +25
+            on_diag(5.0, 1.5),            // 4: outside the band
+            at(12.0, -0.99),              // 5: median x, +12
+            at(0.2, -35.0),               // 6: median y, −35
+            Vector3::new(c.x, c.y, 40.0), // 7: the centre, any z: on every line
+        ];
+        let shear: Vec<f64> = (0..centroids.len())
+            .map(|k| (k as f64 - 3.0).to_radians())
+            .collect();
+        let read = |line| -> Vec<(f64, f64)> {
+            shear_profile(&f, &centroids, &shear, line, 1.0)
+                .iter()
+                .map(|p| (p.distance, p.shear_deg))
+                .collect()
+        };
+        let close = |got: Vec<(f64, f64)>, want: &[(f64, f64)]| {
+            assert_eq!(got.len(), want.len(), "{got:?}");
+            for (g, w) in got.iter().zip(want) {
+                assert!(
+                    (g.0 - w.0).abs() < 1e-12 && (g.1 - w.1).abs() < 1e-12,
+                    "{got:?} vs {want:?}"
+                );
+            }
+        };
+        close(
+            read(ProfileLine::Diagonal),
+            &[(-10.0, -1.0), (0.0, 4.0), (20.0, -3.0)],
+        );
+        close(
+            read(ProfileLine::MedianX),
+            &[(-30.0, -2.0), (0.0, 4.0), (12.0, 2.0)],
+        );
+        close(
+            read(ProfileLine::MedianY),
+            &[(-35.0, 3.0), (0.0, 4.0), (25.0, 0.0)],
+        );
+        // A wider band reaches element 4 (1.5 off the diagonal).
+        assert_eq!(
+            shear_profile(&f, &centroids, &shear, ProfileLine::Diagonal, 1.5).len(),
+            4
+        );
+        assert!(shear_profile(&f, &[], &[], ProfileLine::Diagonal, 1.0).is_empty());
+    }
+
+    #[test]
+    fn band_of_half_a_cell_takes_both_rows_beside_a_median() {
+        // 3 × 4 cells of 1.1 × 0.7 mm, an even number of rows: centroids at ±cell/2 of the
+        // median y = centre, with values that round differently.
+        let f = BlankFrame {
+            center: Vector3::new(0.3, 0.1, 0.0),
+            width: 3.3,
+            height: 2.8,
+        };
+        let (dx, dy) = (1.1, 0.7);
+        let mut centroids = Vec::new();
+        for j in 0..4 {
+            for i in 0..3 {
+                centroids.push(Vector3::new(
+                    f.center.x - 0.5 * f.width + (i as f64 + 0.5) * dx,
+                    f.center.y - 0.5 * f.height + (j as f64 + 0.5) * dy,
+                    0.0,
+                ));
+            }
+        }
+        let shear = vec![0.0; centroids.len()];
+        let p = shear_profile(&f, &centroids, &shear, ProfileLine::MedianX, 0.5 * dy);
+        assert_eq!(p.len(), 6, "{p:?}");
+    }
+
+    #[test]
+    fn area_above_counts_both_signs_strictly() {
+        let lock = 30f64.to_radians();
+        let shear = [0.0, 0.6, -0.6, lock, -lock, 1.2];
+        let areas = [1.0, 2.0, 4.0, 8.0, 16.0, 32.0];
+        assert_eq!(area_above(&shear, &areas, lock), 2.0 + 4.0 + 32.0);
+        assert_eq!(area_above(&shear, &areas, 10.0), 0.0);
+        assert_eq!(area_above(&[], &[], lock), 0.0);
+    }
+}

@@ -7,10 +7,11 @@ use rayon::prelude::*;
 
 use crate::{ElementError, KinematicsError, MIN_CHUNK, lowest_error};
 
-/// A batch of trusses of one fibre law.
+/// A batch of trusses of one fibre law, usually one yarn family.
 ///
-/// Each truss carries the yarns of a strip of fabric: section A₀ and mass
-/// per unit length are the strip's (SPEC §2), given by the mesher.
+/// Each truss carries the yarns of a strip of fabric: its section A₀ is the
+/// strip's (SPEC §2), given by the mesher. Trusses carry no mass of their
+/// own: the fabric's mass is lumped at the nodes.
 #[derive(Debug, Clone)]
 pub struct TrussBatch {
     /// The yarns' law.
@@ -21,8 +22,6 @@ pub struct TrussBatch {
     pub length: Vec<f64>,
     /// Fibre section A₀.
     pub section: Vec<f64>,
-    /// Fabric mass per unit length of the strip (for the stable time step).
-    pub mass_per_length: Vec<f64>,
 }
 
 /// Output fields of one truss.
@@ -38,16 +37,14 @@ pub struct TrussOutput {
 
 impl TrussBatch {
     /// Trusses between `nodes` of the reference positions `x0`, each with
-    /// its fibre section and fabric mass per length.
+    /// its fibre section.
     pub fn new(
         law: FibreLaw,
         x0: &[Vector3<f64>],
         nodes: Vec<[u32; 2]>,
         section: Vec<f64>,
-        mass_per_length: Vec<f64>,
     ) -> Result<Self, ElementError> {
         assert_eq!(nodes.len(), section.len());
-        assert_eq!(nodes.len(), mass_per_length.len());
         let mut length = Vec::with_capacity(nodes.len());
         for (e, &[i, j]) in nodes.iter().enumerate() {
             let l = (x0[j as usize] - x0[i as usize]).norm();
@@ -65,7 +62,6 @@ impl TrussBatch {
             nodes,
             length,
             section,
-            mass_per_length,
         })
     }
 
@@ -158,22 +154,28 @@ impl TrussBatch {
         (0..self.len()).map(|e| self.element_energy(e, x)).sum()
     }
 
-    /// The stable time step of truss `e` in its current length, l/c with
-    /// c² = E_f·A₀/(mass per length): exact for a chain of equal trusses
-    /// between lumped masses.
-    pub fn element_stable_time_step(&self, e: usize, x: &[Vector3<f64>]) -> f64 {
+    /// The stable time step 2/ω of truss `e` alone between two masses, its
+    /// nodes' shares `mass` of the lumped mass: ω² = k·(1/m₁ + 1/m₂), with
+    /// k = E_f·A₀/l in its current length (SPEC §7: the full modulus).
+    ///
+    /// With each node's mass shared equally among the batch's trusses at it,
+    /// this is exact for a chain of equal trusses (2/ω = l/c) and bounds a
+    /// chain's free end, where a light node would outrun l/c.
+    pub fn element_stable_time_step(&self, e: usize, x: &[Vector3<f64>], mass: [f64; 2]) -> f64 {
         let [i, j] = self.nodes[e];
         let l = (x[j as usize] - x[i as usize]).norm();
-        l * (self.mass_per_length[e] / (self.law.wave_modulus() * self.section[e])).sqrt()
+        let k = self.law.wave_modulus() * self.section[e] / l;
+        2.0 / (k * (1.0 / mass[0] + 1.0 / mass[1])).sqrt()
     }
 
-    /// The smallest stable time step of the batch (∞ when empty).
-    pub fn stable_time_step(&self, x: &[Vector3<f64>]) -> f64 {
-        (0..self.len())
-            .into_par_iter()
-            .with_min_len(MIN_CHUNK)
-            .map(|e| self.element_stable_time_step(e, x))
-            .reduce(|| f64::INFINITY, f64::min)
+    /// How many trusses of the batch meet at each of `node_count` nodes.
+    pub fn node_degree(&self, node_count: usize) -> Vec<u32> {
+        let mut degree = vec![0; node_count];
+        for &[i, j] in &self.nodes {
+            degree[i as usize] += 1;
+            degree[j as usize] += 1;
+        }
+        degree
     }
 
     /// Output fields of truss `e`.
@@ -199,7 +201,7 @@ mod tests {
 
     fn batch(law: FibreLaw) -> (TrussBatch, Vec<Vector3<f64>>) {
         let x0 = vec![Vector3::new(0.0, 0.0, 0.0), Vector3::new(4.0, 0.0, 0.0)];
-        let t = TrussBatch::new(law, &x0, vec![[0, 1]], vec![0.3], vec![1e-9]).unwrap();
+        let t = TrussBatch::new(law, &x0, vec![[0, 1]], vec![0.3]).unwrap();
         (t, x0)
     }
 
@@ -264,13 +266,14 @@ mod tests {
 
     #[test]
     fn stable_time_step_is_the_chain_frequency() {
-        // A long chain of these trusses has nodal masses m = (mass/length)·L
-        // and springs k = E·A/L, so ω_max = 2√(k/m): the estimate is 2/ω_max.
+        // A long chain of these trusses with nodal masses m: each truss gets
+        // m/2 from each node, and ω_max = 2√(k/m) exactly.
         let (t, x0) = batch(FibreLaw::new(1000.0, 0.0).unwrap());
-        let dt = t.element_stable_time_step(0, &x0);
-        let (m, k): (f64, f64) = (1e-9 * 4.0, 1000.0 * 0.3 / 4.0);
-        let omega_chain = 2.0 * (k / m).sqrt();
-        assert!((dt - 2.0 / omega_chain).abs() < 1e-15 * dt);
+        let m = 4e-9;
+        let dt = t.element_stable_time_step(0, &x0, [m / 2.0, m / 2.0]);
+        let k: f64 = 1000.0 * 0.3 / 4.0;
+        assert!((dt - 1.0 / (k / m).sqrt()).abs() < 1e-15 * dt);
+        assert_eq!(t.node_degree(3), vec![1, 1, 0]);
     }
 
     #[test]

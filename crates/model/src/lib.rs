@@ -396,27 +396,25 @@ impl Model {
                     .map_err(element("triangle"))?,
             );
         }
+        // One batch per yarn family, so that a node's mass is shared among
+        // the trusses of one family (the stable step of a truss chain).
         let mut trusses = Vec::new();
-        if !mesh.trusses.is_empty() {
-            let nodes: Vec<[u32; 2]> = mesh.trusses.iter().map(|t| t.nodes).collect();
-            let length: Vec<f64> = nodes
+        for family in 0..2u8 {
+            let specs: Vec<_> = mesh.trusses.iter().filter(|t| t.family == family).collect();
+            if specs.is_empty() {
+                continue;
+            }
+            let nodes: Vec<[u32; 2]> = specs.iter().map(|t| t.nodes).collect();
+            let section = specs
                 .iter()
-                .map(|&[i, j]| (mesh.x0[j as usize] - mesh.x0[i as usize]).norm())
-                .collect();
-            let section: Vec<f64> = mesh
-                .trusses
-                .iter()
-                .zip(&length)
-                .map(|(t, l)| material.family_thickness() * t.strip_area / l)
-                .collect();
-            let mass_per_length = mesh
-                .trusses
-                .iter()
-                .zip(&length)
-                .map(|(t, l)| material.areal_density() * t.strip_area / l)
+                .map(|t| {
+                    let [i, j] = t.nodes;
+                    let length = (mesh.x0[j as usize] - mesh.x0[i as usize]).norm();
+                    material.family_thickness() * t.strip_area / length
+                })
                 .collect();
             trusses.push(
-                TrussBatch::new(material.fibre, &mesh.x0, nodes, section, mass_per_length)
+                TrussBatch::new(material.fibre, &mesh.x0, nodes, section)
                     .map_err(element("truss"))?,
             );
         }

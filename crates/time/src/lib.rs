@@ -275,8 +275,10 @@ pub struct Explicit<'m> {
     settings: ExplicitSettings,
     layout: SlotLayout,
     mass: Vec<f64>,
-    /// √(mass scale) per element of each truss batch, then membrane batch.
-    truss_scale: Vec<Vec<f64>>,
+    /// Each truss's shares of its nodes' masses (a node's mass split evenly
+    /// among the trusses of its batch there), for the stable step.
+    truss_mass: Vec<Vec<[f64; 2]>>,
+    /// √(mass scale) per element of each membrane batch.
     membrane_scale: Vec<Vec<f64>>,
     constraints: Vec<Constraint>,
     constrained: Vec<[bool; 3]>,
@@ -381,7 +383,7 @@ impl<'m> Explicit<'m> {
             slots: vec![Vector3::zeros(); layout.len],
             layout,
             mass: model.mass.clone(),
-            truss_scale: model.trusses.iter().map(|b| vec![1.0; b.len()]).collect(),
+            truss_mass: Vec::new(),
             membrane_scale: model.membranes.iter().map(|b| vec![1.0; b.len()]).collect(),
             constraints,
             constrained,
@@ -397,16 +399,49 @@ impl<'m> Explicit<'m> {
                 .map(|b| b.initial_history())
                 .collect(),
         };
+        driver.share_truss_mass();
         if let Some(target) = driver.settings.mass_scaling {
             driver.scale_mass(target);
+            driver.share_truss_mass();
+            // Kinds add their stiffnesses (see `stable_time_step`), so the
+            // elements' own targets can leave the whole a little short: a
+            // last uniform factor closes the gap.
+            let dt = driver.stable_time_step(&model.x0);
+            if dt < target {
+                let f = (target / dt).powi(2);
+                let before: f64 = model.mass.iter().sum();
+                for m in &mut driver.mass {
+                    *m *= f;
+                }
+                driver.added_mass = driver.mass.iter().sum::<f64>() - before;
+                for s in driver.membrane_scale.iter_mut().flatten() {
+                    *s *= f.sqrt();
+                }
+                driver.share_truss_mass();
+            }
         }
         Ok(driver)
     }
 
+    fn share_truss_mass(&mut self) {
+        let n = self.model.node_count();
+        self.truss_mass = self
+            .model
+            .trusses
+            .iter()
+            .map(|b| {
+                let degree = b.node_degree(n);
+                let share = |i: u32| self.mass[i as usize] / f64::from(degree[i as usize]);
+                b.nodes.iter().map(|&[i, j]| [share(i), share(j)]).collect()
+            })
+            .collect();
+    }
+
     /// Selective mass scaling at the reference shape: an element whose step
     /// is below `target` asks for mass factor (target/Δt_e)² on its nodes;
-    /// each node takes the largest factor asked. An element's step then grows
-    /// with the square root of the smallest factor of its nodes.
+    /// each node takes the largest factor asked. A membrane's step then grows
+    /// with the square root of the smallest factor of its nodes; a truss's
+    /// follows from its nodes' new masses.
     fn scale_mass(&mut self, target: f64) {
         let model = self.model;
         let x = &model.x0;
@@ -420,9 +455,9 @@ impl<'m> Explicit<'m> {
                 }
             }
         };
-        for b in &model.trusses {
-            for e in 0..b.len() {
-                ask(&b.nodes[e], b.element_stable_time_step(e, x));
+        for (b, shares) in model.trusses.iter().zip(&self.truss_mass) {
+            for (e, share) in shares.iter().enumerate() {
+                ask(&b.nodes[e], b.element_stable_time_step(e, x, *share));
             }
         }
         for b in &model.membranes {
@@ -437,11 +472,6 @@ impl<'m> Explicit<'m> {
                 .fold(f64::INFINITY, f64::min)
                 .sqrt()
         };
-        for (b, s) in model.trusses.iter().zip(&mut self.truss_scale) {
-            for (e, se) in s.iter_mut().enumerate() {
-                *se = smallest(&b.nodes[e]);
-            }
-        }
         for (b, s) in model.membranes.iter().zip(&mut self.membrane_scale) {
             for (e, se) in s.iter_mut().enumerate() {
                 *se = smallest(b.element_nodes(e));
@@ -455,36 +485,48 @@ impl<'m> Explicit<'m> {
     }
 
     /// The stable step (times the safety factor) at positions `x`.
+    ///
+    /// Trusses, membranes and springs share the nodes' masses and add their
+    /// stiffnesses, so ω_max² ≤ Σ over kinds of each kind's ω_max²: the
+    /// kinds' steps combine as 1/Δt² = Σ 1/Δt_kind², each kind's step the
+    /// smallest of its elements' (SPEC §7: fibres at the full E_f).
     pub fn stable_time_step(&self, x: &[Vector3<f64>]) -> f64 {
         if let Some(dt) = self.settings.time_step {
             return dt;
         }
         let model = self.model;
-        let mut dt = f64::INFINITY;
-        for (b, s) in model.trusses.iter().zip(&self.truss_scale) {
-            dt = dt.min(
-                (0..b.len())
-                    .into_par_iter()
-                    .with_min_len(1024)
-                    .map(|e| b.element_stable_time_step(e, x) * s[e])
-                    .reduce(|| f64::INFINITY, f64::min),
-            );
-        }
-        for (b, s) in model.membranes.iter().zip(&self.membrane_scale) {
-            dt = dt.min(
-                (0..b.len())
-                    .into_par_iter()
-                    .with_min_len(1024)
-                    .map(|e| b.element_stable_time_step(e, x) * s[e])
-                    .reduce(|| f64::INFINITY, f64::min),
-            );
-        }
-        for b in &model.springs {
-            for &n in &b.nodes {
-                dt = dt.min(b.stable_time_step(self.mass[n as usize]));
+        let smallest = |len: usize, dt_e: &(dyn Fn(usize) -> f64 + Sync)| {
+            (0..len)
+                .into_par_iter()
+                .with_min_len(1024)
+                .map(dt_e)
+                .reduce(|| f64::INFINITY, f64::min)
+        };
+        let mut inverse_square = 0.0;
+        let mut add = |dt: f64| {
+            if dt.is_finite() {
+                inverse_square += 1.0 / (dt * dt);
             }
-        }
-        dt * self.settings.safety_factor
+        };
+        add(model
+            .trusses
+            .iter()
+            .zip(&self.truss_mass)
+            .map(|(b, m)| smallest(b.len(), &|e| b.element_stable_time_step(e, x, m[e])))
+            .fold(f64::INFINITY, f64::min));
+        add(model
+            .membranes
+            .iter()
+            .zip(&self.membrane_scale)
+            .map(|(b, s)| smallest(b.len(), &|e| b.element_stable_time_step(e, x) * s[e]))
+            .fold(f64::INFINITY, f64::min));
+        add(model
+            .springs
+            .iter()
+            .flat_map(|b| b.nodes.iter().map(move |&n| (b, n)))
+            .map(|(b, n)| b.stable_time_step(self.mass[n as usize]))
+            .fold(f64::INFINITY, f64::min));
+        self.settings.safety_factor / inverse_square.sqrt()
     }
 
     /// The internal forces at `x` into `self.f_int`, the new histories into
@@ -614,7 +656,9 @@ impl<'m> Explicit<'m> {
         let mut steps = 0u64;
         let mut stopped = false;
         let mut last_progress = Instant::now();
-        while state.time < end * (1.0 - 1e-12) {
+        // A remainder below a millionth of a step is round-off of the sum of
+        // steps, not time left to simulate.
+        while end - state.time > 1e-6 * dt {
             if self.settings.max_steps.is_some_and(|m| steps >= m) {
                 stopped = true;
                 break;
@@ -628,7 +672,11 @@ impl<'m> Explicit<'m> {
                     state.step
                 )));
             }
-            let h = dt.min(end - state.time);
+            let h = if end - state.time < dt * (1.0 + 1e-6) {
+                end - state.time
+            } else {
+                dt
+            };
             let t_new = state.time + h;
             let dt_avg = 0.5 * (dt_prev + h);
             // Velocities to n+½ and positions to n+1 for free components;
@@ -718,7 +766,7 @@ impl<'m> Explicit<'m> {
             dt_prev = h;
             dt_min = dt_min.min(h);
             dt_max = dt_max.max(h);
-            let at_end = state.time >= end * (1.0 - 1e-12);
+            let at_end = end - state.time <= 1e-6 * dt;
             let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
             if at_frame || at_end {
                 let report = self.energies_at(state, &energy, kinetic0, h);

@@ -266,8 +266,7 @@ fn embedded_fibres_equal_trusses_on_an_aligned_patch() {
             section.push(t_f * dx * if i == 0 || i == nx { 0.5 } else { 1.0 });
         }
     }
-    let mass = vec![1.0; nodes.len()];
-    let trusses = TrussBatch::new(material.fibre, &x0, nodes, section, mass).unwrap();
+    let trusses = TrussBatch::new(material.fibre, &x0, nodes, section).unwrap();
 
     let x: Vec<_> = x0
         .iter()

@@ -46,7 +46,7 @@ use drape_constitutive::{Material, MaterialError};
 use drape_elements::{ElementError, FabricSection, MembraneBatch, SpringBatch, TrussBatch};
 use nalgebra::Vector3;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use blank::{BlankFrame, BlankMesh, FibreRepresentation, MeshError, RectangleBlank};
 use measures::{DrawIn, ProfileLine, ProfilePoint};
@@ -71,6 +71,9 @@ pub enum ModelError {
     /// A node set does not exist.
     #[error("unknown node set `{0}`")]
     UnknownNodeSet(String),
+    /// A tool is invalid.
+    #[error("{0}")]
+    Tool(String),
     /// A node index is out of range.
     #[error("node {node} does not exist (the model has {count} nodes)")]
     NoSuchNode {
@@ -81,55 +84,7 @@ pub enum ModelError {
     },
 }
 
-/// A time function a(t) scaling a prescribed motion.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "kind")]
-pub enum Amplitude {
-    /// a = 1.
-    Constant,
-    /// a = t/T, then 1.
-    Ramp {
-        /// T (s).
-        duration: f64,
-    },
-    /// a = ξ³(10 − 15ξ + 6ξ²), ξ = t/T, then 1: zero velocity and
-    /// acceleration at both ends (SPEC §7).
-    SmoothStep {
-        /// T (s).
-        duration: f64,
-    },
-    /// Piecewise linear through (t, a) points, constant beyond the ends.
-    Table {
-        /// (t, a) points with increasing t.
-        points: Vec<[f64; 2]>,
-    },
-}
-
-impl Amplitude {
-    /// a(t).
-    pub fn value(&self, t: f64) -> f64 {
-        match self {
-            Self::Constant => 1.0,
-            Self::Ramp { duration } => (t / duration).clamp(0.0, 1.0),
-            Self::SmoothStep { duration } => {
-                let xi = (t / duration).clamp(0.0, 1.0);
-                xi * xi * xi * (10.0 - 15.0 * xi + 6.0 * xi * xi)
-            }
-            Self::Table { points } => {
-                let (first, last) = (points[0], points[points.len() - 1]);
-                if t <= first[0] {
-                    return first[1];
-                }
-                if t >= last[0] {
-                    return last[1];
-                }
-                let i = points.partition_point(|p| p[0] <= t);
-                let (p0, p1) = (points[i - 1], points[i]);
-                p0[1] + (p1[1] - p0[1]) * (t - p0[0]) / (p1[0] - p0[0])
-            }
-        }
-    }
-}
+pub use drape_contact::{Amplitude, Tool, ToolMotion};
 
 /// A prescribed displacement u(x₀, t) of a node from its reference position
 /// x₀, for motions no amplitude describes (a picture frame's arms).
@@ -205,6 +160,17 @@ impl BoundaryCondition {
     }
 }
 
+/// A force on each of a set of nodes, scaled by an amplitude.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodalLoad {
+    /// The nodes.
+    pub nodes: Vec<u32>,
+    /// Force on each node at a = 1 (N).
+    pub force: Vector3<f64>,
+    /// a(t).
+    pub amplitude: Amplitude,
+}
+
 /// The features a model uses, so that a driver runs only their passes
 /// (SPEC §7, "skip what a scene doesn't need").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
@@ -219,8 +185,16 @@ pub struct Features {
     pub springs: bool,
     /// Gravity.
     pub gravity: bool,
+    /// Concentrated loads.
+    pub loads: bool,
     /// Prescribed motions other than fixed.
     pub prescribed_motion: bool,
+    /// Rigid tools.
+    pub contact: bool,
+    /// A tool with friction.
+    pub friction: bool,
+    /// A force-driven tool (couples the contact constraints).
+    pub force_driven_tools: bool,
 }
 
 /// Where each element batch writes its nodal forces in the global slot
@@ -287,10 +261,17 @@ pub struct Model {
     pub boundary: Vec<BoundaryCondition>,
     /// Gravity acceleration (mm/s²), zero for none.
     pub gravity: Vector3<f64>,
+    /// Concentrated nodal forces.
+    pub loads: Vec<NodalLoad>,
     /// Named node sets.
     pub node_sets: BTreeMap<String, Vec<u32>>,
     /// The blank, when the model was meshed from one.
     pub blank: Option<BlankInfo>,
+    /// Rigid tools.
+    pub tools: Vec<Tool>,
+    /// Distance of the fabric's mid-surface from a tool at contact: half
+    /// its thickness (mm).
+    pub contact_offset: f64,
 }
 
 /// The evolving state of a model.
@@ -434,8 +415,11 @@ impl Model {
             springs: Vec::new(),
             boundary: Vec::new(),
             gravity: Vector3::zeros(),
+            loads: Vec::new(),
             node_sets: mesh.node_sets.clone(),
             blank: None,
+            tools: Vec::new(),
+            contact_offset: 0.5 * material.thickness,
         })
     }
 
@@ -471,6 +455,14 @@ impl Model {
                 return Err(bad(n));
             }
         }
+        for t in &self.tools {
+            t.validate().map_err(ModelError::Tool)?;
+        }
+        for l in &self.loads {
+            if let Some(&n) = l.nodes.iter().find(|&&n| n as usize >= count) {
+                return Err(bad(n));
+            }
+        }
         Ok(())
     }
 
@@ -488,10 +480,14 @@ impl Model {
                 .any(|b| b.section.material.resin.is_viscoelastic()),
             springs: self.springs.iter().any(|b| !b.is_empty()),
             gravity: self.gravity != Vector3::zeros(),
+            loads: !self.loads.is_empty(),
             prescribed_motion: self
                 .boundary
                 .iter()
                 .any(|b| !matches!(b.motion, Motion::Fixed)),
+            contact: !self.tools.is_empty(),
+            friction: self.tools.iter().any(|t| t.friction > 0.0),
+            force_driven_tools: self.tools.iter().any(|t| t.is_force_driven()),
         }
     }
 
@@ -631,22 +627,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn amplitudes() {
-        assert_eq!(Amplitude::Constant.value(3.0), 1.0);
+    fn amplitudes_are_the_contact_crates() {
         assert_eq!(Amplitude::Ramp { duration: 2.0 }.value(1.0), 0.5);
-        assert_eq!(Amplitude::Ramp { duration: 2.0 }.value(5.0), 1.0);
-        let s = Amplitude::SmoothStep { duration: 2.0 };
-        assert_eq!(s.value(0.0), 0.0);
-        assert_eq!(s.value(1.0), 0.5);
-        assert_eq!(s.value(2.0), 1.0);
-        // Zero slope at both ends.
-        assert!(s.value(1e-4) < 1e-10 && 1.0 - s.value(2.0 - 1e-4) < 1e-10);
-        let t = Amplitude::Table {
-            points: vec![[0.0, 0.0], [1.0, 2.0], [3.0, 1.0]],
-        };
-        assert_eq!(t.value(-1.0), 0.0);
-        assert_eq!(t.value(0.5), 1.0);
-        assert_eq!(t.value(2.0), 1.5);
-        assert_eq!(t.value(9.0), 1.0);
     }
 }

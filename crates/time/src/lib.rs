@@ -48,6 +48,7 @@
 
 use std::time::Instant;
 
+use drape_contact::{ContactSettings, ExplicitContact};
 use drape_elements::ElementError;
 use drape_model::{Model, Motion, SlotLayout, State};
 use nalgebra::Vector3;
@@ -77,6 +78,8 @@ pub struct ExplicitSettings {
     pub max_energy_error: Option<f64>,
     /// Stop after this many steps.
     pub max_steps: Option<u64>,
+    /// Broad-phase margin of the contact pass (mm).
+    pub contact_margin: f64,
 }
 
 impl Default for ExplicitSettings {
@@ -91,6 +94,7 @@ impl Default for ExplicitSettings {
             time_step_interval: 20,
             max_energy_error: None,
             max_steps: None,
+            contact_margin: 5.0,
         }
     }
 }
@@ -112,7 +116,12 @@ pub struct Energies {
     pub external_work: f64,
     /// Work of the prescribed motions on the body (their reactions).
     pub boundary_work: f64,
-    /// kinetic + internal + damping − external − boundary − initial kinetic.
+    /// Work of the tools on the fabric (normal and friction forces).
+    pub contact_work: f64,
+    /// Energy dissipated by friction (≥ 0; part of −contact work).
+    pub friction_dissipation: f64,
+    /// kinetic + internal + damping − external − boundary − contact −
+    /// initial kinetic.
     pub balance_error: f64,
 }
 
@@ -124,6 +133,7 @@ impl Energies {
             self.internal_work.abs(),
             self.external_work.abs(),
             self.boundary_work.abs(),
+            self.contact_work.abs(),
         ]
         .into_iter()
         .fold(0.0, f64::max);
@@ -156,6 +166,8 @@ pub struct Frame<'a> {
     pub energy: &'a Energies,
     /// Reaction forces at the constrained nodes (zero elsewhere), N.
     pub reactions: &'a [Vector3<f64>],
+    /// The contact pass (forces, statuses, tools' states), if there are tools.
+    pub contact: Option<&'a ExplicitContact>,
 }
 
 /// Progress of a run, for an observer.
@@ -290,6 +302,10 @@ pub struct Explicit<'m> {
     v_new: Vec<Vector3<f64>>,
     reactions: Vec<Vector3<f64>>,
     history_new: Vec<Vec<f64>>,
+    contact: Option<ExplicitContact>,
+    movable: Vec<bool>,
+    /// Prescribed coordinate of each constrained component this step.
+    prescribed: Vec<f64>,
 }
 
 /// Nodes summed per rayon task in energy sums: fixed chunks make the sums
@@ -377,9 +393,24 @@ impl<'m> Explicit<'m> {
             }
         }
         let layout = model.slot_layout();
+        let contact = (!model.tools.is_empty()).then(|| {
+            ExplicitContact::new(
+                model.tools.clone(),
+                n,
+                ContactSettings {
+                    offset: model.contact_offset,
+                    margin: settings.contact_margin,
+                    ..ContactSettings::default()
+                },
+            )
+        });
+        let movable = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
         let mut driver = Self {
             model,
             settings,
+            contact,
+            movable,
+            prescribed: vec![0.0; constraints.len()],
             slots: vec![Vector3::zeros(); layout.len],
             layout,
             mass: model.mass.clone(),
@@ -571,6 +602,21 @@ impl<'m> Explicit<'m> {
         Ok(())
     }
 
+    /// Gravity and the nodal loads at time `t` into `self.f_ext`.
+    fn external_forces(&mut self, t: f64) {
+        let model = self.model;
+        // Weight from the physical mass: mass scaling adds inertia only.
+        for (f, m) in self.f_ext.iter_mut().zip(&model.mass) {
+            *f = model.gravity * *m;
+        }
+        for load in &model.loads {
+            let f = load.force * load.amplitude.value(t);
+            for &n in &load.nodes {
+                self.f_ext[n as usize] += f;
+            }
+        }
+    }
+
     /// Stored strain energy at `state`.
     fn strain_energy(&self, state: &State) -> f64 {
         let model = self.model;
@@ -623,9 +669,7 @@ impl<'m> Explicit<'m> {
                 "the state does not belong to this model".into(),
             ));
         }
-        for (b, g) in self.f_ext.iter_mut().zip(&self.mass) {
-            *b = model.gravity * *g;
-        }
+        self.external_forces(state.time);
         // Forces at the start, with no time passing so no relaxation.
         let history = std::mem::take(&mut state.history);
         let first = self.internal_forces(&state.x, &history, 0.0, state.step, state.time);
@@ -648,6 +692,7 @@ impl<'m> Explicit<'m> {
                 state,
                 energy: &energy,
                 reactions: &self.reactions,
+                contact: self.contact.as_ref(),
             });
         }
         let mut dt = self.stable_time_step(&state.x);
@@ -700,43 +745,67 @@ impl<'m> Explicit<'m> {
                     });
             }
             // Prescribed components.
-            for c in &self.constraints {
+            for (j, c) in self.constraints.iter().enumerate() {
                 let (i, k) = (c.node as usize, c.component as usize);
-                match self.prescribed_displacement(c, t_new) {
-                    Some(u) => self.x_new[i][k] = model.x0[i][k] + u,
-                    None => {
-                        let vel = self.prescribed_velocity(c, state.time + 0.5 * h);
-                        self.x_new[i][k] = state.x[i][k] + vel * h;
+                self.prescribed[j] = match self.prescribed_displacement(c, t_new) {
+                    Some(u) => model.x0[i][k] + u,
+                    None => state.x[i][k] + self.prescribed_velocity(c, state.time + 0.5 * h) * h,
+                };
+                self.x_new[i][k] = self.prescribed[j];
+                self.v_new[i][k] = (self.x_new[i][k] - state.x[i][k]) / h;
+            }
+            if let Some(contact) = &mut self.contact {
+                contact.enforce(
+                    &mut self.x_new,
+                    &mut self.v_new,
+                    &self.mass,
+                    &self.movable,
+                    t_new,
+                    h,
+                );
+                // A partly constrained node keeps its prescribed components;
+                // its constraint takes the contact force there.
+                for (j, c) in self.constraints.iter().enumerate() {
+                    let (i, k) = (c.node as usize, c.component as usize);
+                    if self.movable[i] {
+                        self.x_new[i][k] = self.prescribed[j];
+                        self.v_new[i][k] = (self.prescribed[j] - state.x[i][k]) / h;
                     }
                 }
-                self.v_new[i][k] = (self.x_new[i][k] - state.x[i][k]) / h;
             }
             // Work of step n over the centred increment (x_{n+1} − x_{n−1})/2.
             {
                 let (x, v, m) = (&state.x, &state.v, &self.mass);
                 let (xn, vn, fi, fe) = (&self.x_new, &self.v_new, &self.f_int, &self.f_ext);
                 let constrained = &self.constrained;
-                let terms = |i: usize| -> [f64; 4] {
+                let f_c = self.contact.as_ref().map(|c| &c.force);
+                let terms = |i: usize| -> [f64; 5] {
                     let dx = v[i] * (0.5 * dt_prev) + (xn[i] - x[i]) * 0.5;
                     let v_mid = (v[i] + vn[i]) * 0.5;
                     let damp = v_mid * (damping * m[i]);
                     let mut w_bc = 0.0;
                     if constrained[i].iter().any(|&c| c) && dt_avg > 0.0 {
                         // The force the constraint applies: m·a − (f_ext − f_int − damping).
-                        let r = (vn[i] - v[i]) * (m[i] / dt_avg) - (fe[i] - fi[i] - damp);
+                        let contact = f_c.map_or(Vector3::zeros(), |f| f[i]);
+                        let r = (vn[i] - v[i]) * (m[i] / dt_avg) - (fe[i] - fi[i] - damp + contact);
                         for k in 0..3 {
                             if constrained[i][k] {
                                 w_bc += r[k] * dx[k];
                             }
                         }
                     }
-                    [fi[i].dot(&dx), fe[i].dot(&dx), damp.dot(&dx), w_bc]
+                    let w_c = f_c.map_or(0.0, |f| f[i].dot(&dx));
+                    [fi[i].dot(&dx), fe[i].dot(&dx), damp.dot(&dx), w_bc, w_c]
                 };
-                let [w_int, w_ext, w_damp, w_bc] = chunked_sums(n, terms);
+                let [w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums(n, terms);
+                energy.contact_work += w_c;
                 energy.internal_work += w_int;
                 energy.external_work += w_ext;
                 energy.damping += w_damp;
                 energy.boundary_work += w_bc;
+            }
+            if !model.loads.is_empty() {
+                self.external_forces(t_new);
             }
             // Forces at n+1 from the committed history.
             let history = std::mem::take(&mut state.history);
@@ -778,6 +847,7 @@ impl<'m> Explicit<'m> {
                         state,
                         energy: &report,
                         reactions: &self.reactions,
+                        contact: self.contact.as_ref(),
                     });
                     while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
                         next_frame += 1;
@@ -840,7 +910,8 @@ impl<'m> Explicit<'m> {
     fn energies_at(&self, state: &State, acc: &Energies, kinetic0: f64, h: f64) -> Energies {
         let n = self.model.node_count();
         let damping = self.settings.damping;
-        let [kinetic, w_int, w_ext, w_damp, w_bc] = chunked_sums(n, |i| {
+        let f_c = self.contact.as_ref().map(|c| &c.force);
+        let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums(n, |i| {
             let half = state.v[i] * (0.5 * h);
             let (fi, fe) = (self.f_int[i], self.f_ext[i]);
             let mut w_bc = 0.0;
@@ -855,6 +926,7 @@ impl<'m> Explicit<'m> {
                 fe.dot(&half),
                 damping * self.mass[i] * state.v[i].dot(&half),
                 w_bc,
+                f_c.map_or(0.0, |f| f[i].dot(&half)),
             ]
         });
         let mut e = *acc;
@@ -863,10 +935,18 @@ impl<'m> Explicit<'m> {
         e.external_work += w_ext;
         e.damping += w_damp;
         e.boundary_work += w_bc;
+        e.contact_work += w_c;
+        e.friction_dissipation = self
+            .contact
+            .as_ref()
+            .map_or(0.0, |c| c.friction_dissipation);
         e.strain = self.strain_energy(state);
         e.viscous = e.internal_work - e.strain;
-        e.balance_error =
-            e.kinetic + e.internal_work + e.damping - e.external_work - e.boundary_work - kinetic0;
+        e.balance_error = e.kinetic + e.internal_work + e.damping
+            - e.external_work
+            - e.boundary_work
+            - e.contact_work
+            - kinetic0;
         e
     }
 

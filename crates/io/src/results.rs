@@ -1,0 +1,408 @@
+//! Results of a run in an output directory.
+//!
+//! A [`ResultsDir`] holds the results of one run:
+//!
+//! | file | what | written by |
+//! |---|---|---|
+//! | `frames/frame_NNNNN.vtu` | VTK unstructured grid of frame `NNNNN` | [`ResultsDir::write_frame`] |
+//! | `series.pvd` | VTK collection of the frames with their times (open this in ParaView) | [`ResultsDir::write_frame`] |
+//! | `energy.csv` | energy history | [`ResultsDir::write_energy`] |
+//! | `profiles.csv` | shear along the blank's diagonal and median | [`ResultsDir::write_profiles`] |
+//! | `summary.json` | derived measures and run statistics ([`Summary`]) | [`ResultsDir::write_summary`] |
+//! | `shear_map.png`, `profiles.png` | pictures | [`ResultsDir::write_pictures`] |
+//!
+//! Every file is written whole or not at all ([`crate::atomic::write`]), and
+//! `series.pvd` is rewritten after each frame, so a run that fails part way
+//! leaves a valid series of the frames written so far.
+//!
+//! # VTU contents
+//! Points are the current positions; cells are the membrane elements in
+//! batch order (VTK triangles and quads), so cell `i` is entry `i` of
+//! [`ElementFields`]. Point data: `displacement` (x − x₀, mm), `velocity`
+//! (mm/s), `contact_force` (N), `contact_status` (0 open, 1 stick, 2 slip;
+//! zeros without tools). Cell data: `shear_angle_deg`,
+//! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_tension_warp`,
+//! `fibre_tension_weft` (N/mm), `resin_stress` (3 components: 11, 22, 12 in
+//! fibre axes, MPa), `thickness` (mm). The encoding (inline base64 binary
+//! with a `UInt64` header) and why are in the `vtk` submodule's docs.
+//!
+//! # Numbers in text files
+//! CSV and PVD numbers are the shortest decimal text that reads back as the
+//! same `f64`, in plain notation for magnitudes in [1e-5, 1e16) and in
+//! exponent notation (`1.5e-7`) otherwise, so no value is rounded and no
+//! small energy prints as a long run of zeros.
+//!
+//! ```no_run
+//! use drape_io::results::{ResultsDir, Summary};
+//! # fn main() -> Result<(), drape_io::results::ResultsError> {
+//! let out = ResultsDir::create(std::path::Path::new("out/run1"))?;
+//! out.write_summary(&Summary { status: "completed".into(), ..Summary::default() })?;
+//! # Ok(()) }
+//! ```
+
+mod pictures;
+mod vtk;
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use drape_contact::ContactStatus;
+use drape_model::{ElementFields, Measures, Model, State};
+use drape_time::Energies;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// What can go wrong while writing results.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {source}")]
+pub struct ResultsError {
+    /// The file or directory.
+    pub path: PathBuf,
+    /// The cause.
+    pub source: std::io::Error,
+}
+
+/// One frame of a run, borrowed from it.
+pub struct FrameData<'a> {
+    /// The model.
+    pub model: &'a Model,
+    /// The state at the frame.
+    pub state: &'a State,
+    /// Element output fields at the frame (membrane elements in batch order).
+    pub fields: &'a ElementFields,
+    /// Contact force per node (N), when the model has tools.
+    pub contact_force: Option<&'a [Vector3<f64>]>,
+    /// Contact status per node, when the model has tools.
+    pub contact_status: Option<&'a [ContactStatus]>,
+}
+
+/// One row of the energy history.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct EnergyRow {
+    /// Time (s).
+    pub time: f64,
+    /// Completed steps.
+    pub step: u64,
+    /// The energies.
+    #[serde(skip)]
+    pub energy: Energies,
+}
+
+/// Draw-in, mm.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct DrawInMm {
+    /// DX.
+    pub dx: f64,
+    /// DY.
+    pub dy: f64,
+    /// DD.
+    pub dd: f64,
+}
+
+/// The energy part of the summary.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct EnergySummary {
+    /// |balance error| / largest energy.
+    pub balance_error: f64,
+    /// E_kin / E_int at the end.
+    pub kinetic_to_internal: f64,
+}
+
+/// Run statistics.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct RunInfo {
+    /// Wall-clock seconds.
+    pub wall_s: f64,
+    /// Steps taken.
+    pub steps: u64,
+    /// Threads.
+    pub threads: usize,
+    /// "explicit".
+    pub solver: String,
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Summary {
+    /// "completed", "failed" or "stopped".
+    pub status: String,
+    /// Why it failed or stopped.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub reason: Option<String>,
+    /// The scene file.
+    pub scene: String,
+    /// Simulated time reached (s).
+    pub time: f64,
+    /// Largest |shear angle| (degrees).
+    pub max_shear_deg: f64,
+    /// Where (current position of the element's centroid, mm).
+    pub max_shear_at: [f64; 3],
+    /// Draw-in.
+    pub draw_in_mm: DrawInMm,
+    /// Largest truss tension (N).
+    pub max_fibre_tension_n: f64,
+    /// Reference area above the locking angle (mm²).
+    pub area_above_locking_mm2: f64,
+    /// Energy.
+    pub energy: EnergySummary,
+    /// Run statistics.
+    pub run: RunInfo,
+}
+
+/// An output directory being filled by a run.
+pub struct ResultsDir {
+    dir: PathBuf,
+    /// Frames written so far: index → (time, file relative to `dir`).
+    frames: BTreeMap<usize, (f64, String)>,
+}
+
+/// The files a [`ResultsDir`] writes at its top level.
+const OUTPUT_FILES: [&str; 6] = [
+    "series.pvd",
+    "energy.csv",
+    "profiles.csv",
+    "summary.json",
+    "shear_map.png",
+    "profiles.png",
+];
+
+/// The `energy.csv` header.
+const ENERGY_HEADER: &str = "time,step,kinetic,strain,internal_work,viscous,damping,external_work,\
+boundary_work,contact_work,friction_dissipation,balance_error";
+
+/// Maps an I/O error on `path` into a [`ResultsError`].
+fn at(path: &Path) -> impl FnOnce(std::io::Error) -> ResultsError + '_ {
+    move |source| ResultsError {
+        path: path.to_owned(),
+        source,
+    }
+}
+
+/// `f64` as the shortest text that reads back as the same value: plain
+/// notation for magnitudes in [1e-5, 1e16), exponent notation otherwise
+/// (`Display` alone would print 1e-12 as fourteen digits of zeros).
+pub(crate) fn fmt_f64(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-5..1e16).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Whether `name` is `frame_` + digits + `.vtu`, a frame this module writes.
+fn is_frame_file(name: &str) -> bool {
+    name.strip_prefix("frame_")
+        .and_then(|rest| rest.strip_suffix(".vtu"))
+        .is_some_and(|digits| !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
+}
+
+impl ResultsDir {
+    /// Creates (or reuses) `dir` and its `frames/` folder.
+    ///
+    /// A directory holds the results of one run: when `dir` is reused, the
+    /// files this module writes (`series.pvd`, `frames/frame_*.vtu`, the
+    /// CSV, JSON and PNG files above) are removed first, so a run that
+    /// fails early cannot leave a previous run's summary or frames looking
+    /// like its own. Other files are left alone.
+    pub fn create(dir: &Path) -> Result<Self, ResultsError> {
+        let frames = dir.join("frames");
+        std::fs::create_dir_all(&frames).map_err(at(&frames))?;
+        for name in OUTPUT_FILES {
+            remove_if_present(&dir.join(name))?;
+        }
+        for entry in std::fs::read_dir(&frames).map_err(at(&frames))? {
+            let entry = entry.map_err(at(&frames))?;
+            if entry.file_name().to_str().is_some_and(is_frame_file) {
+                remove_if_present(&entry.path())?;
+            }
+        }
+        Ok(Self {
+            dir: dir.to_owned(),
+            frames: BTreeMap::new(),
+        })
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Writes frame `index` at `time` as `frames/frame_NNNNN.vtu` and
+    /// rewrites `series.pvd` to list every frame written so far.
+    ///
+    /// Writing an index again replaces that frame. A frame whose arrays do
+    /// not match the model's node or element count is an error of kind
+    /// `InvalidInput` naming the frame file (nothing is written).
+    pub fn write_frame(
+        &mut self,
+        index: usize,
+        time: f64,
+        frame: &FrameData<'_>,
+    ) -> Result<(), ResultsError> {
+        let relative = format!("frames/frame_{index:05}.vtu");
+        let path = self.dir.join(&relative);
+        let xml = vtk::frame_vtu(time, frame).map_err(|mismatch| ResultsError {
+            path: path.clone(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, mismatch.to_string()),
+        })?;
+        crate::atomic::write(&path, xml.as_bytes()).map_err(at(&path))?;
+        self.frames.insert(index, (time, relative));
+        // The series only ever names frames already on disk: a crash
+        // between the two writes loses at most the newest entry.
+        let pvd = self.dir.join("series.pvd");
+        crate::atomic::write(&pvd, vtk::series_pvd(&self.frames).as_bytes()).map_err(at(&pvd))
+    }
+
+    /// Writes `energy.csv`: one row per entry of `rows`, energies in mJ
+    /// (N·mm), with the header
+    /// `time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,balance_error`.
+    pub fn write_energy(&self, rows: &[EnergyRow]) -> Result<(), ResultsError> {
+        let mut csv = String::with_capacity(64 + rows.len() * 200);
+        csv.push_str(ENERGY_HEADER);
+        csv.push('\n');
+        for row in rows {
+            let e = &row.energy;
+            let _ = write!(csv, "{},{}", fmt_f64(row.time), row.step);
+            for v in [
+                e.kinetic,
+                e.strain,
+                e.internal_work,
+                e.viscous,
+                e.damping,
+                e.external_work,
+                e.boundary_work,
+                e.contact_work,
+                e.friction_dissipation,
+                e.balance_error,
+            ] {
+                csv.push(',');
+                csv.push_str(&fmt_f64(v));
+            }
+            csv.push('\n');
+        }
+        self.write_file("energy.csv", csv.as_bytes())
+    }
+
+    /// Writes `profiles.csv` (diagonal and median shear profiles): header
+    /// `line,distance_mm,shear_deg`, the rows of `diagonal` then of
+    /// `median`, each sorted by signed initial distance from the centre.
+    /// Without a rectangular blank both profiles are empty and the file
+    /// holds only its header.
+    pub fn write_profiles(&self, measures: &Measures) -> Result<(), ResultsError> {
+        let mut csv = String::from("line,distance_mm,shear_deg\n");
+        for (line, points) in [
+            ("diagonal", &measures.profile_diagonal),
+            ("median", &measures.profile_median),
+        ] {
+            for p in points {
+                let _ = writeln!(
+                    csv,
+                    "{line},{},{}",
+                    fmt_f64(p.distance),
+                    fmt_f64(p.shear_deg)
+                );
+            }
+        }
+        self.write_file("profiles.csv", csv.as_bytes())
+    }
+
+    /// Writes `summary.json` (pretty-printed, with a final newline).
+    ///
+    /// JSON has no NaN or infinity: such a number is written as `null`.
+    pub fn write_summary(&self, summary: &Summary) -> Result<(), ResultsError> {
+        let path = self.dir.join("summary.json");
+        let mut json = serde_json::to_vec_pretty(summary).map_err(|e| ResultsError {
+            path: path.clone(),
+            source: e.into(),
+        })?;
+        json.push(b'\n');
+        crate::atomic::write(&path, &json).map_err(at(&path))
+    }
+
+    /// Writes `shear_map.png` (the formed part seen from above, coloured by
+    /// shear angle, with a colour bar) and `profiles.png`.
+    ///
+    /// The shear map projects the current positions on the x–y plane and
+    /// paints each membrane element with the viridis colour of its
+    /// |shear angle|, from 0 to the largest, higher elements over lower
+    /// ones; a grey line shows the blank's outline before forming and a
+    /// marker the element of largest shear. The profile plot shows the
+    /// signed shear angle against the signed initial distance from the
+    /// blank's centre, along the diagonal and the median.
+    pub fn write_pictures(
+        &self,
+        model: &Model,
+        state: &State,
+        fields: &ElementFields,
+        measures: &Measures,
+    ) -> Result<(), ResultsError> {
+        let path = self.dir.join("shear_map.png");
+        let png =
+            pictures::shear_map(model, state, fields, measures).map_err(|e| ResultsError {
+                path: path.clone(),
+                source: std::io::Error::other(e),
+            })?;
+        crate::atomic::write(&path, &png).map_err(at(&path))?;
+        let path = self.dir.join("profiles.png");
+        let png = pictures::profiles(measures, state.time).map_err(|e| ResultsError {
+            path: path.clone(),
+            source: std::io::Error::other(e),
+        })?;
+        crate::atomic::write(&path, &png).map_err(at(&path))
+    }
+
+    /// Writes `bytes` whole to `name` in the directory.
+    fn write_file(&self, name: &str, bytes: &[u8]) -> Result<(), ResultsError> {
+        let path = self.dir.join(name);
+        crate::atomic::write(&path, bytes).map_err(at(&path))
+    }
+}
+
+/// Removes `path` unless it does not exist.
+fn remove_if_present(path: &Path) -> Result<(), ResultsError> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(at(path)(e)),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_round_trip_without_long_zero_runs() {
+        for v in [
+            0.0,
+            1.0,
+            -2.5,
+            0.1,
+            1e-12,
+            123456.789,
+            1e300,
+            f64::MIN_POSITIVE,
+            1e-5,
+            9.99e-6,
+        ] {
+            let text = fmt_f64(v);
+            assert_eq!(text.parse::<f64>().unwrap(), v, "{text}");
+            assert!(text.len() <= 24, "{text}");
+        }
+        assert_eq!(fmt_f64(1e-12), "1e-12");
+        assert_eq!(fmt_f64(0.25), "0.25");
+        assert_eq!(fmt_f64(3.0), "3");
+        assert_eq!(fmt_f64(f64::NAN), "NaN");
+    }
+
+    #[test]
+    fn frame_file_names_are_recognised_exactly() {
+        assert!(is_frame_file("frame_00000.vtu"));
+        assert!(is_frame_file("frame_123456.vtu"));
+        assert!(!is_frame_file("frame_.vtu"));
+        assert!(!is_frame_file("frame_0001.vtu.bak"));
+        assert!(!is_frame_file("my_frame_00001.vtu"));
+        assert!(!is_frame_file("frame_00a01.vtu"));
+    }
+}

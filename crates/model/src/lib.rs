@@ -299,6 +299,10 @@ pub struct ElementFields {
     /// Fibre stress τ of the embedded families (MPa); zero when trusses
     /// carry the fibres (their tension is a truss output).
     pub fibre_stress: Vec<[f64; 2]>,
+    /// Yarn tension per unit width of fabric, t_f·τ(ln λ)/λ, of each family
+    /// from the element's fibre stretch (N/mm): the same measure for trusses
+    /// (N/strip width) and embedded fibres.
+    pub fibre_tension: Vec<[f64; 2]>,
     /// Rotated resin stress [11, 22, 12] in fibre axes (MPa).
     pub resin_stress: Vec<[f64; 3]>,
     /// Thickness (mm).
@@ -551,6 +555,11 @@ impl Model {
                 out.shear.push(o.shear_angle);
                 out.fibre_stretch.push(o.fibre_stretch);
                 out.fibre_stress.push(o.fibre_stress);
+                let m = &b.section.material;
+                out.fibre_tension.push(
+                    o.fibre_stretch
+                        .map(|l| m.family_thickness() * m.fibre.stress(l.ln()) / l),
+                );
                 out.resin_stress.push(o.resin_stress);
                 out.thickness.push(o.thickness);
                 let nodes = b.element_nodes(e);

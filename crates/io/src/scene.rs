@@ -1,0 +1,1057 @@
+//! Scene files: a forming simulation in TOML, read into a [`Model`] and the
+//! run's settings.
+//!
+//! Every table rejects unknown keys, and every invalid value is a
+//! [`SceneError`] that names the file, the line and the field and says what
+//! is allowed. The format is documented with examples in
+//! `docs/scene-reference.md`.
+//!
+//! ```
+//! let text = r#"
+//! [simulation]
+//! end_time = 0.01
+//!
+//! [fabric]
+//! material = "glass-serge-4x3"
+//! orientation_deg = 0
+//! fibres = "trusses"
+//! blank = { width = 100, height = 100, cells = [10, 10] }
+//!
+//! [[boundary]]
+//! nodes = "left"
+//! motion = { kind = "fixed" }
+//! "#;
+//! let scene = drape_io::scene::Scene::parse(text, "example.toml".as_ref(), &[]).unwrap();
+//! assert_eq!(scene.model.node_count(), 121);
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use drape_constitutive::Material;
+use drape_contact::{Amplitude, ProfileSegment, Surface, Tool, ToolMotion};
+use drape_elements::{ForceTable, SpringBatch};
+use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
+use drape_model::{BoundaryCondition, Model, ModelError, Motion, NodalLoad};
+use drape_time::ExplicitSettings;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// A scene that cannot be used: where and why.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}{}: {field}: {message}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+pub struct SceneError {
+    /// The scene file.
+    pub file: PathBuf,
+    /// The line of the offending field, when known.
+    pub line: Option<usize>,
+    /// Dotted path of the field (`tools[0].friction`), or what failed.
+    pub field: String,
+    /// What is wrong and what is allowed.
+    pub message: String,
+}
+
+/// Which integrator.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Solver {
+    /// Central differences with lumped mass.
+    #[default]
+    Explicit,
+}
+
+fn default_frames() -> usize {
+    20
+}
+fn default_safety() -> f64 {
+    0.9
+}
+fn default_margin() -> f64 {
+    5.0
+}
+
+/// `[simulation]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationSpec {
+    /// Integrator.
+    #[serde(default)]
+    pub solver: Solver,
+    /// Time to reach (s).
+    pub end_time: f64,
+    /// Output frames after the initial one.
+    #[serde(default = "default_frames")]
+    pub frames: usize,
+    /// Fraction of the stable step used.
+    #[serde(default = "default_safety")]
+    pub safety_factor: f64,
+    /// A fixed time step instead of the stable estimate (s).
+    #[serde(default)]
+    pub time_step: Option<f64>,
+    /// Target time step of selective mass scaling (s).
+    #[serde(default)]
+    pub mass_scaling_dt: Option<f64>,
+    /// Mass-proportional damping α (1/s).
+    #[serde(default)]
+    pub damping: f64,
+    /// Stop when the energy balance error exceeds this fraction.
+    #[serde(default)]
+    pub max_energy_error: Option<f64>,
+    /// Broad-phase margin of the contact search (mm).
+    #[serde(default = "default_margin")]
+    pub contact_margin: f64,
+}
+
+/// A material: a preset's name or a full table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum MaterialSpec {
+    /// A preset (`carbon-prepreg-2x2`, `glass-serge-4x3`).
+    Preset(String),
+    /// Every value given.
+    Inline(Material),
+}
+
+/// `[fabric.blank]`: a rectangle meshed by drape.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BlankSpec {
+    /// Extent along x (mm).
+    pub width: f64,
+    /// Extent along y (mm).
+    pub height: f64,
+    /// Centre (mm).
+    #[serde(default)]
+    pub center: [f64; 3],
+    /// `quad` or `triangle`.
+    #[serde(default = "default_element")]
+    pub element: ElementKind,
+    /// Cells along x and y.
+    #[serde(default)]
+    pub cells: Option<[usize; 2]>,
+    /// Or a target element size (mm).
+    #[serde(default)]
+    pub element_size: Option<f64>,
+}
+
+fn default_element() -> ElementKind {
+    ElementKind::Quad
+}
+
+/// `[fabric]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FabricSpec {
+    /// The material.
+    pub material: MaterialSpec,
+    /// θ, warp angle from x (degrees).
+    #[serde(default)]
+    pub orientation_deg: f64,
+    /// `trusses` or `embedded`.
+    pub fibres: FibreRepresentation,
+    /// The blank.
+    pub blank: BlankSpec,
+}
+
+/// A tool's shape.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
+pub enum GeometrySpec {
+    /// An infinite plane; the fabric on the normal's side.
+    Plane {
+        /// A point of it.
+        point: [f64; 3],
+        /// Normal towards the fabric.
+        normal: [f64; 3],
+    },
+    /// A sphere; the fabric outside.
+    Sphere {
+        /// Centre.
+        center: [f64; 3],
+        /// Radius.
+        radius: f64,
+    },
+    /// A hemisphere on a cylindrical shank, pole up (or down).
+    HemisphericalPunch {
+        /// The pole.
+        pole: [f64; 3],
+        /// Radius.
+        radius: f64,
+        /// Shank length behind the equator.
+        shank: f64,
+        /// Which way the pole points.
+        #[serde(default)]
+        pointing: Pointing,
+    },
+    /// A flat die face at height `z` with a round opening and a fillet,
+    /// the fabric above it and in the opening.
+    Die {
+        /// Axis position (x, y) and face height z.
+        center: [f64; 3],
+        /// Radius of the opening.
+        opening_radius: f64,
+        /// Radius of the fillet between face and opening.
+        fillet_radius: f64,
+        /// Depth of the opening's wall below the fillet.
+        depth: f64,
+        /// Outer radius of the face.
+        outer_radius: f64,
+    },
+    /// A flat ring facing down (a blank holder), the fabric below.
+    Ring {
+        /// Axis position (x, y) and face height z.
+        center: [f64; 3],
+        /// Inner radius.
+        inner_radius: f64,
+        /// Outer radius.
+        outer_radius: f64,
+    },
+    /// A surface of revolution about the vertical axis through `origin`.
+    Revolution {
+        /// A point of the axis.
+        origin: [f64; 3],
+        /// Profile segments in (r, z), fabric on the left of travel.
+        profile: Vec<ProfileSegment>,
+    },
+}
+
+/// Which way a punch points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Pointing {
+    /// Pole at the top (+z), pushed up into the fabric.
+    #[default]
+    Up,
+    /// Pole at the bottom (−z), pushed down into the fabric.
+    Down,
+}
+
+/// A tool's motion.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
+pub enum MotionSpec {
+    /// Fixed.
+    Fixed,
+    /// Travel `distance·a(t)` along `direction`.
+    Displacement {
+        /// Axis (normalised).
+        direction: [f64; 3],
+        /// Travel (mm).
+        distance: f64,
+        /// a(t).
+        amplitude: Amplitude,
+    },
+    /// A rigid body free along `direction`, pushed by `force·a(t)`.
+    Force {
+        /// Axis (normalised).
+        direction: [f64; 3],
+        /// Force (N).
+        force: f64,
+        /// a(t).
+        #[serde(default = "constant")]
+        amplitude: Amplitude,
+        /// Mass of the tool (t).
+        mass: f64,
+    },
+}
+
+fn constant() -> Amplitude {
+    Amplitude::Constant
+}
+
+fn fixed() -> MotionSpec {
+    MotionSpec::Fixed
+}
+
+/// `[[tools]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolSpec {
+    /// Name.
+    pub name: String,
+    /// Coulomb friction with the fabric.
+    #[serde(default)]
+    pub friction: f64,
+    /// Shape.
+    pub geometry: GeometrySpec,
+    /// Motion.
+    #[serde(default = "fixed")]
+    pub motion: MotionSpec,
+}
+
+/// Nodes by set name or by index.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum NodeSelection {
+    /// A named set (`left`, `corners`, `edge_midpoints`, `all`, …).
+    Set(String),
+    /// Node indices.
+    List(Vec<u32>),
+}
+
+/// `[[springs]]`: holding springs from nodes to anchors.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpringSpec {
+    /// The held nodes.
+    pub nodes: NodeSelection,
+    /// Linear stiffness (N/mm), with `preload`.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Force at zero extension (N).
+    #[serde(default)]
+    pub preload: f64,
+    /// Or a force–extension table [[δ, F], …].
+    #[serde(default)]
+    pub table: Option<Vec<[f64; 2]>>,
+    /// Anchor = the node's initial position + this offset (mm).
+    #[serde(default)]
+    pub anchor_offset: [f64; 3],
+    /// Rest length (mm).
+    #[serde(default)]
+    pub rest_length: f64,
+}
+
+/// A boundary condition's motion.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind", deny_unknown_fields)]
+pub enum BcMotionSpec {
+    /// Held.
+    Fixed,
+    /// u = value·a(t).
+    Displacement {
+        /// Displacement (mm).
+        value: [f64; 3],
+        /// a(t).
+        amplitude: Amplitude,
+    },
+    /// v = value·a(t).
+    Velocity {
+        /// Velocity (mm/s).
+        value: [f64; 3],
+        /// a(t).
+        amplitude: Amplitude,
+    },
+    /// A pin-jointed picture frame sheared to `shear_deg·a(t)` about the
+    /// pin at `pin` (default: the blank's bottom-left corner): both arms
+    /// turn by half the shear, so a point at s·x̂ + t·ŷ from the pin goes to
+    /// s·(cos γ/2, sin γ/2) + t·(sin γ/2, cos γ/2).
+    PictureFrame {
+        /// Final shear angle (degrees).
+        shear_deg: f64,
+        /// a(t).
+        amplitude: Amplitude,
+        /// The pinned corner.
+        #[serde(default)]
+        pin: Option<[f64; 3]>,
+    },
+}
+
+fn xyz() -> String {
+    "xyz".to_owned()
+}
+
+/// `[[boundary]]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    /// The nodes.
+    pub nodes: NodeSelection,
+    /// Constrained components, some of "xyz".
+    #[serde(default = "xyz")]
+    pub components: String,
+    /// How they move.
+    pub motion: BcMotionSpec,
+}
+
+/// `[[loads]]`: a force on each node of a set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadSpec {
+    /// The nodes.
+    pub nodes: NodeSelection,
+    /// Force per node (N).
+    pub force: [f64; 3],
+    /// a(t).
+    #[serde(default = "constant")]
+    pub amplitude: Amplitude,
+}
+
+fn default_locking() -> f64 {
+    50.0
+}
+fn yes() -> bool {
+    true
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Locking angle for the area at risk of wrinkling (degrees).
+    #[serde(default = "default_locking")]
+    pub locking_angle_deg: f64,
+    /// Write VTU frames.
+    #[serde(default = "yes")]
+    pub vtu: bool,
+    /// Write PNG pictures.
+    #[serde(default = "yes")]
+    pub pictures: bool,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            locking_angle_deg: default_locking(),
+            vtu: true,
+            pictures: true,
+        }
+    }
+}
+
+/// A whole scene file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// `[simulation]`.
+    pub simulation: SimulationSpec,
+    /// `[fabric]`.
+    pub fabric: FabricSpec,
+    /// `[[tools]]`.
+    #[serde(default)]
+    pub tools: Vec<ToolSpec>,
+    /// `[[springs]]`.
+    #[serde(default)]
+    pub springs: Vec<SpringSpec>,
+    /// `[[boundary]]`.
+    #[serde(default)]
+    pub boundary: Vec<BoundarySpec>,
+    /// `[[loads]]`.
+    #[serde(default)]
+    pub loads: Vec<LoadSpec>,
+    /// Gravity (mm/s²).
+    #[serde(default)]
+    pub gravity: Option<[f64; 3]>,
+    /// `[output]`.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// A scene ready to run.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The file it came from.
+    pub file: PathBuf,
+    /// What the file said (after `--set` overrides).
+    pub spec: SceneFile,
+    /// The model.
+    pub model: Model,
+    /// The driver's settings.
+    pub settings: ExplicitSettings,
+}
+
+/// Where the error is: a dotted field path, checked against the source to
+/// find its line.
+struct Locator<'a> {
+    file: &'a Path,
+    text: &'a str,
+    overridden: &'a [String],
+}
+
+impl Locator<'_> {
+    fn error(&self, field: &str, message: impl Into<String>) -> SceneError {
+        let message = message.into();
+        if self
+            .overridden
+            .iter()
+            .any(|k| field.starts_with(k.as_str()))
+        {
+            return SceneError {
+                file: self.file.to_owned(),
+                line: None,
+                field: field.to_owned(),
+                message: format!("{message} (value set with --set)"),
+            };
+        }
+        SceneError {
+            file: self.file.to_owned(),
+            line: line_of(self.text, field),
+            field: field.to_owned(),
+            message,
+        }
+    }
+}
+
+/// The 1-based line of the dotted `field` (with `[i]` indices) in `text`,
+/// or of its deepest existing parent.
+fn line_of(text: &str, field: &str) -> Option<usize> {
+    use toml::de::{DeTable, DeValue};
+    let doc = DeTable::parse(text).ok()?;
+    let mut span = doc.span();
+    let mut table: Option<&DeTable<'_>> = Some(doc.get_ref());
+    for part in field.split('.') {
+        let (key, index) = match part.find('[') {
+            Some(i) => (
+                &part[..i],
+                part[i + 1..part.len() - 1].parse::<usize>().ok(),
+            ),
+            None => (part, None),
+        };
+        let Some((_, v)) = table.and_then(|t| t.iter().find(|(k, _)| k.get_ref().as_ref() == key))
+        else {
+            break;
+        };
+        span = v.span();
+        let mut value = v.get_ref();
+        if let (Some(i), DeValue::Array(a)) = (index, value) {
+            match a.get(i) {
+                Some(item) => {
+                    span = item.span();
+                    value = item.get_ref();
+                }
+                None => break,
+            }
+        }
+        table = match value {
+            DeValue::Table(t) => Some(t),
+            _ => None,
+        };
+    }
+    Some(text[..span.start.min(text.len())].matches('\n').count() + 1)
+}
+
+fn vector(v: [f64; 3]) -> Vector3<f64> {
+    Vector3::from(v)
+}
+
+impl Scene {
+    /// Reads the scene at `path`, with `--set key.path=value` overrides.
+    pub fn from_file(path: &Path, overrides: &[(String, String)]) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: path.to_owned(),
+            line: None,
+            field: "file".into(),
+            message: format!("cannot read the scene: {e}"),
+        })?;
+        Self::parse(&text, path, overrides)
+    }
+
+    /// Reads a scene from its text; `path` names it in errors and anchors
+    /// relative file names.
+    pub fn parse(
+        text: &str,
+        path: &Path,
+        overrides: &[(String, String)],
+    ) -> Result<Self, SceneError> {
+        let syntax = |e: toml::de::Error| {
+            let line = e
+                .span()
+                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+            SceneError {
+                file: path.to_owned(),
+                line,
+                field: "scene".into(),
+                message: e.message().trim().to_owned(),
+            }
+        };
+        let mut spec: SceneFile = toml::from_str(text).map_err(syntax)?;
+        let overridden: Vec<String> = overrides.iter().map(|(k, _)| k.clone()).collect();
+        if !overrides.is_empty() {
+            let mut table: toml::Table = toml::from_str(text).map_err(syntax)?;
+            for (key, value) in overrides {
+                set_path(&mut table, key, value).map_err(|message| SceneError {
+                    file: path.to_owned(),
+                    line: None,
+                    field: key.clone(),
+                    message,
+                })?;
+            }
+            spec = toml::Value::Table(table)
+                .try_into()
+                .map_err(|e: toml::de::Error| SceneError {
+                    file: path.to_owned(),
+                    line: None,
+                    field: "--set".into(),
+                    message: e.message().trim().to_owned(),
+                })?;
+        }
+        let at = Locator {
+            file: path,
+            text,
+            overridden: &overridden,
+        };
+        let (model, settings) = build(&spec, &at)?;
+        Ok(Self {
+            file: path.to_owned(),
+            spec,
+            model,
+            settings,
+        })
+    }
+}
+
+/// Sets `key` (dotted, numeric parts index arrays) to the TOML `value` (a
+/// bare word that is not TOML is taken as a string).
+pub fn set_path(table: &mut toml::Table, key: &str, value: &str) -> Result<(), String> {
+    let parsed: toml::Value = toml::from_str::<toml::Table>(&format!("v = {value}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(value.to_owned()));
+    let parts: Vec<&str> = key.split('.').collect();
+    let mut current: &mut toml::Value = table
+        .get_mut(parts[0])
+        .ok_or_else(|| format!("no key `{}` in the scene", parts[0]))?;
+    for (i, part) in parts.iter().enumerate().skip(1) {
+        let here = parts[..i].join(".");
+        current = match current {
+            toml::Value::Table(t) => {
+                if i == parts.len() - 1 && !t.contains_key(*part) {
+                    t.insert((*part).to_owned(), parsed.clone());
+                    return Ok(());
+                }
+                t.get_mut(*part)
+                    .ok_or_else(|| format!("no key `{part}` under `{here}`"))?
+            }
+            toml::Value::Array(a) => {
+                let index: usize = part.parse().map_err(|_| {
+                    format!("`{here}` is a list: index it with a number, not `{part}`")
+                })?;
+                let len = a.len();
+                a.get_mut(index)
+                    .ok_or_else(|| format!("`{here}` has {len} entries, there is no {index}"))?
+            }
+            _ => return Err(format!("`{here}` is a value, not a table")),
+        };
+    }
+    *current = parsed;
+    Ok(())
+}
+
+fn positive(at: &Locator<'_>, field: &str, v: f64) -> Result<f64, SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(at.error(
+            field,
+            format!("{v} is not allowed: expected a positive number"),
+        ))
+    }
+}
+
+fn finite3(at: &Locator<'_>, field: &str, v: [f64; 3]) -> Result<Vector3<f64>, SceneError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(vector(v))
+    } else {
+        Err(at.error(field, "every component must be a finite number"))
+    }
+}
+
+fn unit(at: &Locator<'_>, field: &str, v: [f64; 3]) -> Result<Vector3<f64>, SceneError> {
+    let d = finite3(at, field, v)?;
+    let n = d.norm();
+    if n > 0.0 {
+        Ok(d / n)
+    } else {
+        Err(at.error(field, "a direction must not be zero"))
+    }
+}
+
+fn amplitude(at: &Locator<'_>, field: &str, a: &Amplitude) -> Result<Amplitude, SceneError> {
+    a.validate().map_err(|m| at.error(field, m))?;
+    Ok(a.clone())
+}
+
+fn nodes(
+    at: &Locator<'_>,
+    field: &str,
+    model: &Model,
+    sel: &NodeSelection,
+) -> Result<Vec<u32>, SceneError> {
+    match sel {
+        NodeSelection::Set(name) => model.node_set(name).map(<[u32]>::to_vec).map_err(|_| {
+            let known: Vec<&str> = model.node_sets.keys().map(String::as_str).collect();
+            at.error(
+                field,
+                format!(
+                    "unknown node set `{name}`; known sets: {}",
+                    known.join(", ")
+                ),
+            )
+        }),
+        NodeSelection::List(list) => {
+            let count = model.node_count();
+            match list.iter().find(|&&n| n as usize >= count) {
+                Some(n) => Err(at.error(
+                    field,
+                    format!("node {n} does not exist (the blank has {count} nodes)"),
+                )),
+                None => Ok(list.clone()),
+            }
+        }
+    }
+}
+
+fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings), SceneError> {
+    let sim = &spec.simulation;
+    positive(at, "simulation.end_time", sim.end_time)?;
+    if sim.frames == 0 {
+        return Err(at.error(
+            "simulation.frames",
+            "0 is not allowed: expected at least 1 frame",
+        ));
+    }
+    if !(sim.safety_factor > 0.0 && sim.safety_factor <= 1.0) {
+        return Err(at.error(
+            "simulation.safety_factor",
+            format!(
+                "{} is not allowed: expected a number in (0, 1]",
+                sim.safety_factor
+            ),
+        ));
+    }
+    if let Some(dt) = sim.time_step {
+        positive(at, "simulation.time_step", dt)?;
+    }
+    if let Some(dt) = sim.mass_scaling_dt {
+        positive(at, "simulation.mass_scaling_dt", dt)?;
+    }
+    if !(sim.damping.is_finite() && sim.damping >= 0.0) {
+        return Err(at.error(
+            "simulation.damping",
+            format!("{} is not allowed: expected ≥ 0", sim.damping),
+        ));
+    }
+    if let Some(e) = sim.max_energy_error {
+        positive(at, "simulation.max_energy_error", e)?;
+    }
+    positive(at, "simulation.contact_margin", sim.contact_margin)?;
+
+    let fabric = &spec.fabric;
+    let material = match &fabric.material {
+        MaterialSpec::Preset(name) => Material::preset(name).ok_or_else(|| {
+            at.error(
+                "fabric.material",
+                format!(
+                    "unknown preset `{name}`: expected one of {} or a table of values",
+                    drape_constitutive::PRESET_NAMES.join(", ")
+                ),
+            )
+        })?,
+        MaterialSpec::Inline(m) => m.clone(),
+    };
+    material.validate().map_err(|e| {
+        at.error(
+            &format!("fabric.material.{}", e.field),
+            format!("{} is not allowed: expected {}", e.value, e.expected),
+        )
+    })?;
+    let b = &fabric.blank;
+    let meshing = match (b.cells, b.element_size) {
+        (Some(c), None) => Meshing::Cells(c),
+        (None, Some(h)) => Meshing::Size(h),
+        _ => {
+            return Err(at.error(
+                "fabric.blank",
+                "give exactly one of `cells = [nx, ny]` and `element_size`",
+            ));
+        }
+    };
+    let blank = RectangleBlank {
+        width: b.width,
+        height: b.height,
+        center: finite3(at, "fabric.blank.center", b.center)?,
+        orientation_deg: fabric.orientation_deg,
+        element: b.element,
+        meshing,
+        fibres: fabric.fibres,
+    };
+    let mut model = Model::from_blank(&blank, &material).map_err(|e| match e {
+        ModelError::Mesh(drape_model::blank::MeshError::Invalid {
+            field,
+            value,
+            expected,
+        }) => {
+            let path = match field {
+                "orientation_deg" => "fabric.orientation_deg".to_owned(),
+                "meshing" => "fabric.blank.cells".to_owned(),
+                f => format!("fabric.blank.{f}"),
+            };
+            at.error(&path, format!("{value} is not allowed: {expected}"))
+        }
+        other => at.error("fabric", other.to_string()),
+    })?;
+
+    for (i, t) in spec.tools.iter().enumerate() {
+        let here = format!("tools[{i}]");
+        if !(t.friction.is_finite() && t.friction >= 0.0) {
+            return Err(at.error(
+                &format!("{here}.friction"),
+                format!(
+                    "{} is not allowed: expected a friction coefficient ≥ 0",
+                    t.friction
+                ),
+            ));
+        }
+        let g = format!("{here}.geometry");
+        let surface_err = |e: drape_contact::SurfaceError| at.error(&g, e.to_string());
+        let surface = match &t.geometry {
+            GeometrySpec::Plane { point, normal } => Surface::plane(
+                finite3(at, &format!("{g}.point"), *point)?,
+                unit(at, &format!("{g}.normal"), *normal)?,
+            )
+            .map_err(surface_err)?,
+            GeometrySpec::Sphere { center, radius } => {
+                positive(at, &format!("{g}.radius"), *radius)?;
+                Surface::sphere(finite3(at, &format!("{g}.center"), *center)?, *radius)
+                    .map_err(surface_err)?
+            }
+            GeometrySpec::HemisphericalPunch {
+                pole,
+                radius,
+                shank,
+                pointing,
+            } => {
+                positive(at, &format!("{g}.radius"), *radius)?;
+                positive(at, &format!("{g}.shank"), *shank)?;
+                let pole = finite3(at, &format!("{g}.pole"), *pole)?;
+                match pointing {
+                    Pointing::Up => Surface::hemispherical_punch(pole, *radius, *shank),
+                    Pointing::Down => Surface::hemispherical_punch_down(pole, *radius, *shank),
+                }
+                .map_err(surface_err)?
+            }
+            GeometrySpec::Die {
+                center,
+                opening_radius,
+                fillet_radius,
+                depth,
+                outer_radius,
+            } => {
+                let (a, f) = (
+                    positive(at, &format!("{g}.opening_radius"), *opening_radius)?,
+                    positive(at, &format!("{g}.fillet_radius"), *fillet_radius)?,
+                );
+                positive(at, &format!("{g}.depth"), *depth)?;
+                if *outer_radius <= a + f {
+                    return Err(at.error(
+                        &format!("{g}.outer_radius"),
+                        format!("{outer_radius} is not allowed: expected more than opening + fillet radius ({})", a + f),
+                    ));
+                }
+                Surface::revolution(
+                    finite3(at, &format!("{g}.center"), *center)?,
+                    vec![
+                        ProfileSegment::Line {
+                            from: [a, -f - depth],
+                            to: [a, -f],
+                        },
+                        ProfileSegment::Arc {
+                            center: [a + f, -f],
+                            radius: f,
+                            from_deg: 180.0,
+                            to_deg: 90.0,
+                        },
+                        ProfileSegment::Line {
+                            from: [a + f, 0.0],
+                            to: [*outer_radius, 0.0],
+                        },
+                    ],
+                )
+                .map_err(surface_err)?
+            }
+            GeometrySpec::Ring {
+                center,
+                inner_radius,
+                outer_radius,
+            } => {
+                positive(at, &format!("{g}.inner_radius"), *inner_radius)?;
+                if *outer_radius <= *inner_radius {
+                    return Err(at.error(
+                        &format!("{g}.outer_radius"),
+                        format!(
+                            "{outer_radius} is not allowed: expected more than the inner radius"
+                        ),
+                    ));
+                }
+                // Travelled outwards-in along the face, the fabric (below) is on the left.
+                Surface::revolution(
+                    finite3(at, &format!("{g}.center"), *center)?,
+                    vec![ProfileSegment::Line {
+                        from: [*outer_radius, 0.0],
+                        to: [*inner_radius, 0.0],
+                    }],
+                )
+                .map_err(surface_err)?
+            }
+            GeometrySpec::Revolution { origin, profile } => Surface::revolution(
+                finite3(at, &format!("{g}.origin"), *origin)?,
+                profile.clone(),
+            )
+            .map_err(surface_err)?,
+        };
+        let m = format!("{here}.motion");
+        let motion = match &t.motion {
+            MotionSpec::Fixed => ToolMotion::Fixed,
+            MotionSpec::Displacement {
+                direction,
+                distance,
+                amplitude: a,
+            } => ToolMotion::Displacement {
+                direction: unit(at, &format!("{m}.direction"), *direction)?,
+                distance: if distance.is_finite() {
+                    *distance
+                } else {
+                    return Err(at.error(&format!("{m}.distance"), "must be a finite number"));
+                },
+                amplitude: amplitude(at, &format!("{m}.amplitude"), a)?,
+            },
+            MotionSpec::Force {
+                direction,
+                force,
+                amplitude: a,
+                mass,
+            } => ToolMotion::Force {
+                direction: unit(at, &format!("{m}.direction"), *direction)?,
+                force: if force.is_finite() {
+                    *force
+                } else {
+                    return Err(at.error(&format!("{m}.force"), "must be a finite number"));
+                },
+                amplitude: amplitude(at, &format!("{m}.amplitude"), a)?,
+                mass: positive(at, &format!("{m}.mass"), *mass)?,
+            },
+        };
+        model.tools.push(Tool {
+            name: t.name.clone(),
+            surface,
+            motion,
+            friction: t.friction,
+        });
+    }
+
+    for (i, s) in spec.springs.iter().enumerate() {
+        let here = format!("springs[{i}]");
+        let held = nodes(at, &format!("{here}.nodes"), &model, &s.nodes)?;
+        let table = match (&s.table, s.stiffness) {
+            (Some(t), None) => {
+                ForceTable::new(t).map_err(|e| at.error(&format!("{here}.table"), e.to_string()))?
+            }
+            (None, Some(k)) => {
+                positive(at, &format!("{here}.stiffness"), k)?;
+                if !(s.preload.is_finite() && s.preload >= 0.0) {
+                    return Err(at.error(&format!("{here}.preload"), "expected a force ≥ 0"));
+                }
+                ForceTable::linear(k, s.preload)
+            }
+            _ => {
+                return Err(at.error(
+                    &here,
+                    "give exactly one of `stiffness` (with an optional `preload`) and `table`",
+                ));
+            }
+        };
+        if !(s.rest_length.is_finite() && s.rest_length >= 0.0) {
+            return Err(at.error(&format!("{here}.rest_length"), "expected a length ≥ 0"));
+        }
+        let offset = finite3(at, &format!("{here}.anchor_offset"), s.anchor_offset)?;
+        model.springs.push(SpringBatch {
+            table,
+            anchors: held
+                .iter()
+                .map(|&n| model.x0[n as usize] + offset)
+                .collect(),
+            rest_length: vec![s.rest_length; held.len()],
+            nodes: held,
+        });
+    }
+
+    for (i, bc) in spec.boundary.iter().enumerate() {
+        let here = format!("boundary[{i}]");
+        let held = nodes(at, &format!("{here}.nodes"), &model, &bc.nodes)?;
+        let mut components = [false; 3];
+        for ch in bc.components.chars() {
+            match ch {
+                'x' => components[0] = true,
+                'y' => components[1] = true,
+                'z' => components[2] = true,
+                other => {
+                    return Err(at.error(
+                        &format!("{here}.components"),
+                        format!("`{other}` is not allowed: expected some of the letters x, y, z"),
+                    ));
+                }
+            }
+        }
+        let motion = match &bc.motion {
+            BcMotionSpec::Fixed => Motion::Fixed,
+            BcMotionSpec::Displacement {
+                value,
+                amplitude: a,
+            } => Motion::Displacement {
+                value: finite3(at, &format!("{here}.motion.value"), *value)?,
+                amplitude: amplitude(at, &format!("{here}.motion.amplitude"), a)?,
+            },
+            BcMotionSpec::Velocity {
+                value,
+                amplitude: a,
+            } => Motion::Velocity {
+                value: finite3(at, &format!("{here}.motion.value"), *value)?,
+                amplitude: amplitude(at, &format!("{here}.motion.amplitude"), a)?,
+            },
+            BcMotionSpec::PictureFrame {
+                shear_deg,
+                amplitude: a,
+                pin,
+            } => {
+                if !(shear_deg.is_finite() && shear_deg.abs() < 90.0) {
+                    return Err(at.error(
+                        &format!("{here}.motion.shear_deg"),
+                        format!("{shear_deg} is not allowed: expected a shear angle between −90° and 90°"),
+                    ));
+                }
+                let pin = match pin {
+                    Some(p) => finite3(at, &format!("{here}.motion.pin"), *p)?,
+                    None => blank.center - Vector3::new(0.5 * blank.width, 0.5 * blank.height, 0.0),
+                };
+                let a = amplitude(at, &format!("{here}.motion.amplitude"), a)?;
+                let gamma = shear_deg.to_radians();
+                Motion::Trajectory(std::sync::Arc::new(move |x0: &Vector3<f64>, t: f64| {
+                    let (s, c) = (0.5 * gamma * a.value(t)).sin_cos();
+                    let d = x0 - pin;
+                    Vector3::new(c * d.x + s * d.y, s * d.x + c * d.y, d.z) - d
+                }))
+            }
+        };
+        model.boundary.push(BoundaryCondition {
+            nodes: held,
+            components,
+            motion,
+        });
+    }
+
+    for (i, l) in spec.loads.iter().enumerate() {
+        let here = format!("loads[{i}]");
+        model.loads.push(NodalLoad {
+            nodes: nodes(at, &format!("{here}.nodes"), &model, &l.nodes)?,
+            force: finite3(at, &format!("{here}.force"), l.force)?,
+            amplitude: amplitude(at, &format!("{here}.amplitude"), &l.amplitude)?,
+        });
+    }
+    if let Some(g) = spec.gravity {
+        model.gravity = finite3(at, "gravity", g)?;
+    }
+    if !(spec.output.locking_angle_deg.is_finite() && spec.output.locking_angle_deg > 0.0) {
+        return Err(at.error("output.locking_angle_deg", "expected a positive angle"));
+    }
+    let settings = ExplicitSettings {
+        end_time: sim.end_time,
+        safety_factor: sim.safety_factor,
+        time_step: sim.time_step,
+        mass_scaling: sim.mass_scaling_dt,
+        damping: sim.damping,
+        frames: sim.frames,
+        max_energy_error: sim.max_energy_error,
+        contact_margin: sim.contact_margin,
+        ..ExplicitSettings::default()
+    };
+    Ok((model, settings))
+}

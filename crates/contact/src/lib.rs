@@ -6,7 +6,9 @@
 //!   line and arc segments in (r, z) (a punch with its shank, a die with its
 //!   opening and fillet, a blank-holder ring). Each answers the closest
 //!   point, the outward normal and the signed gap of a point, and a bounding
-//!   box for the broad phase.
+//!   box for the broad phase. A triangle mesh ([`MeshSurface`], through
+//!   parry3d-f64) covers tools from CAD; [`read_stl`] and [`read_obj`] load
+//!   its vertices and triangles.
 //! - [`Tool`]: a surface, a [`ToolMotion`] (fixed, a prescribed displacement
 //!   along an axis with an [`Amplitude`], or a force along an axis on a
 //!   rigid body free in that one direction, like a blank holder) and a
@@ -42,9 +44,13 @@
 //! ```
 
 mod explicit;
+mod mesh;
+mod mesh_file;
 mod surface;
 mod tool;
 
 pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact};
+pub use mesh::{MeshError, MeshSurface};
+pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};
 pub use tool::{Amplitude, Tool, ToolMotion, ToolState};

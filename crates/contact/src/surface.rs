@@ -7,6 +7,8 @@
 use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
+use crate::mesh::{MeshError, MeshSurface};
+
 /// The closest point of a surface to a query point.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Projection {
@@ -219,6 +221,9 @@ pub enum SurfaceError {
         /// What is wrong.
         what: &'static str,
     },
+    /// A triangle mesh that cannot be used.
+    #[error("triangle mesh: {0}")]
+    Mesh(#[from] MeshError),
 }
 
 /// A rigid surface in its local frame.
@@ -245,6 +250,10 @@ pub enum Surface {
         /// The profile, segments meeting end to start.
         profile: Vec<ProfileSegment>,
     },
+    /// A triangle mesh (CAD tools from STL or OBJ); the fabric is on the
+    /// side of the counter-clockwise triangle normals, outside a closed
+    /// mesh (see [`MeshSurface`]).
+    Mesh(MeshSurface),
 }
 
 impl Surface {
@@ -297,6 +306,15 @@ impl Surface {
             }
         }
         Ok(Self::Revolution { origin, profile })
+    }
+
+    /// A triangle mesh from its vertices and counter-clockwise triangles
+    /// (see [`MeshSurface::new`] for the checks and the sign convention).
+    pub fn triangle_mesh(
+        vertices: Vec<Vector3<f64>>,
+        triangles: Vec<[u32; 3]>,
+    ) -> Result<Self, SurfaceError> {
+        Ok(Self::Mesh(MeshSurface::new(vertices, triangles)?))
     }
 
     /// A hemispherical punch of radius `radius` on a cylindrical shank of
@@ -380,6 +398,7 @@ impl Surface {
                     gap: sign * dist,
                 }
             }
+            Self::Mesh(mesh) => mesh.project(x),
         }
     }
 
@@ -411,6 +430,7 @@ impl Surface {
                     max: origin + Vector3::new(r_max, r_max, z_max),
                 }
             }
+            Self::Mesh(mesh) => mesh.aabb(),
         }
     }
 }

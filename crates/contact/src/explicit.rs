@@ -3,7 +3,8 @@
 //!
 //! After the predictor has moved the nodes to x̃ₙ₊₁ without contact, the
 //! pass finds the nodes that would sit closer to a tool than the fabric's
-//! half thickness and solves C·M⁻¹·Cᵀ·μ = −g with μ = λ·Δt² ≥ 0: per node in
+//! half thickness and solves C·M⁻¹·Cᵀ·μ = −g with μ = λ·Δt·τ ≥ 0 (τ = Δt
+//! for equal undamped steps, see [`StepTimes`]): per node in
 //! closed form when every constraint is alone (one tool per node, tools
 //! driven by displacement), by a projected preconditioned conjugate
 //! gradient when constraints couple (a node pinched between two tools, a
@@ -62,8 +63,23 @@ struct Constraint {
     tool: u32,
     normal: Vector3<f64>,
     gap: f64,
-    /// μ = λ·Δt².
+    /// μ = λ·Δt·τ.
     mu: f64,
+}
+
+/// The times of one step of central differences, xₙ₊₁ = xₙ + Δt·vₙ₊½,
+/// vₙ₊½ = (vₙ₋½·(1 − ½αΔt_mean) + Δt_mean·aₙ)/(1 + ½αΔt_mean).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepTimes {
+    /// tₙ₊₁ (s).
+    pub t_new: f64,
+    /// Δt = tₙ₊₁ − tₙ (s).
+    pub dt: f64,
+    /// Δt_mean = ½(tₙ₊₁ − tₙ₋₁), the step of the velocity update (s): half
+    /// of Δt at the first step, different from it whenever Δt changes.
+    pub dt_mean: f64,
+    /// α of the mass-proportional damping of the nodes (1/s).
+    pub damping: f64,
 }
 
 /// What a step of the contact pass did.
@@ -115,6 +131,12 @@ struct Scratch {
     q: Vec<f64>,
     diag: Vec<f64>,
     free: Vec<bool>,
+    /// First constraint of each node (u32::MAX for none) and the next one
+    /// of the same node, while looking for violated pairs.
+    head: Vec<u32>,
+    next: Vec<u32>,
+    /// Friction forces of the step, by constraint.
+    applied: Vec<(u32, Vector3<f64>)>,
 }
 
 impl ExplicitContact {
@@ -189,6 +211,9 @@ impl ExplicitContact {
     /// (a force-driven one by its force), corrects the predicted positions
     /// `x` and mid-step velocities `v` of the nodes whose `movable` flag is
     /// set, and records forces and statuses. `mass` are the nodal masses.
+    ///
+    /// For a run of equal steps `dt` without damping; [`Self::enforce_step`]
+    /// takes the general step.
     pub fn enforce(
         &mut self,
         x: &mut [Vector3<f64>],
@@ -198,6 +223,39 @@ impl ExplicitContact {
         t_new: f64,
         dt: f64,
     ) -> ContactStep {
+        let step = StepTimes {
+            t_new,
+            dt,
+            dt_mean: dt,
+            damping: 0.0,
+        };
+        self.enforce_step(x, v, mass, movable, &step)
+    }
+
+    /// [`Self::enforce`] for a step of central differences with varying
+    /// steps and mass-proportional damping (see [`StepTimes`]): the forces
+    /// reported are the ones that, applied at tₙ in the velocity update,
+    /// produce the corrections made to x̃ₙ₊₁.
+    pub fn enforce_step(
+        &mut self,
+        x: &mut [Vector3<f64>],
+        v: &mut [Vector3<f64>],
+        mass: &[f64],
+        movable: &[bool],
+        step_times: &StepTimes,
+    ) -> ContactStep {
+        let StepTimes {
+            t_new,
+            dt,
+            dt_mean,
+            damping,
+        } = *step_times;
+        // A force f on a node at tₙ changes vₙ₊½ by f·τ/m and xₙ₊₁ by
+        // f·τ·Δt/m, τ = Δt_mean/(1 + ½·α·Δt_mean) with the damping taken at
+        // mid-step; an undamped force-driven tool responds with Δt_mean, so
+        // in the nodes' units it weighs M·τ/Δt_mean.
+        let tau = dt_mean / (1.0 + 0.5 * damping * dt_mean);
+        let tool_mass_factor = tau / dt_mean;
         // Tools: prescribed, or the force-driven predictor (reaction to come).
         for (tool, state) in self.tools.iter().zip(self.tool_state.iter_mut()) {
             match tool.prescribed_displacement(t_new) {
@@ -213,7 +271,7 @@ impl ExplicitContact {
                         ..
                     } = &tool.motion
                     {
-                        state.velocity += dt * force * amplitude.value(t_new - dt) / mass;
+                        state.velocity += dt_mean * force * amplitude.value(t_new - dt) / mass;
                         state.displacement += dt * state.velocity;
                     }
                 }
@@ -255,29 +313,44 @@ impl ExplicitContact {
         if self.constraints.is_empty() {
             return ContactStep::default();
         }
-        for c in &self.constraints {
-            self.per_node[c.node as usize] += 1;
-        }
-        let coupled = self.constraints.iter().any(|c| {
-            self.per_node[c.node as usize] > 1 || self.tools[c.tool as usize].is_force_driven()
-        });
-        let mut step = ContactStep {
-            active: self.constraints.len(),
-            ..ContactStep::default()
-        };
-        if coupled {
-            let (iterations, residual) = self.solve_coupled(mass);
-            step.iterations = iterations;
-            step.residual = residual;
-        } else {
-            for c in &mut self.constraints {
-                c.mu = -c.gap * mass[c.node as usize];
+        let mut step = ContactStep::default();
+        // Solve; then, as long as the corrections would push a node into a
+        // tool whose constraint is not in the set (a node pressed by the
+        // holder into the die under it, by one tool into another), add that
+        // constraint and solve again: the set of the predictor alone misses
+        // the contacts the solve itself closes.
+        loop {
+            for c in &self.constraints {
+                self.per_node[c.node as usize] = 0;
+            }
+            for c in &self.constraints {
+                self.per_node[c.node as usize] += 1;
+            }
+            let coupled = self.constraints.iter().any(|c| {
+                self.per_node[c.node as usize] > 1 || self.tools[c.tool as usize].is_force_driven()
+            });
+            if coupled {
+                let (iterations, residual) = self.solve_coupled(mass, tool_mass_factor);
+                step.iterations += iterations;
+                step.residual = residual;
+            } else {
+                for c in &mut self.constraints {
+                    c.mu = (-c.gap * mass[c.node as usize]).max(0.0);
+                }
+            }
+            if !self.add_violated(x, mass, movable, tool_mass_factor) {
+                break;
             }
         }
+        step.active = self.constraints.len();
 
         // Apply the normal corrections and the force-driven tools' reaction.
-        let lambda_scale = 1.0 / (dt * dt);
+        let lambda_scale = 1.0 / (dt * tau);
         for c in &self.constraints {
+            if c.mu == 0.0 && c.gap >= 0.0 {
+                // Added for safety and left open by the solve: not touching.
+                continue;
+            }
             let i = c.node as usize;
             let dx = c.normal * (c.mu / mass[i]);
             x[i] += dx;
@@ -289,10 +362,12 @@ impl ExplicitContact {
             self.touched.push(c.node);
             let tool = &self.tools[c.tool as usize];
             let axis = tool.motion.direction();
+            // On the fabric: the normal force n·λ, along the axis n·a·λ
+            // (positive when the tool pushes the fabric the way it moves).
             self.tool_force[c.tool as usize] += if axis == Vector3::zeros() {
                 lambda
             } else {
-                -c.normal.dot(&axis) * lambda
+                c.normal.dot(&axis) * lambda
             };
             if let ToolMotion::Force {
                 direction,
@@ -300,7 +375,7 @@ impl ExplicitContact {
                 ..
             } = &tool.motion
             {
-                let du = -c.normal.dot(direction) * c.mu / m_tool;
+                let du = -c.normal.dot(direction) * c.mu / (m_tool * tool_mass_factor);
                 let state = &mut self.tool_state[c.tool as usize];
                 state.displacement += du;
                 state.velocity += du / dt;
@@ -308,15 +383,110 @@ impl ExplicitContact {
         }
 
         if self.has_friction() {
-            self.friction(x, v, mass, dt);
+            self.friction(x, v, mass, dt, tau);
         }
         step
     }
 
+    /// Adds to the constraint set every (node, tool) pair of the candidates
+    /// that the solved corrections would leave penetrating by more than the
+    /// tolerance: a corrected node against another tool, any node against a
+    /// force-driven tool the corrections moved. Each added constraint is
+    /// linearised, like the others, at the predicted positions. Returns
+    /// whether any was added.
+    fn add_violated(
+        &mut self,
+        x: &[Vector3<f64>],
+        mass: &[f64],
+        movable: &[bool],
+        tool_mass_factor: f64,
+    ) -> bool {
+        const NONE: u32 = u32::MAX;
+        let s = &mut self.scratch;
+        let nodes = x.len();
+        if s.head.len() != nodes {
+            s.head = vec![NONE; nodes];
+        }
+        s.next.clear();
+        let mut tool_shift = vec![0.0; self.tools.len()];
+        for c in &self.constraints {
+            s.node_sum[c.node as usize] = Vector3::zeros();
+        }
+        // Each node's correction, its constraints as a linked list, and each
+        // force-driven tool's correction.
+        for (k, c) in self.constraints.iter().enumerate() {
+            let i = c.node as usize;
+            s.node_sum[i] += c.normal * (c.mu / mass[i]);
+            s.next.push(s.head[i]);
+            s.head[i] = k as u32;
+            if let ToolMotion::Force {
+                direction,
+                mass: m_tool,
+                ..
+            } = &self.tools[c.tool as usize].motion
+            {
+                tool_shift[c.tool as usize] +=
+                    -c.normal.dot(direction) * c.mu / (m_tool * tool_mass_factor);
+            }
+        }
+        let (offset, tol) = (self.settings.offset, self.settings.tolerance);
+        let mut added = Vec::new();
+        for (t, tool) in self.tools.iter().enumerate() {
+            let u = self.tool_state[t].displacement;
+            let moved = tool_shift[t] != 0.0;
+            for &i in &self.candidates[t] {
+                let iu = i as usize;
+                if !movable[iu] || !(moved || s.head[iu] != NONE) {
+                    continue;
+                }
+                let mut k = s.head[iu];
+                let mut present = false;
+                while k != NONE {
+                    present |= self.constraints[k as usize].tool == t as u32;
+                    k = s.next[k as usize];
+                }
+                if present {
+                    continue;
+                }
+                let corrected = if s.head[iu] != NONE {
+                    x[iu] + s.node_sum[iu]
+                } else {
+                    x[iu]
+                };
+                if tool.project(&corrected, u + tool_shift[t]).gap - offset < -tol {
+                    let p = tool.project(&x[iu], u);
+                    added.push(Constraint {
+                        node: i,
+                        tool: t as u32,
+                        normal: p.normal,
+                        gap: p.gap - offset,
+                        mu: 0.0,
+                    });
+                }
+            }
+        }
+        for c in &self.constraints {
+            s.head[c.node as usize] = NONE;
+        }
+        let any = !added.is_empty();
+        self.constraints.extend(added);
+        any
+    }
+
     /// Coulomb friction on the active constraints: the tangential force that
     /// would make the node stick to the tool over the step, capped at μ_f·λ.
-    fn friction(&mut self, x: &mut [Vector3<f64>], v: &mut [Vector3<f64>], mass: &[f64], dt: f64) {
-        for c in &self.constraints {
+    /// `tau` is the time over which a force changes a node's velocity (see
+    /// [`Self::enforce_step`]).
+    fn friction(
+        &mut self,
+        x: &mut [Vector3<f64>],
+        v: &mut [Vector3<f64>],
+        mass: &[f64],
+        dt: f64,
+        tau: f64,
+    ) {
+        self.scratch.applied.clear();
+        for (k, c) in self.constraints.iter().enumerate() {
             let tool = &self.tools[c.tool as usize];
             if tool.friction == 0.0 || c.mu <= 0.0 {
                 continue;
@@ -329,8 +499,8 @@ impl ExplicitContact {
             if speed == 0.0 {
                 continue;
             }
-            let lambda = c.mu / (dt * dt);
-            let trial = mass[i] * speed / dt;
+            let lambda = c.mu / (dt * tau);
+            let trial = mass[i] * speed / tau;
             let limit = tool.friction * lambda;
             let (magnitude, status) = if trial <= limit {
                 (trial, ContactStatus::Stick)
@@ -338,16 +508,23 @@ impl ExplicitContact {
                 (limit, ContactStatus::Slip)
             };
             let f_t = -v_t / speed * magnitude;
-            let dv = f_t * (dt / mass[i]);
+            let dv = f_t * (tau / mass[i]);
             v[i] += dv;
             x[i] += dv * dt;
             self.force[i] += f_t;
             self.status[i] = status;
-            if status == ContactStatus::Slip {
-                // What the friction force does against the remaining slip.
-                let after = speed - magnitude * dt / mass[i];
-                self.friction_dissipation += magnitude * after * dt;
-            }
+            self.scratch.applied.push((k as u32, f_t));
+        }
+        // What each friction force does against the slip left once all are
+        // applied: a node pinched between two tools slides on both at its
+        // final velocity, not at the one it had before the second.
+        for &(k, f_t) in &self.scratch.applied {
+            let c = &self.constraints[k as usize];
+            let v_tool = self.tools[c.tool as usize].motion.direction()
+                * self.tool_state[c.tool as usize].velocity;
+            let rel = v[c.node as usize] - v_tool;
+            let slip = rel - c.normal * c.normal.dot(&rel);
+            self.friction_dissipation -= f_t.dot(&slip) * dt;
         }
     }
 
@@ -358,7 +535,7 @@ impl ExplicitContact {
     // The solver walks several arrays over the constraints in lockstep;
     // indices read more plainly than zips of five iterators.
     #[allow(clippy::needless_range_loop)]
-    fn solve_coupled(&mut self, mass: &[f64]) -> (usize, f64) {
+    fn solve_coupled(&mut self, mass: &[f64], tool_mass_factor: f64) -> (usize, f64) {
         let n = self.constraints.len();
         let s = &mut self.scratch;
         for v in [&mut s.r, &mut s.z, &mut s.p, &mut s.q, &mut s.diag] {
@@ -374,7 +551,7 @@ impl ExplicitContact {
             .map(|t| match &t.motion {
                 ToolMotion::Force {
                     direction, mass, ..
-                } => (*direction, *mass),
+                } => (*direction, *mass * tool_mass_factor),
                 _ => (Vector3::zeros(), f64::INFINITY),
             })
             .collect();
@@ -405,7 +582,25 @@ impl ExplicitContact {
             s.diag[k] = 1.0 / mass[c.node as usize] + c.normal.dot(&a).powi(2) / m_t;
         }
         let tol = self.settings.tolerance;
-        let mut mu: Vec<f64> = vec![0.0; n];
+        // Start from the last round's multipliers (see `add_violated`), a
+        // new constraint from its own closed form as if alone. When the
+        // constraints are dependent (a node pinched between two tools, a
+        // holder resting on many nodes) the multipliers are not unique;
+        // starting from zero, which of them round-off lets in first decides
+        // the share, and a holder's load would pile on a few nodes that then
+        // stick while the rest slide free. The closed-form start shares it
+        // by nodal mass, like a pressure, and the same way every step.
+        let mut mu: Vec<f64> = cons
+            .iter()
+            .zip(&s.diag)
+            .map(|(c, d)| {
+                if c.mu > 0.0 {
+                    c.mu
+                } else {
+                    (-c.gap).max(0.0) / d
+                }
+            })
+            .collect();
         let mut iterations = 0;
         let mut residual = f64::INFINITY;
         'outer: while iterations < self.settings.max_iterations {
@@ -485,5 +680,95 @@ impl ExplicitContact {
             c.mu = *m;
         }
         (iterations, residual)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surface::Surface;
+    use crate::tool::Amplitude;
+
+    fn floor(friction: f64) -> Tool {
+        Tool {
+            name: "floor".into(),
+            surface: Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
+            motion: ToolMotion::Fixed,
+            friction,
+        }
+    }
+
+    fn settings(offset: f64) -> ContactSettings {
+        ContactSettings {
+            offset,
+            ..ContactSettings::default()
+        }
+    }
+
+    #[test]
+    fn the_force_is_the_one_of_the_velocity_update_for_any_step() {
+        // A node at rest on the floor under an acceleration a: the predictor
+        // moves it a·τ·Δt into the floor; whatever Δt and Δt_mean (the first
+        // step has Δt_mean = Δt/2, the last one is shortened) and the
+        // damping, the contact force is m·a.
+        let (m, a, offset) = (2e-6, 5000.0, 0.1);
+        for (dt, dt_mean, damping) in [(1e-4, 5e-5, 0.0), (3e-5, 6.5e-5, 0.0), (1e-4, 1e-4, 800.0)]
+        {
+            let mut contact = ExplicitContact::new(vec![floor(0.0)], 1, settings(offset));
+            let c2 = 1.0 / (1.0 + 0.5 * damping * dt_mean);
+            let mut v = vec![Vector3::new(0.0, 0.0, -a * dt_mean * c2)];
+            let mut x = vec![Vector3::new(0.0, 0.0, offset) + v[0] * dt];
+            let step = StepTimes {
+                t_new: dt,
+                dt,
+                dt_mean,
+                damping,
+            };
+            contact.enforce_step(&mut x, &mut v, &[m], &[true], &step);
+            assert!(
+                (contact.force[0].z - m * a).abs() < 1e-9 * m * a,
+                "{dt} {dt_mean}: {}",
+                contact.force[0].z
+            );
+            assert!((x[0].z - offset).abs() < 1e-15 && v[0].z.abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_node_pinched_by_a_force_driven_holder_is_held_between_both_tools() {
+        // A node on the floor under a holder plane pushed down by F: the
+        // holder's correction alone would push the node into the floor; the
+        // floor's constraint joins the solve, both tools carry F and the
+        // node and the holder stay where they are.
+        let (m, f, big_m, offset, dt) = (1e-6, 3.0, 1e-4, 0.1, 1e-5);
+        let holder = Tool {
+            name: "holder".into(),
+            surface: Surface::plane(Vector3::new(0.0, 0.0, 2.0 * offset), -Vector3::z()).unwrap(),
+            motion: ToolMotion::Force {
+                direction: -Vector3::z(),
+                force: f,
+                amplitude: Amplitude::Constant,
+                mass: big_m,
+            },
+            friction: 0.0,
+        };
+        let mut contact = ExplicitContact::new(vec![floor(0.0), holder], 1, settings(offset));
+        let mut x = vec![Vector3::new(0.0, 0.0, offset)];
+        let mut v = vec![Vector3::zeros()];
+        for step in 1..=3 {
+            contact.enforce(&mut x, &mut v, &[m], &[true], step as f64 * dt, dt);
+            assert!((x[0].z - offset).abs() < 1e-12, "node at {}", x[0].z);
+            assert!(contact.tool_state[1].displacement.abs() < 1e-12);
+            assert!(
+                (contact.tool_force[0] - f).abs() < 1e-9 * f,
+                "{:?}",
+                contact.tool_force
+            );
+            assert!(
+                (contact.tool_force[1] - f).abs() < 1e-9 * f,
+                "{:?}",
+                contact.tool_force
+            );
+        }
     }
 }

@@ -49,7 +49,7 @@ mod mesh_file;
 mod surface;
 mod tool;
 
-pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact};
+pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes};
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};

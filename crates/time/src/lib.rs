@@ -48,7 +48,7 @@
 
 use std::time::Instant;
 
-use drape_contact::{ContactSettings, ExplicitContact};
+use drape_contact::{ContactSettings, ExplicitContact, StepTimes};
 use drape_elements::ElementError;
 use drape_model::{Model, Motion, SlotLayout, State};
 use nalgebra::Vector3;
@@ -755,13 +755,17 @@ impl<'m> Explicit<'m> {
                 self.v_new[i][k] = (self.x_new[i][k] - state.x[i][k]) / h;
             }
             if let Some(contact) = &mut self.contact {
-                contact.enforce(
+                contact.enforce_step(
                     &mut self.x_new,
                     &mut self.v_new,
                     &self.mass,
                     &self.movable,
-                    t_new,
-                    h,
+                    &StepTimes {
+                        t_new,
+                        dt: h,
+                        dt_mean: dt_avg,
+                        damping,
+                    },
                 );
                 // A partly constrained node keeps its prescribed components;
                 // its constraint takes the contact force there.
@@ -892,12 +896,19 @@ impl<'m> Explicit<'m> {
         })
     }
 
-    /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`.
+    /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`. The
+    /// contact force of n+1 comes with the next step's contact pass; the
+    /// last one stands for it (as in the work's half increment), so that a
+    /// node resting on a tool has no velocity.
     fn full_step_velocity(&self, state: &State, i: usize, h: f64) -> Vector3<f64> {
         let mut v = state.v[i];
+        let contact = self
+            .contact
+            .as_ref()
+            .map_or(Vector3::zeros(), |c| c.force[i]);
         for k in 0..3 {
             if !self.constrained[i][k] {
-                v[k] += 0.5 * h * (self.f_ext[i][k] - self.f_int[i][k]) / self.mass[i];
+                v[k] += 0.5 * h * (self.f_ext[i][k] - self.f_int[i][k] + contact[k]) / self.mass[i];
             }
         }
         v

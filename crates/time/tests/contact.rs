@@ -1,10 +1,13 @@
-//! Contact through the explicit driver: a blank on an incline.
+//! Contact through the explicit driver: a blank on an incline, at rest on
+//! a floor and on a sphere, a strip pinched between a die and a holder.
+//! Quick versions of `cargo xtask validate --filter contact`.
 
 use drape_constitutive::Material;
-use drape_contact::{Surface, Tool, ToolMotion};
-use drape_model::Model;
+use drape_contact::{ProfileSegment, Surface, Tool, ToolMotion};
+use drape_elements::{FabricSection, MembraneBatch, TrussBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
-use drape_time::{Explicit, ExplicitSettings, NoObserver};
+use drape_model::{Amplitude, BoundaryCondition, Model, Motion, NodalLoad};
+use drape_time::{Explicit, ExplicitSettings, Frame, NoObserver, Observer};
 use nalgebra::Vector3;
 
 const G: f64 = 9810.0;
@@ -80,5 +83,345 @@ fn a_blank_sticks_below_the_friction_angle_and_slides_above_it() {
     assert!(
         (dx - expected).abs() < 1e-3 * expected,
         "{dx} vs {expected}"
+    );
+}
+
+fn glass() -> Material {
+    Material::preset("glass-serge-4x3").unwrap()
+}
+
+fn blank_model(side: [f64; 2], cells: [usize; 2], z: f64) -> Model {
+    let blank = RectangleBlank {
+        width: side[0],
+        height: side[1],
+        center: Vector3::new(0.0, 0.0, z),
+        orientation_deg: 0.0,
+        element: ElementKind::Quad,
+        meshing: Meshing::Cells(cells),
+        fibres: FibreRepresentation::Trusses,
+    };
+    Model::from_blank(&blank, &glass()).unwrap()
+}
+
+fn fixed(name: &str, surface: Surface, friction: f64) -> Tool {
+    Tool {
+        name: name.into(),
+        surface,
+        motion: ToolMotion::Fixed,
+        friction,
+    }
+}
+
+/// Calls a closure with every frame.
+struct Frames<F: FnMut(&Frame<'_>)>(F);
+impl<F: FnMut(&Frame<'_>)> Observer for Frames<F> {
+    fn frame(&mut self, frame: &Frame<'_>) {
+        (self.0)(frame)
+    }
+}
+
+/// A blank at rest on a floor, the run ending on a shortened step: the
+/// contact force is the weight exactly and the kinetic energy zero (the
+/// force comes from the step's mean Δt, the full-step velocity includes it).
+#[test]
+fn at_rest_on_a_floor_the_contact_force_is_the_weight_whatever_the_last_step() {
+    let mut model = blank_model([20.0, 20.0], [2, 2], 0.5 * glass().thickness);
+    model.gravity = Vector3::new(0.0, 0.0, -G);
+    model.tools.push(fixed(
+        "floor",
+        Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
+        0.3,
+    ));
+    let weight = G * model.mass.iter().sum::<f64>();
+    let (mut force, mut kinetic) = (Vector3::zeros(), f64::NAN);
+    let mut observer = Frames(|f: &Frame<'_>| {
+        force = f.contact.unwrap().force.iter().sum();
+        kinetic = f.energy.kinetic;
+    });
+    let mut state = model.initial_state();
+    // 1.234e-3 s is no whole number of steps: the last one is shorter.
+    let settings = ExplicitSettings {
+        end_time: 1.234e-3,
+        frames: 1,
+        ..ExplicitSettings::default()
+    };
+    Explicit::new(&model, settings)
+        .unwrap()
+        .run(&mut state, &mut observer)
+        .unwrap();
+    // The force is m·(penetration)/(Δt·τ), the penetration g·Δt² ≈ 6e-8 mm
+    // a difference of coordinates of 0.3 mm: 1e-9 of it is round-off.
+    assert!(
+        (force.z - weight).abs() < 1e-8 * weight,
+        "{force} vs {weight}: {:e}",
+        force.z / weight - 1.0
+    );
+    assert!(force.x.abs() + force.y.abs() < 1e-8 * weight);
+    assert!(kinetic.abs() < 1e-20, "kinetic energy at rest {kinetic}");
+}
+
+/// A blank pressed onto a sphere by a load on every node comes to rest
+/// outside it, the contact forces balancing the loads and the weight.
+#[test]
+fn a_blank_pressed_onto_a_sphere_stays_outside_and_balances_the_load() {
+    let h = glass().thickness;
+    let mut model = blank_model([40.0, 40.0], [8, 8], 0.5 * h);
+    model.gravity = Vector3::new(0.0, 0.0, -G);
+    let sphere = Surface::sphere(Vector3::new(0.0, 0.0, -40.0), 40.0).unwrap();
+    model.tools.push(fixed("sphere", sphere.clone(), 0.3));
+    model.loads.push(NodalLoad {
+        nodes: model.node_set("all").unwrap().to_vec(),
+        force: Vector3::new(0.0, 0.0, -0.1),
+        amplitude: Amplitude::Constant,
+    });
+    let applied = model.gravity * model.mass.iter().sum::<f64>()
+        + Vector3::new(0.0, 0.0, -0.1) * model.node_count() as f64;
+    let (mut penetration, mut force) = (0.0f64, Vector3::zeros());
+    let mut observer = Frames(|f: &Frame<'_>| {
+        for x in &f.state.x {
+            penetration = penetration.max(0.5 * h - sphere.project(x).gap);
+        }
+        force = f.contact.unwrap().force.iter().sum();
+    });
+    let mut state = model.initial_state();
+    let settings = ExplicitSettings {
+        end_time: 0.01,
+        frames: 50,
+        damping: 2000.0,
+        ..ExplicitSettings::default()
+    };
+    Explicit::new(&model, settings)
+        .unwrap()
+        .run(&mut state, &mut observer)
+        .unwrap();
+    assert!(penetration < 1e-6 * h, "penetration {penetration}");
+    let residual = (force + applied).norm() / applied.norm();
+    assert!(residual < 1e-3, "{force} vs {applied}");
+}
+
+/// A strip pinched between a fixed die and a force-driven holder, pulled:
+/// both tools carry the holder's force F, the holder does not sink into the
+/// strip, and the pull settles at 2μF once the strip slides.
+#[test]
+fn a_pinched_strip_slides_at_twice_mu_times_the_holder_force() {
+    let (f, mu, speed) = (10.0, 0.2, 20.0);
+    let (t_clamp, end) = (2e-3, 10e-3);
+    let h = glass().thickness;
+    let mut model = blank_model([60.0, 10.0], [12, 2], 0.5 * h);
+    model.tools.push(fixed(
+        "die",
+        Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
+        mu,
+    ));
+    model.tools.push(Tool {
+        name: "holder".into(),
+        surface: Surface::plane(Vector3::new(0.0, 0.0, h), -Vector3::z()).unwrap(),
+        motion: ToolMotion::Force {
+            direction: -Vector3::z(),
+            force: f,
+            amplitude: Amplitude::SmoothStep { duration: t_clamp },
+            mass: 1e-5,
+        },
+        friction: mu,
+    });
+    let pulled = model.node_set("right").unwrap().to_vec();
+    model.boundary.push(BoundaryCondition {
+        nodes: pulled.clone(),
+        components: [true; 3],
+        motion: Motion::Velocity {
+            value: Vector3::new(speed, 0.0, 0.0),
+            amplitude: Amplitude::Table {
+                points: vec![[0.0, 0.0], [t_clamp, 0.0], [t_clamp + 1e-3, 1.0]],
+            },
+        },
+    });
+    let mut sliding = Vec::new();
+    let mut observer = Frames(|fr: &Frame<'_>| {
+        let contact = fr.contact.unwrap();
+        if fr.state.time >= t_clamp {
+            // Each tool carries F; the holder rests on the strip.
+            assert!(
+                (contact.tool_force[0] - f).abs() < 1e-3 * f,
+                "die {:?}",
+                contact.tool_force
+            );
+            assert!(
+                (contact.tool_force[1] - f).abs() < 1e-3 * f,
+                "holder {:?}",
+                contact.tool_force
+            );
+            assert!(contact.tool_state[1].displacement.abs() < 1e-6);
+        }
+        if fr.state.time >= 6e-3 {
+            sliding.push(
+                pulled
+                    .iter()
+                    .map(|&n| fr.reactions[n as usize].x)
+                    .sum::<f64>(),
+            );
+        }
+    });
+    let mut state = model.initial_state();
+    let settings = ExplicitSettings {
+        end_time: end,
+        frames: 40,
+        damping: 200.0,
+        ..ExplicitSettings::default()
+    };
+    Explicit::new(&model, settings)
+        .unwrap()
+        .run(&mut state, &mut observer)
+        .unwrap();
+    let mean = sliding.iter().sum::<f64>() / sliding.len() as f64;
+    assert!(
+        (mean - 2.0 * mu * f).abs() < 0.01 * 2.0 * mu * f,
+        "pull {mean}"
+    );
+}
+
+/// Capstan: a strip wrapped half round a fixed vertical cylinder (its
+/// reference already bent: 20 mm legs, an arc of radius ρ = R + h/2 with
+/// nodes π/16 apart), held by T₁ at one end and pulled slowly at the other:
+/// sliding, T₂/T₁ = e^(μθ) (0.4 % above it here from the polygonal wrap and
+/// the damping's drag, see the validation case).
+#[test]
+fn a_strip_sliding_round_a_cylinder_follows_the_capstan_equation() {
+    let material = glass();
+    let (ds, width, mu, t1, speed) = (2.0, 10.0, 0.3, 5.0, 10.0);
+    let beta = std::f64::consts::PI / 16.0;
+    let (rho, leg_cells, arc_cells) = (ds / beta, 10usize, 16usize);
+    let cells = 2 * leg_cells + arc_cells;
+    let (s_a, s_b) = (leg_cells as f64 * ds, (leg_cells + arc_cells) as f64 * ds);
+    let tangent = |phi: f64| Vector3::new(-phi.sin(), phi.cos(), 0.0);
+    let point = |phi: f64| Vector3::new(rho * phi.cos(), rho * phi.sin(), 0.0);
+    let (phi_a, phi_b) = (-0.5 * std::f64::consts::PI, 0.5 * std::f64::consts::PI);
+    let centreline = |s: f64| {
+        if s <= s_a {
+            (point(phi_a) - tangent(phi_a) * (s_a - s), tangent(phi_a))
+        } else if s >= s_b {
+            (point(phi_b) + tangent(phi_b) * (s - s_b), tangent(phi_b))
+        } else {
+            let phi = phi_a + (s - s_a) / rho;
+            (point(phi), tangent(phi))
+        }
+    };
+    let length = cells as f64 * ds;
+    let blank = RectangleBlank {
+        width: length,
+        height: width,
+        center: Vector3::new(0.5 * length, 0.0, 0.0),
+        orientation_deg: 0.0,
+        element: ElementKind::Quad,
+        meshing: Meshing::Cells([cells, 2]),
+        fibres: FibreRepresentation::Trusses,
+    };
+    let mesh = blank.mesh().unwrap();
+    let x0: Vec<_> = mesh
+        .x0
+        .iter()
+        .map(|p| centreline(p.x).0 + Vector3::new(0.0, 0.0, p.y))
+        .collect();
+    let warp: Vec<_> = mesh
+        .quads
+        .iter()
+        .map(|q| centreline(q.iter().map(|&n| mesh.x0[n as usize].x).sum::<f64>() / 4.0).1)
+        .collect();
+    let membranes = vec![
+        MembraneBatch::quads(
+            FabricSection::new(material.clone(), false),
+            &x0,
+            mesh.quads.clone(),
+            &warp,
+        )
+        .unwrap(),
+    ];
+    let mut trusses = Vec::new();
+    for family in 0..2u8 {
+        let specs: Vec<_> = mesh.trusses.iter().filter(|t| t.family == family).collect();
+        let sections = specs
+            .iter()
+            .map(|t| {
+                let flat = (mesh.x0[t.nodes[1] as usize] - mesh.x0[t.nodes[0] as usize]).norm();
+                material.family_thickness() * t.strip_area / flat
+            })
+            .collect();
+        let nodes = specs.iter().map(|t| t.nodes).collect();
+        trusses.push(TrussBatch::new(material.fibre, &x0, nodes, sections).unwrap());
+    }
+    let mut mass = vec![0.0; x0.len()];
+    for e in 0..membranes[0].len() {
+        for (&n, a) in membranes[0]
+            .element_nodes(e)
+            .iter()
+            .zip(membranes[0].nodal_areas(e))
+        {
+            mass[n as usize] += material.areal_density() * a;
+        }
+    }
+    let mut model = Model {
+        x0,
+        mass,
+        trusses,
+        membranes,
+        node_sets: mesh.node_sets,
+        contact_offset: 0.5 * material.thickness,
+        ..Model::default()
+    };
+    let radius = rho - 0.5 * material.thickness;
+    model.tools.push(fixed(
+        "cylinder",
+        Surface::revolution(
+            Vector3::zeros(),
+            vec![ProfileSegment::Line {
+                from: [radius, 50.0],
+                to: [radius, -50.0],
+            }],
+        )
+        .unwrap(),
+        mu,
+    ));
+    let held = model.node_set("left").unwrap().to_vec();
+    let pulled = model.node_set("right").unwrap().to_vec();
+    model.loads.push(NodalLoad {
+        force: -tangent(phi_a) * (t1 / held.len() as f64),
+        nodes: held,
+        amplitude: Amplitude::SmoothStep { duration: 2e-3 },
+    });
+    model.boundary.push(BoundaryCondition {
+        nodes: pulled.clone(),
+        components: [true; 3],
+        motion: Motion::Velocity {
+            value: tangent(phi_b) * speed,
+            amplitude: Amplitude::Table {
+                points: vec![[0.0, 0.0], [2e-3, 0.0], [4e-3, 1.0]],
+            },
+        },
+    });
+    let mut ratios = Vec::new();
+    let mut observer = Frames(|f: &Frame<'_>| {
+        if f.state.time >= 10e-3 {
+            let t2: f64 = pulled
+                .iter()
+                .map(|&n| f.reactions[n as usize].dot(&tangent(phi_b)))
+                .sum();
+            ratios.push(t2 / t1);
+        }
+    });
+    let mut state = model.initial_state();
+    let settings = ExplicitSettings {
+        end_time: 14e-3,
+        frames: 14,
+        damping: 1000.0,
+        ..ExplicitSettings::default()
+    };
+    Explicit::new(&model, settings)
+        .unwrap()
+        .run(&mut state, &mut observer)
+        .unwrap();
+    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    let capstan = (mu * std::f64::consts::PI).exp();
+    assert!(
+        (mean / capstan - 1.0).abs() < 0.01,
+        "T₂/T₁ {mean} vs {capstan}"
     );
 }

@@ -20,12 +20,19 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 mod constitutive;
+mod contact;
 mod explicit;
 mod kinematics;
 
 /// Every case of every crate, in the order they run and are reported.
 pub fn registry() -> Vec<Case> {
-    [kinematics::CASES, constitutive::CASES, explicit::CASES].concat()
+    [
+        kinematics::CASES,
+        constitutive::CASES,
+        explicit::CASES,
+        contact::CASES,
+    ]
+    .concat()
 }
 
 /// One validation case.

@@ -342,6 +342,31 @@ impl Surface {
         )
     }
 
+    /// The same punch pointing down (−z), its pole at `pole`, the shank
+    /// above.
+    pub fn hemispherical_punch_down(
+        pole: Vector3<f64>,
+        radius: f64,
+        shank: f64,
+    ) -> Result<Self, SurfaceError> {
+        let centre = pole + Vector3::new(0.0, 0.0, radius);
+        Self::revolution(
+            centre,
+            vec![
+                ProfileSegment::Line {
+                    from: [radius, shank],
+                    to: [radius, 0.0],
+                },
+                ProfileSegment::Arc {
+                    center: [0.0, 0.0],
+                    radius,
+                    from_deg: 0.0,
+                    to_deg: -90.0,
+                },
+            ],
+        )
+    }
+
     /// The closest point, outward normal and signed gap of `x` (local frame).
     pub fn project(&self, x: &Vector3<f64>) -> Projection {
         match self {
@@ -476,6 +501,23 @@ mod tests {
             prop_assert!((q.normal.norm() - 1.0).abs() < 1e-12);
             // The projection is on the surface: its own gap is zero.
             prop_assert!(punch.project(&q.point).gap.abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn a_punch_pointing_down_mirrors_one_pointing_up() {
+        let up = Surface::hemispherical_punch(Vector3::new(0.0, 0.0, 0.0), 50.0, 100.0).unwrap();
+        let down =
+            Surface::hemispherical_punch_down(Vector3::new(0.0, 0.0, 0.0), 50.0, 100.0).unwrap();
+        for p in [
+            Vector3::new(10.0, 5.0, 3.0),
+            Vector3::new(60.0, 0.0, -80.0),
+            Vector3::new(20.0, -30.0, -40.0),
+        ] {
+            let mirrored = Vector3::new(p.x, p.y, -p.z);
+            let (a, b) = (up.project(&p), down.project(&mirrored));
+            assert!((a.gap - b.gap).abs() < 1e-12, "{} vs {}", a.gap, b.gap);
+            assert!((a.normal.z + b.normal.z).abs() < 1e-12);
         }
     }
 

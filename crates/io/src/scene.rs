@@ -212,6 +212,16 @@ pub enum GeometrySpec {
         /// Profile segments in (r, z), fabric on the left of travel.
         profile: Vec<ProfileSegment>,
     },
+    /// A triangle mesh from an STL or OBJ file (relative to the scene
+    /// file), moved by `offset`; the fabric on the side its counter-clockwise
+    /// normals point to (outside a closed mesh).
+    Mesh {
+        /// The file.
+        file: String,
+        /// Translation applied to the mesh (mm).
+        #[serde(default)]
+        offset: [f64; 3],
+    },
 }
 
 /// Which way a punch points.
@@ -286,6 +296,8 @@ pub enum NodeSelection {
     Set(String),
     /// Node indices.
     List(Vec<u32>),
+    /// The union of named sets.
+    Sets(Vec<String>),
 }
 
 /// `[[springs]]`: holding springs from nodes to anchors.
@@ -677,6 +689,15 @@ fn nodes(
                 ),
             )
         }),
+        NodeSelection::Sets(names) => {
+            let mut all = Vec::new();
+            for name in names {
+                all.extend(nodes(at, field, model, &NodeSelection::Set(name.clone()))?);
+            }
+            all.sort_unstable();
+            all.dedup();
+            Ok(all)
+        }
         NodeSelection::List(list) => {
             let count = model.node_count();
             match list.iter().find(|&&n| n as usize >= count) {
@@ -887,6 +908,29 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
                 profile.clone(),
             )
             .map_err(surface_err)?,
+            GeometrySpec::Mesh { file, offset } => {
+                let path = at.file.parent().unwrap_or(Path::new(".")).join(file);
+                let offset = finite3(at, &format!("{g}.offset"), *offset)?;
+                let extension = path
+                    .extension()
+                    .and_then(|e| e.to_str())
+                    .map(str::to_ascii_lowercase);
+                let read = match extension.as_deref() {
+                    Some("stl") => drape_contact::read_stl(&path),
+                    Some("obj") => drape_contact::read_obj(&path),
+                    _ => {
+                        return Err(at.error(
+                            &format!("{g}.file"),
+                            format!("`{file}`: expected an .stl or .obj file"),
+                        ));
+                    }
+                };
+                let (vertices, triangles) =
+                    read.map_err(|e| at.error(&format!("{g}.file"), e.to_string()))?;
+                let vertices = vertices.into_iter().map(|v| v + offset).collect();
+                Surface::triangle_mesh(vertices, triangles)
+                    .map_err(|e| at.error(&format!("{g}.file"), e.to_string()))?
+            }
         };
         let m = format!("{here}.motion");
         let motion = match &t.motion {

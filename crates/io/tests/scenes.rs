@@ -101,3 +101,15 @@ fn a_missing_file_is_reported() {
     let e = Scene::from_file(Path::new("/nonexistent/scene.toml"), &[]).unwrap_err();
     assert!(e.to_string().contains("/nonexistent/scene.toml"), "{e}");
 }
+
+#[test]
+fn a_tool_file_that_does_not_exist_names_the_field() {
+    let text = GOOD.replace(
+        "geometry = { kind = \"plane\", point = [0, 0, -1], normal = [0, 0, 1] }",
+        "geometry = { kind = \"mesh\", file = \"missing-punch.stl\" }",
+    );
+    let e = error_of(&text);
+    assert_eq!(e.field, "tools[0].geometry.file", "{e}");
+    assert_eq!(e.line, Some(13), "{e}");
+    assert!(e.message.contains("missing-punch.stl"), "{e}");
+}

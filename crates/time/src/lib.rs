@@ -717,8 +717,12 @@ impl<'m> Explicit<'m> {
                     state.step
                 )));
             }
-            let h = if end - state.time < dt * (1.0 + 1e-6) {
-                end - state.time
+            // The time left is cut into equal steps no longer than Δt, so the
+            // run ends on end_time without a sliver of a last step (a tiny
+            // step turns an ordinary contact increment into a huge force).
+            let left = end - state.time;
+            let h = if left < 4.0 * dt {
+                left / (left / dt).ceil()
             } else {
                 dt
             };

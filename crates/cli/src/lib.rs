@@ -14,14 +14,15 @@
 //! println!("max shear {:.1}°", report.summary.max_shear_deg);
 //! ```
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use drape_io::results::{
     DrawInMm, EnergyRow, EnergySummary, FrameData, ResultsDir, ResultsError, RunInfo, Summary,
 };
 use drape_io::scene::Scene;
 use drape_model::{Measures, State};
-use drape_time::{Control, Energies, Explicit, Frame, Observer, Progress};
+use drape_time::{Control, DriverState, Energies, Explicit, Frame, Observer, Progress};
+use serde::{Deserialize, Serialize};
 
 pub use drape_time::Control as RunControl;
 
@@ -49,8 +50,55 @@ pub struct RunReport {
 /// diverges is reported in the summary (`status = "failed"`).
 pub type FacadeError = ResultsError;
 
+/// Everything a stopped run needs to continue: written atomically to
+/// `checkpoint.json` in its output directory.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// The `--set` overrides it ran with.
+    pub overrides: Vec<(String, String)>,
+    /// The state.
+    pub state: State,
+    /// The driver's carried state.
+    pub driver: DriverState,
+    /// The energy history so far.
+    pub rows: Vec<EnergyRow>,
+    /// The frames written so far: (index, time).
+    pub frames: Vec<(usize, f64)>,
+}
+
+impl Checkpoint {
+    /// The checkpoint file of an output directory.
+    pub fn path(out: &Path) -> PathBuf {
+        out.join("checkpoint.json")
+    }
+
+    /// Reads the checkpoint of the output directory `out`.
+    pub fn read(out: &Path) -> Result<Self, String> {
+        let path = Self::path(out);
+        let text =
+            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        serde_json::from_str(&text)
+            .map_err(|e| format!("{}: not a drape checkpoint: {e}", path.display()))
+    }
+}
+
+/// How to run beyond the scene itself.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Write a checkpoint every this many steps.
+    pub checkpoint_every: Option<u64>,
+    /// The `--set` overrides, recorded in checkpoints.
+    pub overrides: Vec<(String, String)>,
+    /// Continue from this checkpoint (its output directory is `out`).
+    pub resume: Option<Checkpoint>,
+}
+
 struct Recorder<'a> {
     results: ResultsDir,
+    scene: PathBuf,
+    overrides: Vec<(String, String)>,
     write_frames: bool,
     rows: Vec<EnergyRow>,
     max_shear_deg: f64,
@@ -92,6 +140,27 @@ impl Observer for Recorder<'_> {
         }
     }
 
+    fn checkpoint(&mut self, state: &State, driver: &DriverState) {
+        if self.error.is_some() {
+            return;
+        }
+        let checkpoint = Checkpoint {
+            scene: self.scene.clone(),
+            overrides: self.overrides.clone(),
+            state: state.clone(),
+            driver: driver.clone(),
+            rows: self.rows.clone(),
+            frames: self.results.frames(),
+        };
+        let path = Checkpoint::path(self.results.path());
+        let written = serde_json::to_vec(&checkpoint)
+            .map_err(std::io::Error::other)
+            .and_then(|bytes| drape_io::atomic::write(&path, &bytes));
+        if let Err(source) = written {
+            self.error = Some(ResultsError { path, source });
+        }
+    }
+
     fn progress(&mut self, progress: &Progress) -> Control {
         if self.error.is_some() {
             return Control::Stop;
@@ -113,21 +182,52 @@ pub fn run_scene(
     out: &Path,
     progress: &mut dyn FnMut(&RunProgress) -> Control,
 ) -> Result<RunReport, FacadeError> {
-    let results = ResultsDir::create(out)?;
+    run_scene_with(scene, out, RunOptions::default(), progress)
+}
+
+/// [`run_scene`] with checkpoints, or continuing from one: a resumed run
+/// ends where an uninterrupted one would, bit for bit.
+pub fn run_scene_with(
+    scene: &Scene,
+    out: &Path,
+    options: RunOptions,
+    progress: &mut dyn FnMut(&RunProgress) -> Control,
+) -> Result<RunReport, FacadeError> {
     let model = &scene.model;
-    let mut state = model.initial_state();
+    let (results, mut state, rows, driver) = match options.resume {
+        Some(c) => (
+            ResultsDir::reopen(out, &c.frames)?,
+            c.state,
+            c.rows,
+            Some(c.driver),
+        ),
+        None => (
+            ResultsDir::create(out)?,
+            model.initial_state(),
+            Vec::new(),
+            None,
+        ),
+    };
     let mut recorder = Recorder {
         results,
+        scene: scene.file.clone(),
+        overrides: options.overrides,
         write_frames: scene.spec.output.vtu,
-        rows: Vec::new(),
+        rows,
         max_shear_deg: 0.0,
         error: None,
         last_energy: Energies::default(),
         callback: progress,
     };
     let started = std::time::Instant::now();
-    let outcome = Explicit::new(model, scene.settings.clone())
-        .and_then(|mut driver| driver.run(&mut state, &mut recorder));
+    let mut settings = scene.settings.clone();
+    settings.checkpoint_every = options.checkpoint_every;
+    let outcome = Explicit::new(model, settings).and_then(|mut explicit| {
+        if let Some(d) = driver {
+            explicit.resume_from(d);
+        }
+        explicit.run(&mut state, &mut recorder)
+    });
     let wall_s = started.elapsed().as_secs_f64();
     if let Some(e) = recorder.error.take() {
         return Err(e);

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow};
 use clap::{Parser, Subcommand};
-use drape::{RunControl, RunProgress, run_scene};
+use drape::{Checkpoint, RunControl, RunOptions, RunProgress, run_scene, run_scene_with};
 use drape_io::results::Summary;
 use drape_io::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -28,7 +28,8 @@ enum Command {
     /// Run a scene and write its results.
     Run {
         /// The scene file (TOML).
-        scene: PathBuf,
+        #[arg(required_unless_present = "resume")]
+        scene: Option<PathBuf>,
         /// Output directory (default: results/<scene name>).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -38,6 +39,13 @@ enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Write a restart file (checkpoint.json) every N steps.
+        #[arg(long, value_name = "N")]
+        checkpoint_every: Option<u64>,
+        /// Continue the stopped run in DIR from its checkpoint, with the
+        /// scene and overrides it was started with.
+        #[arg(long, value_name = "DIR", conflicts_with_all = ["scene", "set", "out"])]
+        resume: Option<PathBuf>,
     },
     /// Write a ready-to-run scene from a template.
     New {
@@ -109,7 +117,13 @@ fn main() -> ExitCode {
             out,
             set,
             threads,
-        } => with_threads(threads, || run(&scene, out, &set)),
+            checkpoint_every,
+            resume,
+        } => with_threads(threads, || match (resume, scene) {
+            (Some(dir), _) => resume_run(&dir, checkpoint_every),
+            (None, Some(scene)) => run(&scene, out, &set, checkpoint_every),
+            (None, None) => Err(bad("give a scene file or --resume DIR")),
+        }),
         Command::New { template, path } => new(&template, path),
         Command::Sweep {
             scene,
@@ -261,15 +275,60 @@ fn print_summary(s: &Summary, out: &Path) {
     println!("results           {}", out.display());
 }
 
-fn run(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
+fn run(
+    scene_path: &Path,
+    out: Option<PathBuf>,
+    set: &[String],
+    checkpoint_every: Option<u64>,
+) -> Result<ExitCode> {
     let overrides = parse_sets(set)?;
     let scene = load(scene_path, &overrides)?;
     let out = out.unwrap_or_else(|| default_out(scene_path, ""));
+    let options = RunOptions {
+        checkpoint_every: checked_interval(checkpoint_every)?,
+        overrides,
+        resume: None,
+    };
+    finish_run(&scene, &out, options)
+}
+
+fn checked_interval(every: Option<u64>) -> Result<Option<u64>> {
+    match every {
+        Some(0) => Err(bad("--checkpoint-every must be at least 1")),
+        other => Ok(other),
+    }
+}
+
+fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
+    let checkpoint = Checkpoint::read(dir).map_err(bad)?;
+    let scene = load(&checkpoint.scene, &checkpoint.overrides)?;
+    if checkpoint.state.x.len() != scene.model.node_count() {
+        return Err(bad(format!(
+            "{}: the checkpoint does not belong to {} as it is now",
+            Checkpoint::path(dir).display(),
+            checkpoint.scene.display()
+        )));
+    }
+    eprintln!(
+        "resuming {} at step {}, t = {:.6} s",
+        checkpoint.scene.display(),
+        checkpoint.state.step,
+        checkpoint.state.time
+    );
+    let options = RunOptions {
+        checkpoint_every: checked_interval(checkpoint_every)?,
+        overrides: checkpoint.overrides.clone(),
+        resume: Some(checkpoint),
+    };
+    finish_run(&scene, dir, options)
+}
+
+fn finish_run(scene: &Scene, out: &Path, options: RunOptions) -> Result<ExitCode> {
     let mut reporter = Reporter::new();
-    let report = run_scene(&scene, &out, &mut |p| reporter.update(p))
+    let report = run_scene_with(scene, out, options, &mut |p| reporter.update(p))
         .with_context(|| format!("writing results to {}", out.display()))?;
     reporter.finish();
-    print_summary(&report.summary, &out);
+    print_summary(&report.summary, out);
     Ok(if report.summary.status == "failed" {
         ExitCode::from(1)
     } else {

@@ -225,3 +225,90 @@ fn a_diverging_run_exits_1_and_keeps_what_it_reached() {
     assert!(out.join("frames/frame_00000.vtu").is_file());
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+const DRAPED: &str = r#"gravity = [0, 0, -9810]
+
+[simulation]
+end_time = 0.004
+frames = 4
+mass_scaling_dt = 2e-6
+
+[fabric]
+material = "carbon-prepreg-2x2"
+fibres = "trusses"
+orientation_deg = 45
+blank = { width = 100, height = 100, cells = [10, 10] }
+
+[[tools]]
+name = "punch"
+friction = 0.2
+geometry = { kind = "sphere", center = [0, 0, -40.2], radius = 40 }
+motion = { kind = "displacement", direction = [0, 0, 1], distance = 10, amplitude = { kind = "smooth_step", duration = 0.004 } }
+
+[[springs]]
+nodes = ["corners", "edge_midpoints"]
+stiffness = 2.0
+"#;
+
+#[test]
+fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
+    use drape::{Checkpoint, RunControl, RunOptions, run_scene, run_scene_with};
+    use drape_io::scene::Scene;
+    let dir = temp("resume");
+    let path = dir.join("draped.toml");
+    std::fs::write(&path, DRAPED).unwrap();
+    let scene = Scene::from_file(&path, &[]).unwrap();
+    let straight = run_scene(&scene, &dir.join("straight"), &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(straight.summary.status, "completed");
+
+    // Stopped after 300 steps with a checkpoint every 70, then resumed.
+    let mut interrupted = scene.clone();
+    interrupted.settings.max_steps = Some(300);
+    let out = dir.join("resumed");
+    let options = RunOptions {
+        checkpoint_every: Some(70),
+        ..RunOptions::default()
+    };
+    let first = run_scene_with(&interrupted, &out, options, &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(first.summary.status, "stopped");
+    let checkpoint = Checkpoint::read(&out).unwrap();
+    assert_eq!(checkpoint.state.step, 280);
+    let options = RunOptions {
+        resume: Some(checkpoint),
+        ..RunOptions::default()
+    };
+    let resumed = run_scene_with(&scene, &out, options, &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(resumed.summary.status, "completed");
+    assert_eq!(resumed.state.step, straight.state.step);
+    let bits = |s: &drape_model::State| -> Vec<u64> {
+        s.x.iter()
+            .flat_map(|p| p.iter().map(|v| v.to_bits()))
+            .collect()
+    };
+    assert_eq!(bits(&resumed.state), bits(&straight.state));
+    assert_eq!(
+        resumed.summary.max_shear_deg,
+        straight.summary.max_shear_deg
+    );
+    // Same energy history and frames as the uninterrupted run.
+    let csv = |d: &str| std::fs::read_to_string(dir.join(d).join("energy.csv")).unwrap();
+    assert_eq!(csv("resumed"), csv("straight"));
+    assert!(out.join("frames/frame_00004.vtu").is_file());
+
+    // The same through the command line.
+    let cli = dir.join("cli");
+    let o = drape(&[
+        "run",
+        path.to_str().unwrap(),
+        "--checkpoint-every",
+        "100",
+        "--out",
+        cli.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(cli.join("checkpoint.json").is_file());
+    let o = drape(&["run", "--resume", cli.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("resuming"), "{}", text(&o));
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -135,7 +135,7 @@ pub struct Tool {
 }
 
 /// Where a tool is: its displacement and velocity along its axis.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct ToolState {
     /// Displacement along the axis (mm).
     pub displacement: f64,

@@ -85,7 +85,6 @@ pub struct EnergyRow {
     /// Completed steps.
     pub step: u64,
     /// The energies.
-    #[serde(skip)]
     pub energy: Energies,
 }
 
@@ -222,6 +221,41 @@ impl ResultsDir {
             dir: dir.to_owned(),
             frames: BTreeMap::new(),
         })
+    }
+
+    /// Reopens the directory of a stopped run to continue it: the frames
+    /// listed in `frames` (index, time: those its checkpoint had written)
+    /// are kept and stay in the series, any later frame is removed.
+    pub fn reopen(dir: &Path, frames: &[(usize, f64)]) -> Result<Self, ResultsError> {
+        let folder = dir.join("frames");
+        std::fs::create_dir_all(&folder).map_err(at(&folder))?;
+        let kept: BTreeMap<usize, (f64, String)> = frames
+            .iter()
+            .map(|&(i, t)| (i, (t, format!("frames/frame_{i:05}.vtu"))))
+            .collect();
+        for entry in std::fs::read_dir(&folder).map_err(at(&folder))? {
+            let entry = entry.map_err(at(&folder))?;
+            let name = entry.file_name();
+            let Some(name) = name.to_str().filter(|n| is_frame_file(n)) else {
+                continue;
+            };
+            if !kept.values().any(|(_, f)| f.ends_with(name)) {
+                remove_if_present(&entry.path())?;
+            }
+        }
+        let reopened = Self {
+            dir: dir.to_owned(),
+            frames: kept,
+        };
+        let pvd = dir.join("series.pvd");
+        crate::atomic::write(&pvd, vtk::series_pvd(&reopened.frames).as_bytes())
+            .map_err(at(&pvd))?;
+        Ok(reopened)
+    }
+
+    /// The frames written so far: (index, time).
+    pub fn frames(&self) -> Vec<(usize, f64)> {
+        self.frames.iter().map(|(&i, &(t, _))| (i, t)).collect()
     }
 
     /// The directory.

@@ -46,7 +46,7 @@ use drape_constitutive::{Material, MaterialError};
 use drape_elements::{ElementError, FabricSection, MembraneBatch, SpringBatch, TrussBatch};
 use nalgebra::Vector3;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use blank::{BlankFrame, BlankMesh, FibreRepresentation, MeshError, RectangleBlank};
 use measures::{DrawIn, ProfileLine, ProfilePoint};
@@ -275,7 +275,7 @@ pub struct Model {
 }
 
 /// The evolving state of a model.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct State {
     /// Time (s).
     pub time: f64,

@@ -53,6 +53,7 @@ use drape_elements::ElementError;
 use drape_model::{Model, Motion, SlotLayout, State};
 use nalgebra::Vector3;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 /// Settings of an explicit run.
 #[derive(Debug, Clone, PartialEq)]
@@ -80,6 +81,8 @@ pub struct ExplicitSettings {
     pub max_steps: Option<u64>,
     /// Broad-phase margin of the contact pass (mm).
     pub contact_margin: f64,
+    /// Hand the observer a checkpoint every this many steps.
+    pub checkpoint_every: Option<u64>,
 }
 
 impl Default for ExplicitSettings {
@@ -95,12 +98,13 @@ impl Default for ExplicitSettings {
             max_energy_error: None,
             max_steps: None,
             contact_margin: 5.0,
+            checkpoint_every: None,
         }
     }
 }
 
 /// The energy balance (mJ = N·mm).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Energies {
     /// ½·m·v² at the current step.
     pub kinetic: f64,
@@ -200,6 +204,27 @@ pub trait Observer {
     fn progress(&mut self, _progress: &Progress) -> Control {
         Control::Continue
     }
+    /// Called every `checkpoint_every` steps with what a restart needs
+    /// ([`Explicit::resume_from`]).
+    fn checkpoint(&mut self, _state: &State, _driver: &DriverState) {}
+}
+
+/// What the driver carries from step to step beside the [`State`]: with
+/// both, a run continues exactly as if it had never stopped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DriverState {
+    /// The current stable step.
+    pub dt: f64,
+    /// The last step taken.
+    pub dt_prev: f64,
+    /// The works accumulated so far (to the last half step).
+    pub energy: Energies,
+    /// Kinetic energy at the start of the run.
+    pub kinetic0: f64,
+    /// The tools' displacements and velocities.
+    pub tools: Vec<drape_contact::ToolState>,
+    /// Friction dissipated so far.
+    pub friction_dissipation: f64,
 }
 
 /// An observer that does nothing.
@@ -306,6 +331,8 @@ pub struct Explicit<'m> {
     movable: Vec<bool>,
     /// Prescribed coordinate of each constrained component this step.
     prescribed: Vec<f64>,
+    /// Where to pick up, for a resumed run.
+    resume: Option<DriverState>,
 }
 
 /// Nodes summed per rayon task in energy sums: fixed chunks make the sums
@@ -411,6 +438,7 @@ impl<'m> Explicit<'m> {
             contact,
             movable,
             prescribed: vec![0.0; constraints.len()],
+            resume: None,
             slots: vec![Vector3::zeros(); layout.len],
             layout,
             mass: model.mass.clone(),
@@ -652,6 +680,14 @@ impl<'m> Explicit<'m> {
         }
     }
 
+    /// Continues a stopped run: the next [`Self::run`] takes its step size,
+    /// energies and tools from `driver` (saved with the state by
+    /// [`Observer::checkpoint`]), so it reaches the same result, bit for bit,
+    /// as a run that never stopped.
+    pub fn resume_from(&mut self, driver: DriverState) {
+        self.resume = Some(driver);
+    }
+
     /// Runs from `state` to the end time. On error `state` holds the last
     /// good step.
     pub fn run(
@@ -675,8 +711,16 @@ impl<'m> Explicit<'m> {
         let first = self.internal_forces(&state.x, &history, 0.0, state.step, state.time);
         state.history = history;
         first?;
-        let mut energy = Energies::default();
-        let kinetic0: f64 = chunked_sum(n, |i| 0.5 * self.mass[i] * state.v[i].norm_squared());
+        let resume = self.resume.take();
+        let mut energy = resume.as_ref().map_or_else(Energies::default, |r| r.energy);
+        let kinetic0: f64 = match &resume {
+            Some(r) => r.kinetic0,
+            None => chunked_sum(n, |i| 0.5 * self.mass[i] * state.v[i].norm_squared()),
+        };
+        if let (Some(r), Some(contact)) = (&resume, &mut self.contact) {
+            contact.tool_state.clone_from(&r.tools);
+            contact.friction_dissipation = r.friction_dissipation;
+        }
         let frame_dt = if self.settings.frames > 0 {
             end / self.settings.frames as f64
         } else {
@@ -695,8 +739,13 @@ impl<'m> Explicit<'m> {
                 contact: self.contact.as_ref(),
             });
         }
-        let mut dt = self.stable_time_step(&state.x);
-        let mut dt_prev = if state.step == 0 { 0.0 } else { dt };
+        let (mut dt, mut dt_prev) = match &resume {
+            Some(r) => (r.dt, r.dt_prev),
+            None => {
+                let dt = self.stable_time_step(&state.x);
+                (dt, if state.step == 0 { 0.0 } else { dt })
+            }
+        };
         let (mut dt_min, mut dt_max) = (f64::INFINITY, 0.0f64);
         let mut steps = 0u64;
         let mut stopped = false;
@@ -708,7 +757,9 @@ impl<'m> Explicit<'m> {
                 stopped = true;
                 break;
             }
-            if steps > 0 && steps % self.settings.time_step_interval.max(1) == 0 {
+            // On the state's step count, so that a resumed run re-estimates
+            // at the same steps as an uninterrupted one.
+            if state.step > 0 && state.step % self.settings.time_step_interval.max(1) == 0 {
                 dt = self.stable_time_step(&state.x);
             }
             if !(dt > 0.0 && dt.is_finite()) {
@@ -721,8 +772,10 @@ impl<'m> Explicit<'m> {
             // run ends on end_time without a sliver of a last step (a tiny
             // step turns an ordinary contact increment into a huge force).
             let left = end - state.time;
+            // (A millionth of a step over a whole number is round-off of the
+            // summed steps, not a step more.)
             let h = if left < 4.0 * dt {
-                left / (left / dt).ceil()
+                left / (left / dt - 1e-6).ceil().max(1.0)
             } else {
                 dt
             };
@@ -843,6 +896,27 @@ impl<'m> Explicit<'m> {
             dt_prev = h;
             dt_min = dt_min.min(h);
             dt_max = dt_max.max(h);
+            if self
+                .settings
+                .checkpoint_every
+                .is_some_and(|k| state.step % k.max(1) == 0)
+            {
+                let driver = DriverState {
+                    dt,
+                    dt_prev,
+                    energy,
+                    kinetic0,
+                    tools: self
+                        .contact
+                        .as_ref()
+                        .map_or_else(Vec::new, |c| c.tool_state.clone()),
+                    friction_dissipation: self
+                        .contact
+                        .as_ref()
+                        .map_or(0.0, |c| c.friction_dissipation),
+                };
+                observer.checkpoint(state, &driver);
+            }
             let at_end = end - state.time <= 1e-6 * dt;
             let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
             if at_frame || at_end {

@@ -388,11 +388,17 @@ impl Rng {
 mod tests {
     use super::*;
 
+    /// The per-point cases run in `cargo test` too; the simulation cases
+    /// (explicit, contact: tens of seconds) run in `cargo xtask validate
+    /// --quick`, which CI runs right after the tests.
     #[test]
-    fn all_quick_cases_pass() {
+    fn the_quick_kinematics_and_constitutive_cases_pass() {
         let failures: Vec<String> = registry()
             .iter()
-            .filter(|c| c.quick)
+            .filter(|c| {
+                c.quick
+                    && (c.name.starts_with("kinematics/") || c.name.starts_with("constitutive/"))
+            })
             .map(run_case)
             .flat_map(|r| {
                 r.checks

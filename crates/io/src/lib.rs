@@ -9,5 +9,6 @@
 //! What it is not: no mechanics and no time loop.
 
 pub mod atomic;
+pub mod mesh_import;
 pub mod results;
 pub mod scene;

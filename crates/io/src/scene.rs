@@ -111,30 +111,35 @@ pub enum MaterialSpec {
     Inline(Material),
 }
 
-/// `[fabric.blank]`: a rectangle meshed by drape.
+/// `[fabric.blank]`: a rectangle meshed by drape (`width`, `height`,
+/// `cells` or `element_size`, `center`, `element`) or a mesh file (`mesh`),
+/// never both. The rectangle's keys are options so that mixing the two
+/// forms is reported rather than silently ignored.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BlankSpec {
     /// Extent along x (mm).
-    pub width: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
     /// Extent along y (mm).
-    pub height: f64,
-    /// Centre (mm).
-    #[serde(default)]
-    pub center: [f64; 3],
-    /// `quad` or `triangle`.
-    #[serde(default = "default_element")]
-    pub element: ElementKind,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
+    /// Centre (mm), default the origin.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<[f64; 3]>,
+    /// `quad` (default) or `triangle`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub element: Option<ElementKind>,
     /// Cells along x and y.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cells: Option<[usize; 2]>,
     /// Or a target element size (mm).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub element_size: Option<f64>,
-}
-
-fn default_element() -> ElementKind {
-    ElementKind::Quad
+    /// Or a mesh file, Gmsh `.msh` (4.1) or Abaqus `.inp`, relative to the
+    /// scene file (see [`crate::mesh_import`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<String>,
 }
 
 /// `[fabric]`.
@@ -711,6 +716,138 @@ fn nodes(
     }
 }
 
+/// The model of a rectangular blank, and its bottom-left corner (the
+/// default pin of a picture frame).
+fn rectangle_blank(
+    at: &Locator<'_>,
+    fabric: &FabricSpec,
+    material: &Material,
+) -> Result<(Model, Vector3<f64>), SceneError> {
+    let b = &fabric.blank;
+    let (Some(width), Some(height)) = (b.width, b.height) else {
+        let missing = if b.width.is_none() { "width" } else { "height" };
+        return Err(at.error(
+            "fabric.blank",
+            format!(
+                "`{missing}` is missing: give `width`, `height` and `cells` (or `element_size`) \
+                 for a rectangle, or `mesh = \"file.msh\"` (or .inp) for a meshed blank"
+            ),
+        ));
+    };
+    let meshing = match (b.cells, b.element_size) {
+        (Some(c), None) => Meshing::Cells(c),
+        (None, Some(h)) => Meshing::Size(h),
+        _ => {
+            return Err(at.error(
+                "fabric.blank",
+                "give exactly one of `cells = [nx, ny]` and `element_size`",
+            ));
+        }
+    };
+    let blank = RectangleBlank {
+        width,
+        height,
+        center: finite3(at, "fabric.blank.center", b.center.unwrap_or_default())?,
+        orientation_deg: fabric.orientation_deg,
+        element: b.element.unwrap_or(ElementKind::Quad),
+        meshing,
+        fibres: fabric.fibres,
+    };
+    let model = Model::from_blank(&blank, material).map_err(|e| match e {
+        ModelError::Mesh(drape_model::blank::MeshError::Invalid {
+            field,
+            value,
+            expected,
+        }) => {
+            let path = match field {
+                "orientation_deg" => "fabric.orientation_deg".to_owned(),
+                "meshing" => "fabric.blank.cells".to_owned(),
+                f => format!("fabric.blank.{f}"),
+            };
+            at.error(&path, format!("{value} is not allowed: {expected}"))
+        }
+        other => at.error("fabric", other.to_string()),
+    })?;
+    let corner = blank.center - Vector3::new(0.5 * blank.width, 0.5 * blank.height, 0.0);
+    Ok((model, corner))
+}
+
+/// The model of a blank meshed in a file (`fabric.blank.mesh`, relative to
+/// the scene file), with embedded fibres along the warp (cos θ, sin θ, 0)
+/// projected on each element; and its bounding box's low corner (the
+/// default pin of a picture frame).
+fn mesh_blank(
+    at: &Locator<'_>,
+    fabric: &FabricSpec,
+    file: &str,
+    material: &Material,
+) -> Result<(Model, Vector3<f64>), SceneError> {
+    let b = &fabric.blank;
+    let rectangle_keys = [
+        ("width", b.width.is_some()),
+        ("height", b.height.is_some()),
+        ("center", b.center.is_some()),
+        ("element", b.element.is_some()),
+        ("cells", b.cells.is_some()),
+        ("element_size", b.element_size.is_some()),
+    ];
+    if let Some((key, _)) = rectangle_keys.iter().find(|(_, given)| *given) {
+        return Err(at.error(
+            &format!("fabric.blank.{key}"),
+            format!(
+                "`{key}` describes a rectangle and cannot be combined with `mesh`: a blank is \
+                 either a rectangle (`width`, `height`, `cells` or `element_size`) or a mesh file"
+            ),
+        ));
+    }
+    if fabric.fibres != FibreRepresentation::Embedded {
+        return Err(at.error(
+            "fabric.fibres",
+            "a blank from a mesh file needs `fibres = \"embedded\"`: trusses need the \
+             fibre-aligned lattice that drape meshes itself",
+        ));
+    }
+    if !fabric.orientation_deg.is_finite() {
+        return Err(at.error("fabric.orientation_deg", "must be a finite angle"));
+    }
+    let path = at.file.parent().unwrap_or(Path::new(".")).join(file);
+    let mesh = crate::mesh_import::read_mesh(&path)
+        .map_err(|e| at.error("fabric.blank.mesh", e.to_string()))?;
+    let model = Model::from_mesh(
+        &mesh.blank_mesh(fabric.orientation_deg),
+        material,
+        FibreRepresentation::Embedded,
+    )
+    .map_err(|e| {
+        let message = match &e {
+            // The batch's index back to the file's label.
+            ModelError::Element { kind, error } => {
+                let labels = if *kind == "quad" {
+                    &mesh.quad_labels
+                } else {
+                    &mesh.triangle_labels
+                };
+                match labels.get(error.element) {
+                    Some(label) => format!(
+                        "{}: element {label} ({kind}): {} (at integration point {})",
+                        path.display(),
+                        error.cause,
+                        error.point
+                    ),
+                    None => format!("{}: {e}", path.display()),
+                }
+            }
+            _ => format!("{}: {e}", path.display()),
+        };
+        at.error("fabric.blank.mesh", message)
+    })?;
+    let low = mesh
+        .x0
+        .iter()
+        .fold(Vector3::repeat(f64::INFINITY), |m, x| m.inf(x));
+    Ok((model, low))
+}
+
 fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings), SceneError> {
     let sim = &spec.simulation;
     positive(at, "simulation.end_time", sim.end_time)?;
@@ -765,41 +902,10 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
             format!("{} is not allowed: expected {}", e.value, e.expected),
         )
     })?;
-    let b = &fabric.blank;
-    let meshing = match (b.cells, b.element_size) {
-        (Some(c), None) => Meshing::Cells(c),
-        (None, Some(h)) => Meshing::Size(h),
-        _ => {
-            return Err(at.error(
-                "fabric.blank",
-                "give exactly one of `cells = [nx, ny]` and `element_size`",
-            ));
-        }
+    let (mut model, default_pin) = match &fabric.blank.mesh {
+        Some(file) => mesh_blank(at, fabric, file, &material)?,
+        None => rectangle_blank(at, fabric, &material)?,
     };
-    let blank = RectangleBlank {
-        width: b.width,
-        height: b.height,
-        center: finite3(at, "fabric.blank.center", b.center)?,
-        orientation_deg: fabric.orientation_deg,
-        element: b.element,
-        meshing,
-        fibres: fabric.fibres,
-    };
-    let mut model = Model::from_blank(&blank, &material).map_err(|e| match e {
-        ModelError::Mesh(drape_model::blank::MeshError::Invalid {
-            field,
-            value,
-            expected,
-        }) => {
-            let path = match field {
-                "orientation_deg" => "fabric.orientation_deg".to_owned(),
-                "meshing" => "fabric.blank.cells".to_owned(),
-                f => format!("fabric.blank.{f}"),
-            };
-            at.error(&path, format!("{value} is not allowed: {expected}"))
-        }
-        other => at.error("fabric", other.to_string()),
-    })?;
 
     for (i, t) in spec.tools.iter().enumerate() {
         let here = format!("tools[{i}]");
@@ -1054,7 +1160,7 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
                 }
                 let pin = match pin {
                     Some(p) => finite3(at, &format!("{here}.motion.pin"), *p)?,
-                    None => blank.center - Vector3::new(0.5 * blank.width, 0.5 * blank.height, 0.0),
+                    None => default_pin,
                 };
                 let a = amplitude(at, &format!("{here}.motion.amplitude"), a)?;
                 let gamma = shear_deg.to_radians();

@@ -381,36 +381,8 @@ impl Model {
                     .map_err(element("triangle"))?,
             );
         }
-        // One batch per yarn family, so that a node's mass is shared among
-        // the trusses of one family (the stable step of a truss chain).
-        let mut trusses = Vec::new();
-        for family in 0..2u8 {
-            let specs: Vec<_> = mesh.trusses.iter().filter(|t| t.family == family).collect();
-            if specs.is_empty() {
-                continue;
-            }
-            let nodes: Vec<[u32; 2]> = specs.iter().map(|t| t.nodes).collect();
-            let section = specs
-                .iter()
-                .map(|t| {
-                    let [i, j] = t.nodes;
-                    let length = (mesh.x0[j as usize] - mesh.x0[i as usize]).norm();
-                    material.family_thickness() * t.strip_area / length
-                })
-                .collect();
-            trusses.push(
-                TrussBatch::new(material.fibre, &mesh.x0, nodes, section)
-                    .map_err(element("truss"))?,
-            );
-        }
-        let mut mass = vec![0.0; mesh.x0.len()];
-        for b in &membranes {
-            for e in 0..b.len() {
-                for (&n, a) in b.element_nodes(e).iter().zip(b.nodal_areas(e)) {
-                    mass[n as usize] += material.areal_density() * a;
-                }
-            }
-        }
+        let trusses = Self::truss_batches(&mesh.trusses, &mesh.x0, &mesh.x0, material)?;
+        let mass = Self::lumped_mass(mesh.x0.len(), &membranes);
         Ok(Self {
             x0: mesh.x0.clone(),
             mass,
@@ -425,6 +397,61 @@ impl Model {
             tools: Vec::new(),
             contact_offset: 0.5 * material.thickness,
         })
+    }
+
+    /// One truss batch per yarn family for the mesh's `specs`, on the
+    /// reference positions `x0`. A truss's section A₀ = t_f·(strip area /
+    /// its length in `flat`, the flat blank the strips were measured on);
+    /// `flat` and `x0` differ only for a blank bent before the run.
+    ///
+    /// One batch per family, so that a node's mass is shared among the
+    /// trusses of one family (the stable step of a truss chain).
+    pub fn truss_batches(
+        specs: &[blank::TrussSpec],
+        flat: &[Vector3<f64>],
+        x0: &[Vector3<f64>],
+        material: &Material,
+    ) -> Result<Vec<TrussBatch>, ModelError> {
+        let mut batches = Vec::new();
+        for family in 0..2u8 {
+            let specs: Vec<_> = specs.iter().filter(|t| t.family == family).collect();
+            if specs.is_empty() {
+                continue;
+            }
+            let nodes: Vec<[u32; 2]> = specs.iter().map(|t| t.nodes).collect();
+            let section = specs
+                .iter()
+                .map(|t| {
+                    let [i, j] = t.nodes;
+                    let length = (flat[j as usize] - flat[i as usize]).norm();
+                    material.family_thickness() * t.strip_area / length
+                })
+                .collect();
+            batches.push(
+                TrussBatch::new(material.fibre, x0, nodes, section).map_err(|error| {
+                    ModelError::Element {
+                        kind: "truss",
+                        error,
+                    }
+                })?,
+            );
+        }
+        Ok(batches)
+    }
+
+    /// The lumped nodal masses of `membranes` over `node_count` nodes: each
+    /// node gets ρh·∫Nₐ dA of every element it belongs to.
+    pub fn lumped_mass(node_count: usize, membranes: &[MembraneBatch]) -> Vec<f64> {
+        let mut mass = vec![0.0; node_count];
+        for b in membranes {
+            let rho_h = b.section.material.areal_density();
+            for e in 0..b.len() {
+                for (&n, a) in b.element_nodes(e).iter().zip(b.nodal_areas(e)) {
+                    mass[n as usize] += rho_h * a;
+                }
+            }
+        }
+        mass
     }
 
     /// Number of nodes.

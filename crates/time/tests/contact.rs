@@ -4,7 +4,7 @@
 
 use drape_constitutive::Material;
 use drape_contact::{ProfileSegment, Surface, Tool, ToolMotion};
-use drape_elements::{FabricSection, MembraneBatch, TrussBatch};
+use drape_elements::{FabricSection, MembraneBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion, NodalLoad};
 use drape_time::{Explicit, ExplicitSettings, Frame, NoObserver, Observer};
@@ -335,29 +335,8 @@ fn a_strip_sliding_round_a_cylinder_follows_the_capstan_equation() {
         )
         .unwrap(),
     ];
-    let mut trusses = Vec::new();
-    for family in 0..2u8 {
-        let specs: Vec<_> = mesh.trusses.iter().filter(|t| t.family == family).collect();
-        let sections = specs
-            .iter()
-            .map(|t| {
-                let flat = (mesh.x0[t.nodes[1] as usize] - mesh.x0[t.nodes[0] as usize]).norm();
-                material.family_thickness() * t.strip_area / flat
-            })
-            .collect();
-        let nodes = specs.iter().map(|t| t.nodes).collect();
-        trusses.push(TrussBatch::new(material.fibre, &x0, nodes, sections).unwrap());
-    }
-    let mut mass = vec![0.0; x0.len()];
-    for e in 0..membranes[0].len() {
-        for (&n, a) in membranes[0]
-            .element_nodes(e)
-            .iter()
-            .zip(membranes[0].nodal_areas(e))
-        {
-            mass[n as usize] += material.areal_density() * a;
-        }
-    }
+    let trusses = Model::truss_batches(&mesh.trusses, &mesh.x0, &x0, &material).unwrap();
+    let mass = Model::lumped_mass(x0.len(), &membranes);
     let mut model = Model {
         x0,
         mass,

@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 
 use drape_constitutive::Material;
 use drape_contact::{ContactStatus, ProfileSegment, Surface};
-use drape_elements::{FabricSection, MembraneBatch, TrussBatch};
+use drape_elements::{FabricSection, MembraneBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{
     Amplitude, BoundaryCondition, Model, Motion, NodalLoad, State, Tool, ToolMotion,
@@ -234,29 +234,8 @@ fn bent_strip(
     let section = FabricSection::new(material.clone(), false);
     let membranes =
         vec![MembraneBatch::quads(section, &x0, mesh.quads.clone(), &warp).expect("quads")];
-    let mut trusses = Vec::new();
-    for family in 0..2u8 {
-        let specs: Vec<_> = mesh.trusses.iter().filter(|t| t.family == family).collect();
-        let nodes = specs.iter().map(|t| t.nodes).collect();
-        // A₀ = t_f·(strip area / flat length) = t_f·(strip width).
-        let sections = specs
-            .iter()
-            .map(|t| {
-                let [i, j] = t.nodes;
-                let flat = (mesh.x0[j as usize] - mesh.x0[i as usize]).norm();
-                material.family_thickness() * t.strip_area / flat
-            })
-            .collect();
-        trusses.push(TrussBatch::new(material.fibre, &x0, nodes, sections).expect("trusses"));
-    }
-    let mut mass = vec![0.0; x0.len()];
-    for b in &membranes {
-        for e in 0..b.len() {
-            for (&n, a) in b.element_nodes(e).iter().zip(b.nodal_areas(e)) {
-                mass[n as usize] += material.areal_density() * a;
-            }
-        }
-    }
+    let trusses = Model::truss_batches(&mesh.trusses, &mesh.x0, &x0, &material).expect("trusses");
+    let mass = Model::lumped_mass(x0.len(), &membranes);
     Model {
         x0,
         mass,

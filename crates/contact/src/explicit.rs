@@ -137,6 +137,13 @@ struct Scratch {
     next: Vec<u32>,
     /// Friction forces of the step, by constraint.
     applied: Vec<(u32, Vector3<f64>)>,
+    /// The coupled solve's multipliers, and per tool: axis and mass,
+    /// correction sums, shifts; constraints found violated after a solve.
+    mu: Vec<f64>,
+    tool_axis: Vec<(Vector3<f64>, f64)>,
+    tool_sum: Vec<f64>,
+    tool_shift: Vec<f64>,
+    added: Vec<Constraint>,
 }
 
 impl ExplicitContact {
@@ -408,7 +415,9 @@ impl ExplicitContact {
             s.head = vec![NONE; nodes];
         }
         s.next.clear();
-        let mut tool_shift = vec![0.0; self.tools.len()];
+        let mut tool_shift = std::mem::take(&mut s.tool_shift);
+        tool_shift.clear();
+        tool_shift.resize(self.tools.len(), 0.0);
         for c in &self.constraints {
             s.node_sum[c.node as usize] = Vector3::zeros();
         }
@@ -430,7 +439,8 @@ impl ExplicitContact {
             }
         }
         let (offset, tol) = (self.settings.offset, self.settings.tolerance);
-        let mut added = Vec::new();
+        let mut added = std::mem::take(&mut s.added);
+        added.clear();
         for (t, tool) in self.tools.iter().enumerate() {
             let u = self.tool_state[t].displacement;
             let moved = tool_shift[t] != 0.0;
@@ -469,7 +479,9 @@ impl ExplicitContact {
             s.head[c.node as usize] = NONE;
         }
         let any = !added.is_empty();
-        self.constraints.extend(added);
+        self.constraints.extend_from_slice(&added);
+        self.scratch.added = added;
+        self.scratch.tool_shift = tool_shift;
         any
     }
 
@@ -546,16 +558,17 @@ impl ExplicitContact {
         s.free.resize(n, false);
         let tools = &self.tools;
         let cons = &mut self.constraints;
-        let tool_axis: Vec<(Vector3<f64>, f64)> = tools
-            .iter()
-            .map(|t| match &t.motion {
-                ToolMotion::Force {
-                    direction, mass, ..
-                } => (*direction, *mass * tool_mass_factor),
-                _ => (Vector3::zeros(), f64::INFINITY),
-            })
-            .collect();
-        let mut tool_sum = vec![0.0; tools.len()];
+        let mut tool_axis = std::mem::take(&mut s.tool_axis);
+        tool_axis.clear();
+        tool_axis.extend(tools.iter().map(|t| match &t.motion {
+            ToolMotion::Force {
+                direction, mass, ..
+            } => (*direction, *mass * tool_mass_factor),
+            _ => (Vector3::zeros(), f64::INFINITY),
+        }));
+        let mut tool_sum = std::mem::take(&mut s.tool_sum);
+        tool_sum.clear();
+        tool_sum.resize(tools.len(), 0.0);
         // y = A·w for a vector w over the constraints.
         let apply = |w: &[f64],
                      y: &mut [f64],
@@ -590,17 +603,15 @@ impl ExplicitContact {
         // the share, and a holder's load would pile on a few nodes that then
         // stick while the rest slide free. The closed-form start shares it
         // by nodal mass, like a pressure, and the same way every step.
-        let mut mu: Vec<f64> = cons
-            .iter()
-            .zip(&s.diag)
-            .map(|(c, d)| {
-                if c.mu > 0.0 {
-                    c.mu
-                } else {
-                    (-c.gap).max(0.0) / d
-                }
-            })
-            .collect();
+        let mut mu = std::mem::take(&mut s.mu);
+        mu.clear();
+        mu.extend(cons.iter().zip(&s.diag).map(|(c, d)| {
+            if c.mu > 0.0 {
+                c.mu
+            } else {
+                (-c.gap).max(0.0) / d
+            }
+        }));
         let mut iterations = 0;
         let mut residual = f64::INFINITY;
         'outer: while iterations < self.settings.max_iterations {
@@ -679,6 +690,9 @@ impl ExplicitContact {
         for (c, m) in cons.iter_mut().zip(&mu) {
             c.mu = *m;
         }
+        s.mu = mu;
+        s.tool_axis = tool_axis;
+        s.tool_sum = tool_sum;
         (iterations, residual)
     }
 }

@@ -249,7 +249,13 @@ pub fn run_scene_with(
     };
     let locking = scene.spec.output.locking_angle_deg;
     let measures = model.measures(&state, locking).unwrap_or_default();
-    let draw_in = measures.draw_in.unwrap_or_default();
+    // Draw-in needs a rectangular blank's edges: NaN (null in the JSON)
+    // for an imported mesh.
+    let draw_in = measures.draw_in.unwrap_or(drape_model::measures::DrawIn {
+        dx: f64::NAN,
+        dy: f64::NAN,
+        dd: f64::NAN,
+    });
     let summary = Summary {
         status: status.to_owned(),
         reason,

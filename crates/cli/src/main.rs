@@ -258,10 +258,14 @@ fn print_summary(s: &Summary, out: &Path) {
         "max shear         {:.2}° at ({:.1}, {:.1}, {:.1}) mm",
         s.max_shear_deg, s.max_shear_at[0], s.max_shear_at[1], s.max_shear_at[2]
     );
-    println!(
-        "draw-in           DX {:.2} mm, DY {:.2} mm, DD {:.2} mm",
-        s.draw_in_mm.dx, s.draw_in_mm.dy, s.draw_in_mm.dd
-    );
+    if s.draw_in_mm.dx.is_finite() {
+        println!(
+            "draw-in           DX {:.2} mm, DY {:.2} mm, DD {:.2} mm",
+            s.draw_in_mm.dx, s.draw_in_mm.dy, s.draw_in_mm.dd
+        );
+    } else {
+        println!("draw-in           n/a (not a rectangular blank)");
+    }
     println!("max fibre tension {:.1} N", s.max_fibre_tension_n);
     println!("above locking     {:.0} mm²", s.area_above_locking_mm2);
     println!(

@@ -88,15 +88,23 @@ pub struct EnergyRow {
     pub energy: Energies,
 }
 
-/// Draw-in, mm.
+/// Draw-in, mm. NaN (written as `null`) when the blank is not a rectangle.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct DrawInMm {
     /// DX.
+    #[serde(deserialize_with = "nan_if_null")]
     pub dx: f64,
     /// DY.
+    #[serde(deserialize_with = "nan_if_null")]
     pub dy: f64,
     /// DD.
+    #[serde(deserialize_with = "nan_if_null")]
     pub dd: f64,
+}
+
+/// JSON has no NaN: serde_json writes it as `null`; read `null` back as NaN.
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 /// The energy part of the summary.

@@ -153,8 +153,8 @@ pub fn area_above(shear_rad: &[f64], areas: &[f64], locking_rad: f64) -> f64 {
         .iter()
         .zip(areas)
         .filter(|(gamma, _)| gamma.abs() > locking_rad)
-        .map(|(_, a)| a)
-        .sum()
+        // A fold from +0: an empty `sum` of floats is −0, which reads oddly.
+        .fold(0.0, |total, (_, a)| total + a)
 }
 
 #[cfg(test)]

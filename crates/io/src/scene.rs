@@ -614,20 +614,17 @@ pub fn set_path(table: &mut toml::Table, key: &str, value: &str) -> Result<(), S
         .and_then(|mut t| t.remove("v"))
         .unwrap_or_else(|| toml::Value::String(value.to_owned()));
     let parts: Vec<&str> = key.split('.').collect();
+    // A missing table on the way is created: `--set output.vtu=false`
+    // works in a scene without an [output] table.
     let mut current: &mut toml::Value = table
-        .get_mut(parts[0])
-        .ok_or_else(|| format!("no key `{}` in the scene", parts[0]))?;
+        .entry(parts[0])
+        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
     for (i, part) in parts.iter().enumerate().skip(1) {
         let here = parts[..i].join(".");
         current = match current {
-            toml::Value::Table(t) => {
-                if i == parts.len() - 1 && !t.contains_key(*part) {
-                    t.insert((*part).to_owned(), parsed.clone());
-                    return Ok(());
-                }
-                t.get_mut(*part)
-                    .ok_or_else(|| format!("no key `{part}` under `{here}`"))?
-            }
+            toml::Value::Table(t) => t
+                .entry(*part)
+                .or_insert_with(|| toml::Value::Table(toml::Table::new())),
             toml::Value::Array(a) => {
                 let index: usize = part.parse().map_err(|_| {
                     format!("`{here}` is a list: index it with a number, not `{part}`")

@@ -52,6 +52,13 @@ fn the_good_scene_loads_and_overrides_apply() {
     let set = [("fabric.orientation_deg".to_owned(), "45".to_owned())];
     let scene = Scene::parse(GOOD, Path::new("good.toml"), &set).unwrap();
     assert_eq!(scene.spec.fabric.orientation_deg, 45.0);
+    // A table the file does not have is created; a typo is still an error.
+    let set = [("output.vtu".to_owned(), "false".to_owned())];
+    let scene = Scene::parse(GOOD, Path::new("good.toml"), &set).unwrap();
+    assert!(!scene.spec.output.vtu);
+    let set = [("output.vtuu".to_owned(), "false".to_owned())];
+    let e = Scene::parse(GOOD, Path::new("good.toml"), &set).unwrap_err();
+    assert!(e.to_string().contains("vtuu"), "{e}");
 }
 
 #[test]

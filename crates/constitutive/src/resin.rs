@@ -198,6 +198,45 @@ impl ResinLaw {
         d_eps: &Matrix2<f64>,
         dt: f64,
     ) {
+        let factors = self.prony.iter().map(|p| {
+            let x = dt / p.tau;
+            ((-x).exp(), p.g * ramp_weight(x))
+        });
+        self.advance(tau_bar, history, d_eps, factors);
+    }
+
+    /// (e^(−Δt/τₖ), gₖ·φ(Δt/τₖ)) of each Prony term for a step `dt`.
+    pub fn prony_factors(&self, dt: f64, out: &mut [(f64, f64)]) {
+        for (o, p) in out.iter_mut().zip(&self.prony) {
+            let x = dt / p.tau;
+            *o = ((-x).exp(), p.g * ramp_weight(x));
+        }
+    }
+
+    /// [`Self::update_stress`] with the step's Prony factors precomputed
+    /// by [`Self::prony_factors`]: they depend on Δt only, so a batch
+    /// computes them once per step instead of at every point.
+    #[inline]
+    pub fn update_stress_with(
+        &self,
+        tau_bar: &mut Matrix2<f64>,
+        history: &mut [f64],
+        d_eps: &Matrix2<f64>,
+        factors: &[(f64, f64)],
+    ) {
+        debug_assert_eq!(factors.len(), self.prony.len());
+        self.advance(tau_bar, history, d_eps, factors.iter().copied());
+    }
+
+    /// The update with each Prony term's (decay, weight) from `factors`.
+    #[inline]
+    fn advance(
+        &self,
+        tau_bar: &mut Matrix2<f64>,
+        history: &mut [f64],
+        d_eps: &Matrix2<f64>,
+        factors: impl Iterator<Item = (f64, f64)>,
+    ) {
         self.update_normal(tau_bar, d_eps);
         let d_gamma = d_eps[(0, 1)] + d_eps[(1, 0)];
         let d_s0 = self.shear_modulus() * d_gamma;
@@ -209,9 +248,8 @@ impl ResinLaw {
             *s0 += d_s0;
             let mut long_term = 1.0;
             let mut relaxing = 0.0;
-            for (qk, p) in q.iter_mut().zip(&self.prony) {
-                let x = dt / p.tau;
-                *qk = (-x).exp() * *qk + p.g * ramp_weight(x) * d_s0;
+            for ((qk, (decay, weight)), p) in q.iter_mut().zip(factors).zip(&self.prony) {
+                *qk = decay * *qk + weight * d_s0;
                 long_term -= p.g;
                 relaxing += *qk;
             }
@@ -400,6 +438,23 @@ mod tests {
             law.update_stress(&mut tau, &mut h, &d, 0.3);
             assert!((trial - tau).norm() <= 1e-15 * tau.norm());
         }
+    }
+
+    #[test]
+    fn precomputed_prony_factors_give_the_same_update_bit_for_bit() {
+        let law = prony_resin();
+        let d = Matrix2::new(1e-3, -4e-4, -4e-4, 2e-4);
+        let (mut a, mut b) = (
+            Matrix2::new(0.3, -0.2, -0.2, 0.1),
+            Matrix2::new(0.3, -0.2, -0.2, 0.1),
+        );
+        let (mut ha, mut hb) = (vec![0.5, 0.1, -0.03, 0.1], vec![0.5, 0.1, -0.03, 0.1]);
+        let mut factors = vec![(0.0, 0.0); law.prony.len()];
+        law.prony_factors(0.37, &mut factors);
+        law.update_stress(&mut a, &mut ha, &d, 0.37);
+        law.update_stress_with(&mut b, &mut hb, &d, &factors);
+        assert_eq!(a, b);
+        assert_eq!(ha, hb);
     }
 
     #[test]

@@ -109,6 +109,14 @@ pub struct MembraneBatch {
     stride: usize,
 }
 
+/// A step's Δt and its Prony factors (e^(−Δt/τₖ), gₖ·φ): computed once
+/// per batch pass; empty to have each point compute them.
+#[derive(Debug, Clone, Copy)]
+struct Step<'a> {
+    dt: f64,
+    prony: &'a [(f64, f64)],
+}
+
 /// What one integration point computes from a current F.
 struct PointResponse {
     f: Matrix3x2<f64>,
@@ -323,7 +331,7 @@ impl MembraneBatch {
         xe: &[Vector3<f64>],
         h_in: &[f64],
         h_out: Option<&mut [f64]>,
-        dt: f64,
+        step: Step<'_>,
     ) -> Result<PointResponse, KinematicsError> {
         let m = &self.section.material;
         let f = deformation_gradient(xe, self.point_grad(e, p));
@@ -335,20 +343,37 @@ impl MembraneBatch {
             Some(out) => {
                 let mut tau = tau_n;
                 out[KINEMATIC_HISTORY..].copy_from_slice(&h_in[KINEMATIC_HISTORY..]);
-                m.resin
-                    .update_stress(&mut tau, &mut out[KINEMATIC_HISTORY..], &d_eps, dt);
+                if step.prony.len() == m.resin.prony.len() {
+                    m.resin.update_stress_with(
+                        &mut tau,
+                        &mut out[KINEMATIC_HISTORY..],
+                        &d_eps,
+                        step.prony,
+                    );
+                } else {
+                    m.resin
+                        .update_stress(&mut tau, &mut out[KINEMATIC_HISTORY..], &d_eps, step.dt);
+                }
                 sym_into(&polar.u, &mut out[0..3]);
                 sym_into(&tau, &mut out[3..6]);
                 tau
             }
             None => m
                 .resin
-                .stress_after(&tau_n, &h_in[KINEMATIC_HISTORY..], &d_eps, dt),
+                .stress_after(&tau_n, &h_in[KINEMATIC_HISTORY..], &d_eps, step.dt),
         };
-        let fibres = [
-            fibre_stretch(&f, &FIBRES[0])?,
-            fibre_stretch(&f, &FIBRES[1])?,
-        ];
+        let fibres = if self.section.embedded_fibres {
+            [
+                fibre_stretch(&f, &FIBRES[0])?,
+                fibre_stretch(&f, &FIBRES[1])?,
+            ]
+        } else {
+            [FibreKinematics {
+                stretch: 1.0,
+                direction: Vector3::zeros(),
+                log_strain: 0.0,
+            }; 2]
+        };
         let mut p_eff = f * (polar.u_inv * tau * polar.u_inv) * m.resin_thickness();
         let mut fibre_law = [(0.0, 0.0); 2];
         if self.section.embedded_fibres {
@@ -385,6 +410,19 @@ impl MembraneBatch {
         dt: f64,
         forces: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
+        self.element_force_with(e, x, h_in, h_out, Step { dt, prony: &[] }, forces)
+    }
+
+    #[inline]
+    fn element_force_with(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_out: &mut [f64],
+        step: Step<'_>,
+        forces: &mut [Vector3<f64>],
+    ) -> Result<(), ElementError> {
         let nn = self.shape.nodes();
         let xe = self.gather(e, x);
         forces.fill(Vector3::zeros());
@@ -397,7 +435,7 @@ impl MembraneBatch {
                     &xe[..nn],
                     &h_in[range.clone()],
                     Some(&mut h_out[range]),
-                    dt,
+                    step,
                 )
                 .map_err(|cause| ElementError {
                     element: e,
@@ -425,6 +463,14 @@ impl MembraneBatch {
         assert_eq!(slots.len(), nn * self.len());
         assert_eq!(h_in.len(), eh * self.len());
         assert_eq!(h_out.len(), eh * self.len());
+        let resin = &self.section.material.resin;
+        let mut table = [(0.0, 0.0); 8];
+        let factors: &[(f64, f64)] = if resin.prony.len() <= table.len() {
+            resin.prony_factors(dt, &mut table);
+            &table[..resin.prony.len()]
+        } else {
+            &[]
+        };
         lowest_error(
             slots
                 .par_chunks_mut(nn)
@@ -432,7 +478,14 @@ impl MembraneBatch {
                 .with_min_len(MIN_CHUNK)
                 .enumerate()
                 .map(|(e, (f, out))| {
-                    self.element_force(e, x, &h_in[e * eh..(e + 1) * eh], out, dt, f)
+                    self.element_force_with(
+                        e,
+                        x,
+                        &h_in[e * eh..(e + 1) * eh],
+                        out,
+                        Step { dt, prony: factors },
+                        f,
+                    )
                 }),
         )
     }
@@ -461,7 +514,7 @@ impl MembraneBatch {
         for p in 0..self.shape.points() {
             let h = &h_in[p * self.stride..(p + 1) * self.stride];
             let r = self
-                .point_response(e, p, &xe[..nn], h, None, dt)
+                .point_response(e, p, &xe[..nn], h, None, Step { dt, prony: &[] })
                 .map_err(|cause| ElementError {
                     element: e,
                     point: p,

@@ -333,6 +333,8 @@ pub struct Explicit<'m> {
     prescribed: Vec<f64>,
     /// Where to pick up, for a resumed run.
     resume: Option<DriverState>,
+    /// Partial sums of the step's works.
+    work_partials: Vec<[f64; 5]>,
 }
 
 /// Nodes summed per rayon task in energy sums: fixed chunks make the sums
@@ -351,20 +353,26 @@ fn chunked_sums<const K: usize, F>(n: usize, term: F) -> [f64; K]
 where
     F: Fn(usize) -> [f64; K] + Sync,
 {
-    let partial: Vec<[f64; K]> = (0..n.div_ceil(SUM_CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut acc = [0.0; K];
-            for i in c * SUM_CHUNK..((c + 1) * SUM_CHUNK).min(n) {
-                for (a, t) in acc.iter_mut().zip(term(i)) {
-                    *a += t;
-                }
+    chunked_sums_into(n, term, &mut Vec::new())
+}
+
+/// [`chunked_sums`] with the per-chunk partial sums in `partial`, a buffer
+/// kept by the caller so that a time step allocates nothing.
+fn chunked_sums_into<const K: usize, F>(n: usize, term: F, partial: &mut Vec<[f64; K]>) -> [f64; K]
+where
+    F: Fn(usize) -> [f64; K] + Sync,
+{
+    partial.clear();
+    partial.resize(n.div_ceil(SUM_CHUNK), [0.0; K]);
+    partial.par_iter_mut().enumerate().for_each(|(c, acc)| {
+        for i in c * SUM_CHUNK..((c + 1) * SUM_CHUNK).min(n) {
+            for (a, t) in acc.iter_mut().zip(term(i)) {
+                *a += t;
             }
-            acc
-        })
-        .collect();
+        }
+    });
     let mut total = [0.0; K];
-    for p in &partial {
+    for p in partial.iter() {
         for (t, v) in total.iter_mut().zip(p) {
             *t += v;
         }
@@ -439,6 +447,7 @@ impl<'m> Explicit<'m> {
             movable,
             prescribed: vec![0.0; constraints.len()],
             resume: None,
+            work_partials: Vec::new(),
             slots: vec![Vector3::zeros(); layout.len],
             layout,
             mass: model.mass.clone(),
@@ -858,7 +867,8 @@ impl<'m> Explicit<'m> {
                     let w_c = f_c.map_or(0.0, |f| f[i].dot(&dx));
                     [fi[i].dot(&dx), fe[i].dot(&dx), damp.dot(&dx), w_bc, w_c]
                 };
-                let [w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums(n, terms);
+                let [w_int, w_ext, w_damp, w_bc, w_c] =
+                    chunked_sums_into(n, terms, &mut self.work_partials);
                 energy.contact_work += w_c;
                 energy.internal_work += w_int;
                 energy.external_work += w_ext;

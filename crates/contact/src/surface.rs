@@ -87,6 +87,12 @@ pub enum ProfileSegment {
     },
 }
 
+/// The point of the circle (centre, radius) at `deg` degrees from +r.
+fn on_circle(center: [f64; 2], radius: f64, deg: f64) -> Vector2<f64> {
+    let a = deg.to_radians();
+    Vector2::from(center) + Vector2::new(a.cos(), a.sin()) * radius
+}
+
 impl ProfileSegment {
     fn start(&self) -> Vector2<f64> {
         match *self {
@@ -96,10 +102,7 @@ impl ProfileSegment {
                 radius,
                 from_deg,
                 ..
-            } => {
-                let a = from_deg.to_radians();
-                Vector2::from(center) + Vector2::new(a.cos(), a.sin()) * radius
-            }
+            } => on_circle(center, radius, from_deg),
         }
     }
 
@@ -111,10 +114,7 @@ impl ProfileSegment {
                 radius,
                 to_deg,
                 ..
-            } => {
-                let a = to_deg.to_radians();
-                Vector2::from(center) + Vector2::new(a.cos(), a.sin()) * radius
-            }
+            } => on_circle(center, radius, to_deg),
         }
     }
 

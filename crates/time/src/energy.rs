@@ -1,0 +1,106 @@
+//! The energy balance and the deterministic sums it is made of.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// The energy balance (mJ = N·mm).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Energies {
+    /// ½·m·v² at the current step.
+    pub kinetic: f64,
+    /// Elastic energy stored in the elements.
+    pub strain: f64,
+    /// Work of the internal forces, ∫f_int·dx.
+    pub internal_work: f64,
+    /// Internal work not stored: the resin's relaxation (and integration error).
+    pub viscous: f64,
+    /// Work of the damping forces.
+    pub damping: f64,
+    /// Work of gravity.
+    pub external_work: f64,
+    /// Work of the prescribed motions on the body (their reactions).
+    pub boundary_work: f64,
+    /// Work of the tools on the fabric (normal and friction forces).
+    pub contact_work: f64,
+    /// Energy dissipated by friction (≥ 0; part of −contact work).
+    pub friction_dissipation: f64,
+    /// kinetic + internal + damping − external − boundary − contact −
+    /// initial kinetic.
+    pub balance_error: f64,
+}
+
+impl Energies {
+    /// |balance error| over the largest energy term (0 when all vanish).
+    pub fn relative_error(&self) -> f64 {
+        let scale = [
+            self.kinetic,
+            self.internal_work.abs(),
+            self.external_work.abs(),
+            self.boundary_work.abs(),
+            self.contact_work.abs(),
+        ]
+        .into_iter()
+        .fold(0.0, f64::max);
+        if scale > 0.0 {
+            self.balance_error.abs() / scale
+        } else {
+            0.0
+        }
+    }
+
+    /// E_kin/E_int: small for a quasi-static run.
+    pub fn kinetic_to_internal(&self) -> f64 {
+        if self.internal_work.abs() > 0.0 {
+            self.kinetic / self.internal_work.abs()
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Nodes summed per rayon task in energy sums: fixed chunks make the sums
+/// independent of the thread count.
+const SUM_CHUNK: usize = 4096;
+
+pub(crate) fn chunked_sum<F>(n: usize, term: F) -> f64
+where
+    F: Fn(usize) -> f64 + Sync,
+{
+    chunked_sums(n, |i| [term(i)])[0]
+}
+
+/// K sums over nodes at once, in fixed chunks.
+pub(crate) fn chunked_sums<const K: usize, F>(n: usize, term: F) -> [f64; K]
+where
+    F: Fn(usize) -> [f64; K] + Sync,
+{
+    chunked_sums_into(n, term, &mut Vec::new())
+}
+
+/// [`chunked_sums`] with the per-chunk partial sums in `partial`, a buffer
+/// kept by the caller so that a time step allocates nothing.
+pub(crate) fn chunked_sums_into<const K: usize, F>(
+    n: usize,
+    term: F,
+    partial: &mut Vec<[f64; K]>,
+) -> [f64; K]
+where
+    F: Fn(usize) -> [f64; K] + Sync,
+{
+    partial.clear();
+    partial.resize(n.div_ceil(SUM_CHUNK), [0.0; K]);
+    partial.par_iter_mut().enumerate().for_each(|(c, acc)| {
+        for i in c * SUM_CHUNK..((c + 1) * SUM_CHUNK).min(n) {
+            for (a, t) in acc.iter_mut().zip(term(i)) {
+                *a += t;
+            }
+        }
+    });
+    let mut total = [0.0; K];
+    for p in partial.iter() {
+        for (t, v) in total.iter_mut().zip(p) {
+            *t += v;
+        }
+    }
+    total
+}

@@ -1,0 +1,780 @@
+//! The explicit central-difference driver (SPEC §7, "Explicit").
+
+use std::time::Instant;
+
+use drape_contact::{ContactSettings, ExplicitContact, StepTimes};
+use drape_model::{Model, Motion, SlotLayout, State};
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+use crate::energy::{chunked_sum, chunked_sums, chunked_sums_into};
+use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
+
+/// Settings of an explicit run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExplicitSettings {
+    /// Time to reach (s).
+    pub end_time: f64,
+    /// Fraction of the stable step used.
+    pub safety_factor: f64,
+    /// A fixed Δt instead of the stable estimate (not checked: the user's
+    /// responsibility).
+    pub time_step: Option<f64>,
+    /// Target Δt for selective mass scaling: nodes of elements whose stable
+    /// step is smaller get mass until it is reached.
+    pub mass_scaling: Option<f64>,
+    /// α of the mass-proportional damping force −α·m·v (1/s).
+    pub damping: f64,
+    /// Number of output frames after the initial one, equally spaced in time.
+    pub frames: usize,
+    /// Steps between stable-Δt re-estimates.
+    pub time_step_interval: u64,
+    /// Stop when |energy balance error| exceeds this fraction of the largest
+    /// energy, checked at frames.
+    pub max_energy_error: Option<f64>,
+    /// Stop after this many steps.
+    pub max_steps: Option<u64>,
+    /// Broad-phase margin of the contact pass (mm).
+    pub contact_margin: f64,
+    /// Hand the observer a checkpoint every this many steps.
+    pub checkpoint_every: Option<u64>,
+}
+
+impl Default for ExplicitSettings {
+    fn default() -> Self {
+        Self {
+            end_time: 1.0,
+            safety_factor: 0.9,
+            time_step: None,
+            mass_scaling: None,
+            damping: 0.0,
+            frames: 10,
+            time_step_interval: 20,
+            max_energy_error: None,
+            max_steps: None,
+            contact_margin: 5.0,
+            checkpoint_every: None,
+        }
+    }
+}
+
+/// A constrained component: node, component, which boundary condition.
+#[derive(Debug, Clone, Copy)]
+struct Constraint {
+    node: u32,
+    component: u8,
+    bc: u32,
+}
+
+/// The explicit central-difference driver with its scratch buffers.
+pub struct Explicit<'m> {
+    model: &'m Model,
+    settings: ExplicitSettings,
+    layout: SlotLayout,
+    mass: Vec<f64>,
+    /// Each truss's shares of its nodes' masses (a node's mass split evenly
+    /// among the trusses of its batch there), for the stable step.
+    truss_mass: Vec<Vec<[f64; 2]>>,
+    /// √(mass scale) per element of each membrane batch.
+    membrane_scale: Vec<Vec<f64>>,
+    constraints: Vec<Constraint>,
+    constrained: Vec<[bool; 3]>,
+    added_mass: f64,
+    slots: Vec<Vector3<f64>>,
+    f_int: Vec<Vector3<f64>>,
+    f_ext: Vec<Vector3<f64>>,
+    x_new: Vec<Vector3<f64>>,
+    v_new: Vec<Vector3<f64>>,
+    reactions: Vec<Vector3<f64>>,
+    history_new: Vec<Vec<f64>>,
+    contact: Option<ExplicitContact>,
+    movable: Vec<bool>,
+    /// Prescribed coordinate of each constrained component this step.
+    prescribed: Vec<f64>,
+    /// Where to pick up, for a resumed run.
+    resume: Option<DriverState>,
+    /// Partial sums of the step's works.
+    work_partials: Vec<[f64; 5]>,
+}
+
+impl<'m> Explicit<'m> {
+    /// Prepares a run of `model`: checks it, builds the slot layout and the
+    /// constraint list, applies mass scaling.
+    pub fn new(model: &'m Model, settings: ExplicitSettings) -> Result<Self, RunError> {
+        model.check().map_err(|e| RunError::Setup(e.to_string()))?;
+        if !(settings.end_time.is_finite() && settings.end_time >= 0.0) {
+            return Err(RunError::Setup(format!(
+                "end time {} must be a non-negative number",
+                settings.end_time
+            )));
+        }
+        if !(settings.safety_factor > 0.0 && settings.safety_factor <= 1.0) {
+            return Err(RunError::Setup(format!(
+                "safety factor {} must be in (0, 1]",
+                settings.safety_factor
+            )));
+        }
+        let n = model.node_count();
+        if let Some(node) = (0..n).find(|&i| model.mass[i].is_nan() || model.mass[i] <= 0.0) {
+            return Err(RunError::Setup(format!(
+                "node {node} has no mass (it belongs to no membrane element)"
+            )));
+        }
+        let mut constrained = vec![[false; 3]; n];
+        let mut owner = vec![[u32::MAX; 3]; n];
+        for (b, bc) in model.boundary.iter().enumerate() {
+            for &node in &bc.nodes {
+                for c in 0..3 {
+                    if bc.components[c] {
+                        constrained[node as usize][c] = true;
+                        owner[node as usize][c] = b as u32;
+                    }
+                }
+            }
+        }
+        let mut constraints = Vec::new();
+        for (node, o) in owner.iter().enumerate() {
+            for (c, &bc) in o.iter().enumerate() {
+                if bc != u32::MAX {
+                    constraints.push(Constraint {
+                        node: node as u32,
+                        component: c as u8,
+                        bc,
+                    });
+                }
+            }
+        }
+        let layout = model.slot_layout();
+        let contact = (!model.tools.is_empty()).then(|| {
+            ExplicitContact::new(
+                model.tools.clone(),
+                n,
+                ContactSettings {
+                    offset: model.contact_offset,
+                    margin: settings.contact_margin,
+                    ..ContactSettings::default()
+                },
+            )
+        });
+        let movable = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
+        let mut driver = Self {
+            model,
+            settings,
+            contact,
+            movable,
+            prescribed: vec![0.0; constraints.len()],
+            resume: None,
+            work_partials: Vec::new(),
+            slots: vec![Vector3::zeros(); layout.len],
+            layout,
+            mass: model.mass.clone(),
+            truss_mass: Vec::new(),
+            membrane_scale: model.membranes.iter().map(|b| vec![1.0; b.len()]).collect(),
+            constraints,
+            constrained,
+            added_mass: 0.0,
+            f_int: vec![Vector3::zeros(); n],
+            f_ext: vec![Vector3::zeros(); n],
+            x_new: vec![Vector3::zeros(); n],
+            v_new: vec![Vector3::zeros(); n],
+            reactions: vec![Vector3::zeros(); n],
+            history_new: model
+                .membranes
+                .iter()
+                .map(|b| b.initial_history())
+                .collect(),
+        };
+        driver.share_truss_mass();
+        if let Some(target) = driver.settings.mass_scaling {
+            driver.scale_mass(target);
+            driver.share_truss_mass();
+            // Kinds add their stiffnesses (see `stable_time_step`), so the
+            // elements' own targets can leave the whole a little short: a
+            // last uniform factor closes the gap.
+            let dt = driver.stable_time_step(&model.x0);
+            if dt < target {
+                let f = (target / dt).powi(2);
+                let before: f64 = model.mass.iter().sum();
+                for m in &mut driver.mass {
+                    *m *= f;
+                }
+                driver.added_mass = driver.mass.iter().sum::<f64>() - before;
+                for s in driver.membrane_scale.iter_mut().flatten() {
+                    *s *= f.sqrt();
+                }
+                driver.share_truss_mass();
+            }
+        }
+        Ok(driver)
+    }
+
+    fn share_truss_mass(&mut self) {
+        let n = self.model.node_count();
+        self.truss_mass = self
+            .model
+            .trusses
+            .iter()
+            .map(|b| {
+                let degree = b.node_degree(n);
+                let share = |i: u32| self.mass[i as usize] / f64::from(degree[i as usize]);
+                b.nodes.iter().map(|&[i, j]| [share(i), share(j)]).collect()
+            })
+            .collect();
+    }
+
+    /// Selective mass scaling at the reference shape: an element whose step
+    /// is below `target` asks for mass factor (target/Δt_e)² on its nodes;
+    /// each node takes the largest factor asked. A membrane's step then grows
+    /// with the square root of the smallest factor of its nodes; a truss's
+    /// follows from its nodes' new masses.
+    fn scale_mass(&mut self, target: f64) {
+        let model = self.model;
+        let x = &model.x0;
+        let safety = self.settings.safety_factor;
+        let mut factor = vec![1.0f64; model.node_count()];
+        let mut ask = |nodes: &[u32], dt: f64| {
+            let f = (target / (safety * dt)).powi(2);
+            if f > 1.0 {
+                for &n in nodes {
+                    factor[n as usize] = factor[n as usize].max(f);
+                }
+            }
+        };
+        for (b, shares) in model.trusses.iter().zip(&self.truss_mass) {
+            for (e, share) in shares.iter().enumerate() {
+                ask(&b.nodes[e], b.element_stable_time_step(e, x, *share));
+            }
+        }
+        for b in &model.membranes {
+            for e in 0..b.len() {
+                ask(b.element_nodes(e), b.element_stable_time_step(e, x));
+            }
+        }
+        let smallest = |nodes: &[u32]| {
+            nodes
+                .iter()
+                .map(|&n| factor[n as usize])
+                .fold(f64::INFINITY, f64::min)
+                .sqrt()
+        };
+        for (b, s) in model.membranes.iter().zip(&mut self.membrane_scale) {
+            for (e, se) in s.iter_mut().enumerate() {
+                *se = smallest(b.element_nodes(e));
+            }
+        }
+        let before: f64 = self.mass.iter().sum();
+        for (m, f) in self.mass.iter_mut().zip(&factor) {
+            *m *= f;
+        }
+        self.added_mass = self.mass.iter().sum::<f64>() - before;
+    }
+
+    /// The stable step (times the safety factor) at positions `x`.
+    ///
+    /// Trusses, membranes and springs share the nodes' masses and add their
+    /// stiffnesses, so ω_max² ≤ Σ over kinds of each kind's ω_max²: the
+    /// kinds' steps combine as 1/Δt² = Σ 1/Δt_kind², each kind's step the
+    /// smallest of its elements' (SPEC §7: fibres at the full E_f).
+    pub fn stable_time_step(&self, x: &[Vector3<f64>]) -> f64 {
+        if let Some(dt) = self.settings.time_step {
+            return dt;
+        }
+        let model = self.model;
+        let smallest = |len: usize, dt_e: &(dyn Fn(usize) -> f64 + Sync)| {
+            (0..len)
+                .into_par_iter()
+                .with_min_len(1024)
+                .map(dt_e)
+                .reduce(|| f64::INFINITY, f64::min)
+        };
+        let mut inverse_square = 0.0;
+        let mut add = |dt: f64| {
+            if dt.is_finite() {
+                inverse_square += 1.0 / (dt * dt);
+            }
+        };
+        add(model
+            .trusses
+            .iter()
+            .zip(&self.truss_mass)
+            .map(|(b, m)| smallest(b.len(), &|e| b.element_stable_time_step(e, x, m[e])))
+            .fold(f64::INFINITY, f64::min));
+        add(model
+            .membranes
+            .iter()
+            .zip(&self.membrane_scale)
+            .map(|(b, s)| smallest(b.len(), &|e| b.element_stable_time_step(e, x) * s[e]))
+            .fold(f64::INFINITY, f64::min));
+        add(model
+            .springs
+            .iter()
+            .flat_map(|b| b.nodes.iter().map(move |&n| (b, n)))
+            .map(|(b, n)| b.stable_time_step(self.mass[n as usize]))
+            .fold(f64::INFINITY, f64::min));
+        self.settings.safety_factor / inverse_square.sqrt()
+    }
+
+    /// The internal forces at `x` into `self.f_int`, the new histories into
+    /// `self.history_new`.
+    fn internal_forces(
+        &mut self,
+        x: &[Vector3<f64>],
+        history: &[Vec<f64>],
+        dt: f64,
+        step: u64,
+        time: f64,
+    ) -> Result<(), RunError> {
+        let model = self.model;
+        let fail = |batch: String, error| RunError::Element {
+            step,
+            time,
+            batch,
+            error,
+        };
+        for (i, b) in model.trusses.iter().enumerate() {
+            let start = self.layout.truss_offsets[i];
+            b.forces_into(x, &mut self.slots[start..start + 2 * b.len()])
+                .map_err(|e| fail(format!("truss batch {i}"), e))?;
+        }
+        for (i, b) in model.membranes.iter().enumerate() {
+            let start = self.layout.membrane_offsets[i];
+            let n = b.shape().nodes() * b.len();
+            b.forces_into(
+                x,
+                &history[i],
+                &mut self.history_new[i],
+                dt,
+                &mut self.slots[start..start + n],
+            )
+            .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
+        }
+        for (i, b) in model.springs.iter().enumerate() {
+            let start = self.layout.spring_offsets[i];
+            b.forces_into(x, &mut self.slots[start..start + b.len()]);
+        }
+        self.layout.gather(&self.slots, &mut self.f_int);
+        Ok(())
+    }
+
+    /// Gravity and the nodal loads at time `t` into `self.f_ext`.
+    fn external_forces(&mut self, t: f64) {
+        let model = self.model;
+        // Weight from the physical mass: mass scaling adds inertia only.
+        for (f, m) in self.f_ext.iter_mut().zip(&model.mass) {
+            *f = model.gravity * *m;
+        }
+        for load in &model.loads {
+            let f = load.force * load.amplitude.value(t);
+            for &n in &load.nodes {
+                self.f_ext[n as usize] += f;
+            }
+        }
+    }
+
+    /// Stored strain energy at `state`.
+    fn strain_energy(&self, state: &State) -> f64 {
+        let model = self.model;
+        let mut e = 0.0;
+        for b in &model.trusses {
+            e += (0..b.len())
+                .map(|i| b.element_energy(i, &state.x).unwrap_or(f64::NAN))
+                .sum::<f64>();
+        }
+        for (b, h) in model.membranes.iter().zip(&state.history) {
+            e += b.energy(&state.x, h).unwrap_or(f64::NAN);
+        }
+        for b in &model.springs {
+            e += (0..b.len())
+                .map(|i| b.element_energy(i, &state.x))
+                .sum::<f64>();
+        }
+        e
+    }
+
+    fn prescribed_displacement(&self, c: &Constraint, t: f64) -> Option<f64> {
+        let bc = &self.model.boundary[c.bc as usize];
+        bc.displacement(&self.model.x0[c.node as usize], t)
+            .map(|u| u[c.component as usize])
+    }
+
+    fn prescribed_velocity(&self, c: &Constraint, t: f64) -> f64 {
+        match &self.model.boundary[c.bc as usize].motion {
+            Motion::Velocity { value, amplitude } => {
+                value[c.component as usize] * amplitude.value(t)
+            }
+            _ => unreachable!("velocity asked of a displacement condition"),
+        }
+    }
+
+    /// Continues a stopped run: the next [`Self::run`] takes its step size,
+    /// energies and tools from `driver` (saved with the state by
+    /// [`Observer::checkpoint`]), so it reaches the same result, bit for bit,
+    /// as a run that never stopped.
+    pub fn resume_from(&mut self, driver: DriverState) {
+        self.resume = Some(driver);
+    }
+
+    /// Runs from `state` to the end time. On error `state` holds the last
+    /// good step.
+    pub fn run(
+        &mut self,
+        state: &mut State,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary, RunError> {
+        let started = Instant::now();
+        let model = self.model;
+        let n = model.node_count();
+        let end = self.settings.end_time;
+        let damping = self.settings.damping;
+        if state.x.len() != n || state.history.len() != model.membranes.len() {
+            return Err(RunError::Setup(
+                "the state does not belong to this model".into(),
+            ));
+        }
+        self.external_forces(state.time);
+        // Forces at the start, with no time passing so no relaxation.
+        let history = std::mem::take(&mut state.history);
+        let first = self.internal_forces(&state.x, &history, 0.0, state.step, state.time);
+        state.history = history;
+        first?;
+        let resume = self.resume.take();
+        let mut energy = resume.as_ref().map_or_else(Energies::default, |r| r.energy);
+        let kinetic0: f64 = match &resume {
+            Some(r) => r.kinetic0,
+            None => chunked_sum(n, |i| 0.5 * self.mass[i] * state.v[i].norm_squared()),
+        };
+        if let (Some(r), Some(contact)) = (&resume, &mut self.contact) {
+            contact.tool_state.clone_from(&r.tools);
+            contact.friction_dissipation = r.friction_dissipation;
+        }
+        let frame_dt = if self.settings.frames > 0 {
+            end / self.settings.frames as f64
+        } else {
+            f64::INFINITY
+        };
+        let mut next_frame = (state.time / frame_dt).floor() as usize + 1;
+        if state.step == 0 {
+            energy.kinetic = kinetic0;
+            energy.strain = self.strain_energy(state);
+            observer.frame(&Frame {
+                index: 0,
+                model,
+                state,
+                energy: &energy,
+                reactions: &self.reactions,
+                contact: self.contact.as_ref(),
+            });
+        }
+        let (mut dt, mut dt_prev) = match &resume {
+            Some(r) => (r.dt, r.dt_prev),
+            None => {
+                let dt = self.stable_time_step(&state.x);
+                (dt, if state.step == 0 { 0.0 } else { dt })
+            }
+        };
+        let (mut dt_min, mut dt_max) = (f64::INFINITY, 0.0f64);
+        let mut steps = 0u64;
+        let mut stopped = false;
+        let mut last_progress = Instant::now();
+        // A remainder below a millionth of a step is round-off of the sum of
+        // steps, not time left to simulate.
+        while end - state.time > 1e-6 * dt {
+            if self.settings.max_steps.is_some_and(|m| steps >= m) {
+                stopped = true;
+                break;
+            }
+            // On the state's step count, so that a resumed run re-estimates
+            // at the same steps as an uninterrupted one.
+            if state.step > 0 && state.step % self.settings.time_step_interval.max(1) == 0 {
+                dt = self.stable_time_step(&state.x);
+            }
+            if !(dt > 0.0 && dt.is_finite()) {
+                return Err(RunError::Setup(format!(
+                    "stable time step {dt:e} at step {} is not positive",
+                    state.step
+                )));
+            }
+            // The time left is cut into equal steps no longer than Δt, so the
+            // run ends on end_time without a sliver of a last step (a tiny
+            // step turns an ordinary contact increment into a huge force).
+            let left = end - state.time;
+            // (A millionth of a step over a whole number is round-off of the
+            // summed steps, not a step more.)
+            let h = if left < 4.0 * dt {
+                left / (left / dt - 1e-6).ceil().max(1.0)
+            } else {
+                dt
+            };
+            let t_new = state.time + h;
+            let dt_avg = 0.5 * (dt_prev + h);
+            // Velocities to n+½ and positions to n+1 for free components;
+            // mass-proportional damping taken at the mid-step velocity.
+            let (c1, c2) = (
+                1.0 - 0.5 * damping * dt_avg,
+                1.0 / (1.0 + 0.5 * damping * dt_avg),
+            );
+            {
+                let (x, v, m, f_int, f_ext) =
+                    (&state.x, &state.v, &self.mass, &self.f_int, &self.f_ext);
+                self.x_new
+                    .par_iter_mut()
+                    .zip(self.v_new.par_iter_mut())
+                    .with_min_len(1024)
+                    .enumerate()
+                    .for_each(|(i, (xn, vn))| {
+                        let a = (f_ext[i] - f_int[i]) / m[i];
+                        *vn = (v[i] * c1 + a * dt_avg) * c2;
+                        *xn = x[i] + *vn * h;
+                    });
+            }
+            // Prescribed components.
+            for (j, c) in self.constraints.iter().enumerate() {
+                let (i, k) = (c.node as usize, c.component as usize);
+                self.prescribed[j] = match self.prescribed_displacement(c, t_new) {
+                    Some(u) => model.x0[i][k] + u,
+                    None => state.x[i][k] + self.prescribed_velocity(c, state.time + 0.5 * h) * h,
+                };
+                self.x_new[i][k] = self.prescribed[j];
+                self.v_new[i][k] = (self.x_new[i][k] - state.x[i][k]) / h;
+            }
+            if let Some(contact) = &mut self.contact {
+                contact.enforce_step(
+                    &mut self.x_new,
+                    &mut self.v_new,
+                    &self.mass,
+                    &self.movable,
+                    &StepTimes {
+                        t_new,
+                        dt: h,
+                        dt_mean: dt_avg,
+                        damping,
+                    },
+                );
+                // A partly constrained node keeps its prescribed components;
+                // its constraint takes the contact force there.
+                for (j, c) in self.constraints.iter().enumerate() {
+                    let (i, k) = (c.node as usize, c.component as usize);
+                    if self.movable[i] {
+                        self.x_new[i][k] = self.prescribed[j];
+                        self.v_new[i][k] = (self.prescribed[j] - state.x[i][k]) / h;
+                    }
+                }
+            }
+            // Work of step n over the centred increment (x_{n+1} − x_{n−1})/2.
+            {
+                let (x, v, m) = (&state.x, &state.v, &self.mass);
+                let (xn, vn, fi, fe) = (&self.x_new, &self.v_new, &self.f_int, &self.f_ext);
+                let constrained = &self.constrained;
+                let f_c = self.contact.as_ref().map(|c| &c.force);
+                let terms = |i: usize| -> [f64; 5] {
+                    let dx = v[i] * (0.5 * dt_prev) + (xn[i] - x[i]) * 0.5;
+                    let v_mid = (v[i] + vn[i]) * 0.5;
+                    let damp = v_mid * (damping * m[i]);
+                    let mut w_bc = 0.0;
+                    if constrained[i].iter().any(|&c| c) && dt_avg > 0.0 {
+                        // The force the constraint applies: m·a − (f_ext − f_int − damping).
+                        let contact = f_c.map_or(Vector3::zeros(), |f| f[i]);
+                        let r = (vn[i] - v[i]) * (m[i] / dt_avg) - (fe[i] - fi[i] - damp + contact);
+                        for k in 0..3 {
+                            if constrained[i][k] {
+                                w_bc += r[k] * dx[k];
+                            }
+                        }
+                    }
+                    let w_c = f_c.map_or(0.0, |f| f[i].dot(&dx));
+                    [fi[i].dot(&dx), fe[i].dot(&dx), damp.dot(&dx), w_bc, w_c]
+                };
+                let [w_int, w_ext, w_damp, w_bc, w_c] =
+                    chunked_sums_into(n, terms, &mut self.work_partials);
+                energy.contact_work += w_c;
+                energy.internal_work += w_int;
+                energy.external_work += w_ext;
+                energy.damping += w_damp;
+                energy.boundary_work += w_bc;
+            }
+            if !model.loads.is_empty() {
+                self.external_forces(t_new);
+            }
+            // Forces at n+1 from the committed history.
+            let history = std::mem::take(&mut state.history);
+            let x_new = std::mem::take(&mut self.x_new);
+            let result = self.internal_forces(&x_new, &history, h, state.step + 1, t_new);
+            self.x_new = x_new;
+            state.history = history;
+            result?;
+            if let Some(i) = (0..n).find(|&i| {
+                !(self.x_new[i].iter().all(|v| v.is_finite())
+                    && self.f_int[i].iter().all(|v| v.is_finite()))
+            }) {
+                return Err(RunError::NonFinite {
+                    step: state.step + 1,
+                    time: t_new,
+                    node: i,
+                    what: "position or force",
+                });
+            }
+            // Commit.
+            std::mem::swap(&mut state.x, &mut self.x_new);
+            std::mem::swap(&mut state.v, &mut self.v_new);
+            std::mem::swap(&mut state.history, &mut self.history_new);
+            state.time = t_new;
+            state.step += 1;
+            steps += 1;
+            dt_prev = h;
+            dt_min = dt_min.min(h);
+            dt_max = dt_max.max(h);
+            if self
+                .settings
+                .checkpoint_every
+                .is_some_and(|k| state.step % k.max(1) == 0)
+            {
+                let driver = DriverState {
+                    dt,
+                    dt_prev,
+                    energy,
+                    kinetic0,
+                    tools: self
+                        .contact
+                        .as_ref()
+                        .map_or_else(Vec::new, |c| c.tool_state.clone()),
+                    friction_dissipation: self
+                        .contact
+                        .as_ref()
+                        .map_or(0.0, |c| c.friction_dissipation),
+                };
+                observer.checkpoint(state, &driver);
+            }
+            let at_end = end - state.time <= 1e-6 * dt;
+            let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
+            if at_frame || at_end {
+                let report = self.energies_at(state, &energy, kinetic0, h);
+                if at_frame {
+                    self.compute_reactions();
+                    observer.frame(&Frame {
+                        index: next_frame,
+                        model,
+                        state,
+                        energy: &report,
+                        reactions: &self.reactions,
+                        contact: self.contact.as_ref(),
+                    });
+                    while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
+                        next_frame += 1;
+                    }
+                }
+                if let Some(bound) = self.settings.max_energy_error {
+                    let relative = report.relative_error();
+                    if relative > bound {
+                        return Err(RunError::EnergyBalance {
+                            step: state.step,
+                            time: state.time,
+                            relative,
+                            bound,
+                        });
+                    }
+                }
+            }
+            if last_progress.elapsed().as_millis() >= 100 || at_end {
+                last_progress = Instant::now();
+                let p = Progress {
+                    step: state.step,
+                    time: state.time,
+                    end_time: end,
+                    dt: h,
+                };
+                if observer.progress(&p) == Control::Stop && !at_end {
+                    stopped = true;
+                    break;
+                }
+            }
+        }
+        let energy = self.energies_at(state, &energy, kinetic0, dt_prev);
+        Ok(RunSummary {
+            steps,
+            dt_range: (dt_min, dt_max),
+            added_mass: self.added_mass,
+            total_mass: self.mass.iter().sum(),
+            energy,
+            stopped,
+            wall_seconds: started.elapsed().as_secs_f64(),
+            threads: rayon::current_num_threads(),
+        })
+    }
+
+    /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`. The
+    /// contact force of n+1 comes with the next step's contact pass; the
+    /// last one stands for it (as in the work's half increment), so that a
+    /// node resting on a tool has no velocity.
+    fn full_step_velocity(&self, state: &State, i: usize, h: f64) -> Vector3<f64> {
+        let mut v = state.v[i];
+        let contact = self
+            .contact
+            .as_ref()
+            .map_or(Vector3::zeros(), |c| c.force[i]);
+        for k in 0..3 {
+            if !self.constrained[i][k] {
+                v[k] += 0.5 * h * (self.f_ext[i][k] - self.f_int[i][k] + contact[k]) / self.mass[i];
+            }
+        }
+        v
+    }
+
+    /// The energies at step n+1: the works accumulated to n+½ plus the
+    /// half increment (x_{n+1} − x_n)/2 at the forces of n+1 (reactions
+    /// taken quasi-static there), so that they match the full-step kinetic
+    /// energy to O(Δt²).
+    fn energies_at(&self, state: &State, acc: &Energies, kinetic0: f64, h: f64) -> Energies {
+        let n = self.model.node_count();
+        let damping = self.settings.damping;
+        let f_c = self.contact.as_ref().map(|c| &c.force);
+        let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums(n, |i| {
+            let half = state.v[i] * (0.5 * h);
+            let (fi, fe) = (self.f_int[i], self.f_ext[i]);
+            let mut w_bc = 0.0;
+            for k in 0..3 {
+                if self.constrained[i][k] {
+                    w_bc += (fi[k] - fe[k]) * half[k];
+                }
+            }
+            [
+                0.5 * self.mass[i] * self.full_step_velocity(state, i, h).norm_squared(),
+                fi.dot(&half),
+                fe.dot(&half),
+                damping * self.mass[i] * state.v[i].dot(&half),
+                w_bc,
+                f_c.map_or(0.0, |f| f[i].dot(&half)),
+            ]
+        });
+        let mut e = *acc;
+        e.kinetic = kinetic;
+        e.internal_work += w_int;
+        e.external_work += w_ext;
+        e.damping += w_damp;
+        e.boundary_work += w_bc;
+        e.contact_work += w_c;
+        e.friction_dissipation = self
+            .contact
+            .as_ref()
+            .map_or(0.0, |c| c.friction_dissipation);
+        e.strain = self.strain_energy(state);
+        e.viscous = e.internal_work - e.strain;
+        e.balance_error = e.kinetic + e.internal_work + e.damping
+            - e.external_work
+            - e.boundary_work
+            - e.contact_work
+            - kinetic0;
+        e
+    }
+
+    /// Reactions at the constrained components, quasi-static part
+    /// f_int − f_ext (the inertia of a prescribed node is the user's motion).
+    fn compute_reactions(&mut self) {
+        for r in self.reactions.iter_mut() {
+            *r = Vector3::zeros();
+        }
+        for c in &self.constraints {
+            let (i, k) = (c.node as usize, c.component as usize);
+            self.reactions[i][k] = self.f_int[i][k] - self.f_ext[i][k];
+        }
+    }
+}

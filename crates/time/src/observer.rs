@@ -1,0 +1,82 @@
+//! What a driver tells the outside world while it runs: frames, progress,
+//! checkpoints; and how the outside world asks it to stop.
+
+use drape_contact::ExplicitContact;
+use drape_model::{Model, State};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::Energies;
+
+/// One output frame.
+pub struct Frame<'a> {
+    /// 0 for the initial state.
+    pub index: usize,
+    /// The model.
+    pub model: &'a Model,
+    /// The state at the frame.
+    pub state: &'a State,
+    /// The energies there.
+    pub energy: &'a Energies,
+    /// Reaction forces at the constrained nodes (zero elsewhere), N.
+    pub reactions: &'a [Vector3<f64>],
+    /// The contact pass (forces, statuses, tools' states), if there are tools.
+    pub contact: Option<&'a ExplicitContact>,
+}
+
+/// Progress of a run, for an observer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Completed steps.
+    pub step: u64,
+    /// Simulated time.
+    pub time: f64,
+    /// Time to reach.
+    pub end_time: f64,
+    /// Current Δt.
+    pub dt: f64,
+}
+
+/// What an observer asks of the run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Control {
+    /// Go on.
+    Continue,
+    /// Stop after this step (the state stays consistent).
+    Stop,
+}
+
+/// Receives frames and progress from a run.
+pub trait Observer {
+    /// An output frame.
+    fn frame(&mut self, _frame: &Frame<'_>) {}
+    /// Called every few steps; return [`Control::Stop`] to stop.
+    fn progress(&mut self, _progress: &Progress) -> Control {
+        Control::Continue
+    }
+    /// Called every `checkpoint_every` steps with what a restart needs
+    /// ([`Explicit::resume_from`]).
+    fn checkpoint(&mut self, _state: &State, _driver: &DriverState) {}
+}
+
+/// What the driver carries from step to step beside the [`State`]: with
+/// both, a run continues exactly as if it had never stopped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DriverState {
+    /// The current stable step.
+    pub dt: f64,
+    /// The last step taken.
+    pub dt_prev: f64,
+    /// The works accumulated so far (to the last half step).
+    pub energy: Energies,
+    /// Kinetic energy at the start of the run.
+    pub kinetic0: f64,
+    /// The tools' displacements and velocities.
+    pub tools: Vec<drape_contact::ToolState>,
+    /// Friction dissipated so far.
+    pub friction_dissipation: f64,
+}
+
+/// An observer that does nothing.
+pub struct NoObserver;
+impl Observer for NoObserver {}

@@ -55,7 +55,7 @@ pub trait Observer {
         Control::Continue
     }
     /// Called every `checkpoint_every` steps with what a restart needs
-    /// ([`Explicit::resume_from`]).
+    /// ([`crate::Explicit::resume_from`]).
     fn checkpoint(&mut self, _state: &State, _driver: &DriverState) {}
 }
 

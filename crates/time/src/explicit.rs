@@ -3,11 +3,12 @@
 use std::time::Instant;
 
 use drape_contact::{ContactSettings, ExplicitContact, StepTimes};
-use drape_model::{Model, Motion, SlotLayout, State};
+use drape_model::{Model, State};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::energy::{chunked_sum, chunked_sums, chunked_sums_into};
+use crate::shared::{self, Constraints, ForcePass};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
 /// Settings of an explicit run.
@@ -58,37 +59,24 @@ impl Default for ExplicitSettings {
     }
 }
 
-/// A constrained component: node, component, which boundary condition.
-#[derive(Debug, Clone, Copy)]
-struct Constraint {
-    node: u32,
-    component: u8,
-    bc: u32,
-}
-
 /// The explicit central-difference driver with its scratch buffers.
 pub struct Explicit<'m> {
     model: &'m Model,
     settings: ExplicitSettings,
-    layout: SlotLayout,
     mass: Vec<f64>,
     /// Each truss's shares of its nodes' masses (a node's mass split evenly
     /// among the trusses of its batch there), for the stable step.
     truss_mass: Vec<Vec<[f64; 2]>>,
     /// √(mass scale) per element of each membrane batch.
     membrane_scale: Vec<Vec<f64>>,
-    constraints: Vec<Constraint>,
-    constrained: Vec<[bool; 3]>,
+    constraints: Constraints,
     added_mass: f64,
-    slots: Vec<Vector3<f64>>,
-    f_int: Vec<Vector3<f64>>,
+    forces: ForcePass,
     f_ext: Vec<Vector3<f64>>,
     x_new: Vec<Vector3<f64>>,
     v_new: Vec<Vector3<f64>>,
     reactions: Vec<Vector3<f64>>,
-    history_new: Vec<Vec<f64>>,
     contact: Option<ExplicitContact>,
-    movable: Vec<bool>,
     /// Prescribed coordinate of each constrained component this step.
     prescribed: Vec<f64>,
     /// Where to pick up, for a resumed run.
@@ -101,13 +89,7 @@ impl<'m> Explicit<'m> {
     /// Prepares a run of `model`: checks it, builds the slot layout and the
     /// constraint list, applies mass scaling.
     pub fn new(model: &'m Model, settings: ExplicitSettings) -> Result<Self, RunError> {
-        model.check().map_err(|e| RunError::Setup(e.to_string()))?;
-        if !(settings.end_time.is_finite() && settings.end_time >= 0.0) {
-            return Err(RunError::Setup(format!(
-                "end time {} must be a non-negative number",
-                settings.end_time
-            )));
-        }
+        shared::check_model(model, settings.end_time)?;
         if !(settings.safety_factor > 0.0 && settings.safety_factor <= 1.0) {
             return Err(RunError::Setup(format!(
                 "safety factor {} must be in (0, 1]",
@@ -115,36 +97,7 @@ impl<'m> Explicit<'m> {
             )));
         }
         let n = model.node_count();
-        if let Some(node) = (0..n).find(|&i| model.mass[i].is_nan() || model.mass[i] <= 0.0) {
-            return Err(RunError::Setup(format!(
-                "node {node} has no mass (it belongs to no membrane element)"
-            )));
-        }
-        let mut constrained = vec![[false; 3]; n];
-        let mut owner = vec![[u32::MAX; 3]; n];
-        for (b, bc) in model.boundary.iter().enumerate() {
-            for &node in &bc.nodes {
-                for c in 0..3 {
-                    if bc.components[c] {
-                        constrained[node as usize][c] = true;
-                        owner[node as usize][c] = b as u32;
-                    }
-                }
-            }
-        }
-        let mut constraints = Vec::new();
-        for (node, o) in owner.iter().enumerate() {
-            for (c, &bc) in o.iter().enumerate() {
-                if bc != u32::MAX {
-                    constraints.push(Constraint {
-                        node: node as u32,
-                        component: c as u8,
-                        bc,
-                    });
-                }
-            }
-        }
-        let layout = model.slot_layout();
+        let constraints = Constraints::new(model);
         let contact = (!model.tools.is_empty()).then(|| {
             ExplicitContact::new(
                 model.tools.clone(),
@@ -156,33 +109,23 @@ impl<'m> Explicit<'m> {
                 },
             )
         });
-        let movable = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
         let mut driver = Self {
             model,
             settings,
             contact,
-            movable,
-            prescribed: vec![0.0; constraints.len()],
+            prescribed: vec![0.0; constraints.list.len()],
             resume: None,
             work_partials: Vec::new(),
-            slots: vec![Vector3::zeros(); layout.len],
-            layout,
+            forces: ForcePass::new(model),
             mass: model.mass.clone(),
             truss_mass: Vec::new(),
             membrane_scale: model.membranes.iter().map(|b| vec![1.0; b.len()]).collect(),
             constraints,
-            constrained,
             added_mass: 0.0,
-            f_int: vec![Vector3::zeros(); n],
             f_ext: vec![Vector3::zeros(); n],
             x_new: vec![Vector3::zeros(); n],
             v_new: vec![Vector3::zeros(); n],
             reactions: vec![Vector3::zeros(); n],
-            history_new: model
-                .membranes
-                .iter()
-                .map(|b| b.initial_history())
-                .collect(),
         };
         driver.share_truss_mass();
         if let Some(target) = driver.settings.mass_scaling {
@@ -314,98 +257,6 @@ impl<'m> Explicit<'m> {
         self.settings.safety_factor / inverse_square.sqrt()
     }
 
-    /// The internal forces at `x` into `self.f_int`, the new histories into
-    /// `self.history_new`.
-    fn internal_forces(
-        &mut self,
-        x: &[Vector3<f64>],
-        history: &[Vec<f64>],
-        dt: f64,
-        step: u64,
-        time: f64,
-    ) -> Result<(), RunError> {
-        let model = self.model;
-        let fail = |batch: String, error| RunError::Element {
-            step,
-            time,
-            batch,
-            error,
-        };
-        for (i, b) in model.trusses.iter().enumerate() {
-            let start = self.layout.truss_offsets[i];
-            b.forces_into(x, &mut self.slots[start..start + 2 * b.len()])
-                .map_err(|e| fail(format!("truss batch {i}"), e))?;
-        }
-        for (i, b) in model.membranes.iter().enumerate() {
-            let start = self.layout.membrane_offsets[i];
-            let n = b.shape().nodes() * b.len();
-            b.forces_into(
-                x,
-                &history[i],
-                &mut self.history_new[i],
-                dt,
-                &mut self.slots[start..start + n],
-            )
-            .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
-        }
-        for (i, b) in model.springs.iter().enumerate() {
-            let start = self.layout.spring_offsets[i];
-            b.forces_into(x, &mut self.slots[start..start + b.len()]);
-        }
-        self.layout.gather(&self.slots, &mut self.f_int);
-        Ok(())
-    }
-
-    /// Gravity and the nodal loads at time `t` into `self.f_ext`.
-    fn external_forces(&mut self, t: f64) {
-        let model = self.model;
-        // Weight from the physical mass: mass scaling adds inertia only.
-        for (f, m) in self.f_ext.iter_mut().zip(&model.mass) {
-            *f = model.gravity * *m;
-        }
-        for load in &model.loads {
-            let f = load.force * load.amplitude.value(t);
-            for &n in &load.nodes {
-                self.f_ext[n as usize] += f;
-            }
-        }
-    }
-
-    /// Stored strain energy at `state`.
-    fn strain_energy(&self, state: &State) -> f64 {
-        let model = self.model;
-        let mut e = 0.0;
-        for b in &model.trusses {
-            e += (0..b.len())
-                .map(|i| b.element_energy(i, &state.x).unwrap_or(f64::NAN))
-                .sum::<f64>();
-        }
-        for (b, h) in model.membranes.iter().zip(&state.history) {
-            e += b.energy(&state.x, h).unwrap_or(f64::NAN);
-        }
-        for b in &model.springs {
-            e += (0..b.len())
-                .map(|i| b.element_energy(i, &state.x))
-                .sum::<f64>();
-        }
-        e
-    }
-
-    fn prescribed_displacement(&self, c: &Constraint, t: f64) -> Option<f64> {
-        let bc = &self.model.boundary[c.bc as usize];
-        bc.displacement(&self.model.x0[c.node as usize], t)
-            .map(|u| u[c.component as usize])
-    }
-
-    fn prescribed_velocity(&self, c: &Constraint, t: f64) -> f64 {
-        match &self.model.boundary[c.bc as usize].motion {
-            Motion::Velocity { value, amplitude } => {
-                value[c.component as usize] * amplitude.value(t)
-            }
-            _ => unreachable!("velocity asked of a displacement condition"),
-        }
-    }
-
     /// Continues a stopped run: the next [`Self::run`] takes its step size,
     /// energies and tools from `driver` (saved with the state by
     /// [`Observer::checkpoint`]), so it reaches the same result, bit for bit,
@@ -426,17 +277,11 @@ impl<'m> Explicit<'m> {
         let n = model.node_count();
         let end = self.settings.end_time;
         let damping = self.settings.damping;
-        if state.x.len() != n || state.history.len() != model.membranes.len() {
-            return Err(RunError::Setup(
-                "the state does not belong to this model".into(),
-            ));
-        }
-        self.external_forces(state.time);
+        shared::check_state(model, state)?;
+        shared::external_forces(model, state.time, &mut self.f_ext);
         // Forces at the start, with no time passing so no relaxation.
-        let history = std::mem::take(&mut state.history);
-        let first = self.internal_forces(&state.x, &history, 0.0, state.step, state.time);
-        state.history = history;
-        first?;
+        self.forces
+            .evaluate(model, &state.x, &state.history, 0.0, state.step, state.time)?;
         let resume = self.resume.take();
         let mut energy = resume.as_ref().map_or_else(Energies::default, |r| r.energy);
         let kinetic0: f64 = match &resume {
@@ -455,7 +300,7 @@ impl<'m> Explicit<'m> {
         let mut next_frame = (state.time / frame_dt).floor() as usize + 1;
         if state.step == 0 {
             energy.kinetic = kinetic0;
-            energy.strain = self.strain_energy(state);
+            energy.strain = shared::strain_energy(model, state);
             observer.frame(&Frame {
                 index: 0,
                 model,
@@ -514,8 +359,13 @@ impl<'m> Explicit<'m> {
                 1.0 / (1.0 + 0.5 * damping * dt_avg),
             );
             {
-                let (x, v, m, f_int, f_ext) =
-                    (&state.x, &state.v, &self.mass, &self.f_int, &self.f_ext);
+                let (x, v, m, f_int, f_ext) = (
+                    &state.x,
+                    &state.v,
+                    &self.mass,
+                    &self.forces.f_int,
+                    &self.f_ext,
+                );
                 self.x_new
                     .par_iter_mut()
                     .zip(self.v_new.par_iter_mut())
@@ -528,12 +378,9 @@ impl<'m> Explicit<'m> {
                     });
             }
             // Prescribed components.
-            for (j, c) in self.constraints.iter().enumerate() {
+            for (j, c) in self.constraints.list.iter().enumerate() {
                 let (i, k) = (c.node as usize, c.component as usize);
-                self.prescribed[j] = match self.prescribed_displacement(c, t_new) {
-                    Some(u) => model.x0[i][k] + u,
-                    None => state.x[i][k] + self.prescribed_velocity(c, state.time + 0.5 * h) * h,
-                };
+                self.prescribed[j] = Constraints::position(model, c, state.x[i][k], state.time, h);
                 self.x_new[i][k] = self.prescribed[j];
                 self.v_new[i][k] = (self.x_new[i][k] - state.x[i][k]) / h;
             }
@@ -542,7 +389,7 @@ impl<'m> Explicit<'m> {
                     &mut self.x_new,
                     &mut self.v_new,
                     &self.mass,
-                    &self.movable,
+                    &self.constraints.movable,
                     &StepTimes {
                         t_new,
                         dt: h,
@@ -552,9 +399,9 @@ impl<'m> Explicit<'m> {
                 );
                 // A partly constrained node keeps its prescribed components;
                 // its constraint takes the contact force there.
-                for (j, c) in self.constraints.iter().enumerate() {
+                for (j, c) in self.constraints.list.iter().enumerate() {
                     let (i, k) = (c.node as usize, c.component as usize);
-                    if self.movable[i] {
+                    if self.constraints.movable[i] {
                         self.x_new[i][k] = self.prescribed[j];
                         self.v_new[i][k] = (self.prescribed[j] - state.x[i][k]) / h;
                     }
@@ -563,8 +410,8 @@ impl<'m> Explicit<'m> {
             // Work of step n over the centred increment (x_{n+1} − x_{n−1})/2.
             {
                 let (x, v, m) = (&state.x, &state.v, &self.mass);
-                let (xn, vn, fi, fe) = (&self.x_new, &self.v_new, &self.f_int, &self.f_ext);
-                let constrained = &self.constrained;
+                let (xn, vn, fi, fe) = (&self.x_new, &self.v_new, &self.forces.f_int, &self.f_ext);
+                let constrained = &self.constraints.constrained;
                 let f_c = self.contact.as_ref().map(|c| &c.force);
                 let terms = |i: usize| -> [f64; 5] {
                     let dx = v[i] * (0.5 * dt_prev) + (xn[i] - x[i]) * 0.5;
@@ -593,18 +440,14 @@ impl<'m> Explicit<'m> {
                 energy.boundary_work += w_bc;
             }
             if !model.loads.is_empty() {
-                self.external_forces(t_new);
+                shared::external_forces(model, t_new, &mut self.f_ext);
             }
             // Forces at n+1 from the committed history.
-            let history = std::mem::take(&mut state.history);
-            let x_new = std::mem::take(&mut self.x_new);
-            let result = self.internal_forces(&x_new, &history, h, state.step + 1, t_new);
-            self.x_new = x_new;
-            state.history = history;
-            result?;
+            self.forces
+                .evaluate(model, &self.x_new, &state.history, h, state.step + 1, t_new)?;
             if let Some(i) = (0..n).find(|&i| {
                 !(self.x_new[i].iter().all(|v| v.is_finite())
-                    && self.f_int[i].iter().all(|v| v.is_finite()))
+                    && self.forces.f_int[i].iter().all(|v| v.is_finite()))
             }) {
                 return Err(RunError::NonFinite {
                     step: state.step + 1,
@@ -616,7 +459,7 @@ impl<'m> Explicit<'m> {
             // Commit.
             std::mem::swap(&mut state.x, &mut self.x_new);
             std::mem::swap(&mut state.v, &mut self.v_new);
-            std::mem::swap(&mut state.history, &mut self.history_new);
+            std::mem::swap(&mut state.history, &mut self.forces.history_new);
             state.time = t_new;
             state.step += 1;
             steps += 1;
@@ -712,8 +555,9 @@ impl<'m> Explicit<'m> {
             .as_ref()
             .map_or(Vector3::zeros(), |c| c.force[i]);
         for k in 0..3 {
-            if !self.constrained[i][k] {
-                v[k] += 0.5 * h * (self.f_ext[i][k] - self.f_int[i][k] + contact[k]) / self.mass[i];
+            if !self.constraints.constrained[i][k] {
+                v[k] += 0.5 * h * (self.f_ext[i][k] - self.forces.f_int[i][k] + contact[k])
+                    / self.mass[i];
             }
         }
         v
@@ -729,10 +573,10 @@ impl<'m> Explicit<'m> {
         let f_c = self.contact.as_ref().map(|c| &c.force);
         let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums(n, |i| {
             let half = state.v[i] * (0.5 * h);
-            let (fi, fe) = (self.f_int[i], self.f_ext[i]);
+            let (fi, fe) = (self.forces.f_int[i], self.f_ext[i]);
             let mut w_bc = 0.0;
             for k in 0..3 {
-                if self.constrained[i][k] {
+                if self.constraints.constrained[i][k] {
                     w_bc += (fi[k] - fe[k]) * half[k];
                 }
             }
@@ -756,7 +600,7 @@ impl<'m> Explicit<'m> {
             .contact
             .as_ref()
             .map_or(0.0, |c| c.friction_dissipation);
-        e.strain = self.strain_energy(state);
+        e.strain = shared::strain_energy(self.model, state);
         e.viscous = e.internal_work - e.strain;
         e.balance_error = e.kinetic + e.internal_work + e.damping
             - e.external_work
@@ -772,9 +616,9 @@ impl<'m> Explicit<'m> {
         for r in self.reactions.iter_mut() {
             *r = Vector3::zeros();
         }
-        for c in &self.constraints {
+        for c in &self.constraints.list {
             let (i, k) = (c.node as usize, c.component as usize);
-            self.reactions[i][k] = self.f_int[i][k] - self.f_ext[i][k];
+            self.reactions[i][k] = self.forces.f_int[i][k] - self.f_ext[i][k];
         }
     }
 }

@@ -50,6 +50,7 @@ mod energy;
 mod error;
 mod explicit;
 mod observer;
+mod shared;
 
 pub use energy::Energies;
 pub use error::{RunError, RunSummary};

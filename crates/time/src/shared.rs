@@ -1,0 +1,230 @@
+//! What both drivers use alike: the constrained components and their
+//! prescribed motions, the internal force pass (element batches into slots,
+//! gathered per node), gravity and nodal loads, the stored strain energy,
+//! and the checks a model must pass before it runs.
+//!
+//! Not here: anything about how a driver advances time (central
+//! differences, Newton increments) or treats contact.
+
+use drape_model::{Model, Motion, SlotLayout, State};
+use nalgebra::Vector3;
+
+use crate::RunError;
+
+/// A constrained component: node, component, which boundary condition.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Constraint {
+    pub node: u32,
+    pub component: u8,
+    pub bc: u32,
+}
+
+/// The constrained components of a model: where conditions overlap, the
+/// later one wins for the components it names.
+#[derive(Debug, Clone)]
+pub(crate) struct Constraints {
+    /// Each constrained component once, in node order.
+    pub list: Vec<Constraint>,
+    /// Per node, which components are constrained.
+    pub constrained: Vec<[bool; 3]>,
+    /// Per node, whether any component is free (contact may move it).
+    pub movable: Vec<bool>,
+}
+
+impl Constraints {
+    pub fn new(model: &Model) -> Self {
+        let n = model.node_count();
+        let mut constrained = vec![[false; 3]; n];
+        let mut owner = vec![[u32::MAX; 3]; n];
+        for (b, bc) in model.boundary.iter().enumerate() {
+            for &node in &bc.nodes {
+                for c in 0..3 {
+                    if bc.components[c] {
+                        constrained[node as usize][c] = true;
+                        owner[node as usize][c] = b as u32;
+                    }
+                }
+            }
+        }
+        let mut list = Vec::new();
+        for (node, o) in owner.iter().enumerate() {
+            for (c, &bc) in o.iter().enumerate() {
+                if bc != u32::MAX {
+                    list.push(Constraint {
+                        node: node as u32,
+                        component: c as u8,
+                        bc,
+                    });
+                }
+            }
+        }
+        let movable = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
+        Self {
+            list,
+            constrained,
+            movable,
+        }
+    }
+
+    /// The prescribed displacement of `c` at `t`, None for a velocity
+    /// condition.
+    pub fn displacement(model: &Model, c: &Constraint, t: f64) -> Option<f64> {
+        let bc = &model.boundary[c.bc as usize];
+        bc.displacement(&model.x0[c.node as usize], t)
+            .map(|u| u[c.component as usize])
+    }
+
+    /// The prescribed velocity of `c` at `t` (a velocity condition only).
+    pub fn velocity(model: &Model, c: &Constraint, t: f64) -> f64 {
+        match &model.boundary[c.bc as usize].motion {
+            Motion::Velocity { value, amplitude } => {
+                value[c.component as usize] * amplitude.value(t)
+            }
+            _ => unreachable!("velocity asked of a displacement condition"),
+        }
+    }
+
+    /// The prescribed coordinate of `c` at `t + h`, from its coordinate
+    /// `now` at `t` (a velocity condition moves it by the mid-step
+    /// velocity).
+    pub fn position(model: &Model, c: &Constraint, now: f64, t: f64, h: f64) -> f64 {
+        match Self::displacement(model, c, t + h) {
+            Some(u) => model.x0[c.node as usize][c.component as usize] + u,
+            None => now + Self::velocity(model, c, t + 0.5 * h) * h,
+        }
+    }
+}
+
+/// The internal force pass: every batch writes its elements' nodal forces
+/// into its own slots (in parallel), the layout gathers them per node in a
+/// fixed order.
+#[derive(Debug, Clone)]
+pub(crate) struct ForcePass {
+    pub layout: SlotLayout,
+    slots: Vec<Vector3<f64>>,
+    /// The internal forces of the last evaluation, per node.
+    pub f_int: Vec<Vector3<f64>>,
+    /// The membranes' histories of the last evaluation.
+    pub history_new: Vec<Vec<f64>>,
+}
+
+impl ForcePass {
+    pub fn new(model: &Model) -> Self {
+        let layout = model.slot_layout();
+        Self {
+            slots: vec![Vector3::zeros(); layout.len],
+            layout,
+            f_int: vec![Vector3::zeros(); model.node_count()],
+            history_new: model
+                .membranes
+                .iter()
+                .map(|b| b.initial_history())
+                .collect(),
+        }
+    }
+
+    /// The internal forces at `x` into `self.f_int`, the new histories (from
+    /// the committed `history`, over a step `dt`) into `self.history_new`.
+    /// `step` and `time` only name the failure.
+    pub fn evaluate(
+        &mut self,
+        model: &Model,
+        x: &[Vector3<f64>],
+        history: &[Vec<f64>],
+        dt: f64,
+        step: u64,
+        time: f64,
+    ) -> Result<(), RunError> {
+        let fail = |batch: String, error| RunError::Element {
+            step,
+            time,
+            batch,
+            error,
+        };
+        for (i, b) in model.trusses.iter().enumerate() {
+            let start = self.layout.truss_offsets[i];
+            b.forces_into(x, &mut self.slots[start..start + 2 * b.len()])
+                .map_err(|e| fail(format!("truss batch {i}"), e))?;
+        }
+        for (i, b) in model.membranes.iter().enumerate() {
+            let start = self.layout.membrane_offsets[i];
+            let n = b.shape().nodes() * b.len();
+            b.forces_into(
+                x,
+                &history[i],
+                &mut self.history_new[i],
+                dt,
+                &mut self.slots[start..start + n],
+            )
+            .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
+        }
+        for (i, b) in model.springs.iter().enumerate() {
+            let start = self.layout.spring_offsets[i];
+            b.forces_into(x, &mut self.slots[start..start + b.len()]);
+        }
+        self.layout.gather(&self.slots, &mut self.f_int);
+        Ok(())
+    }
+}
+
+/// Gravity and the nodal loads at time `t` into `f_ext`.
+pub(crate) fn external_forces(model: &Model, t: f64, f_ext: &mut [Vector3<f64>]) {
+    // Weight from the physical mass: mass scaling adds inertia only.
+    for (f, m) in f_ext.iter_mut().zip(&model.mass) {
+        *f = model.gravity * *m;
+    }
+    for load in &model.loads {
+        let f = load.force * load.amplitude.value(t);
+        for &n in &load.nodes {
+            f_ext[n as usize] += f;
+        }
+    }
+}
+
+/// Stored strain energy at `state`.
+pub(crate) fn strain_energy(model: &Model, state: &State) -> f64 {
+    let mut e = 0.0;
+    for b in &model.trusses {
+        e += (0..b.len())
+            .map(|i| b.element_energy(i, &state.x).unwrap_or(f64::NAN))
+            .sum::<f64>();
+    }
+    for (b, h) in model.membranes.iter().zip(&state.history) {
+        e += b.energy(&state.x, h).unwrap_or(f64::NAN);
+    }
+    for b in &model.springs {
+        e += (0..b.len())
+            .map(|i| b.element_energy(i, &state.x))
+            .sum::<f64>();
+    }
+    e
+}
+
+/// What every driver asks of a model before it runs: a consistent model,
+/// a mass at every node, a non-negative end time.
+pub(crate) fn check_model(model: &Model, end_time: f64) -> Result<(), RunError> {
+    model.check().map_err(|e| RunError::Setup(e.to_string()))?;
+    if !(end_time.is_finite() && end_time >= 0.0) {
+        return Err(RunError::Setup(format!(
+            "end time {end_time} must be a non-negative number"
+        )));
+    }
+    if let Some(node) =
+        (0..model.node_count()).find(|&i| model.mass[i].is_nan() || model.mass[i] <= 0.0)
+    {
+        return Err(RunError::Setup(format!(
+            "node {node} has no mass (it belongs to no membrane element)"
+        )));
+    }
+    Ok(())
+}
+
+/// Checks that `state` belongs to `model`.
+pub(crate) fn check_state(model: &Model, state: &State) -> Result<(), RunError> {
+    if state.x.len() != model.node_count() || state.history.len() != model.membranes.len() {
+        return Err(RunError::Setup(
+            "the state does not belong to this model".into(),
+        ));
+    }
+    Ok(())
+}

@@ -128,8 +128,8 @@ impl Observer for Recorder<'_> {
                 model: frame.model,
                 state: frame.state,
                 fields: &fields,
-                contact_force: frame.contact.map(|c| c.force.as_slice()),
-                contact_status: frame.contact.map(|c| c.status.as_slice()),
+                contact_force: frame.contact.map(|c| c.force),
+                contact_status: frame.contact.map(|c| c.status),
             };
             if let Err(e) = self
                 .results

@@ -172,6 +172,19 @@ impl ExplicitContact {
         }
     }
 
+    /// The pass's outputs, as a frame shows them.
+    pub fn view(&self) -> crate::ContactView<'_> {
+        crate::ContactView {
+            tools: &self.tools,
+            tool_state: &self.tool_state,
+            force: &self.force,
+            status: &self.status,
+            tool_of: &self.tool_of,
+            tool_force: &self.tool_force,
+            friction_dissipation: self.friction_dissipation,
+        }
+    }
+
     /// Whether any tool has friction (the friction pass runs only then).
     pub fn has_friction(&self) -> bool {
         self.tools.iter().any(|t| t.friction > 0.0)

@@ -48,9 +48,11 @@ mod mesh;
 mod mesh_file;
 mod surface;
 mod tool;
+mod view;
 
 pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes};
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};
 pub use tool::{Amplitude, Tool, ToolMotion, ToolState};
+pub use view::ContactView;

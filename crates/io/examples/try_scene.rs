@@ -22,7 +22,7 @@ impl Observer for Print {
             d.dd,
             e.kinetic_to_internal(),
             e.relative_error(),
-            f.contact.map(|c| c.tool_force.clone())
+            f.contact.map(|c| c.tool_force.to_vec())
         );
     }
 }

@@ -307,7 +307,7 @@ impl<'m> Explicit<'m> {
                 state,
                 energy: &energy,
                 reactions: &self.reactions,
-                contact: self.contact.as_ref(),
+                contact: self.contact.as_ref().map(ExplicitContact::view),
             });
         }
         let (mut dt, mut dt_prev) = match &resume {
@@ -499,7 +499,7 @@ impl<'m> Explicit<'m> {
                         state,
                         energy: &report,
                         reactions: &self.reactions,
-                        contact: self.contact.as_ref(),
+                        contact: self.contact.as_ref().map(ExplicitContact::view),
                     });
                     while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
                         next_frame += 1;

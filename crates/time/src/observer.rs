@@ -1,7 +1,7 @@
 //! What a driver tells the outside world while it runs: frames, progress,
 //! checkpoints; and how the outside world asks it to stop.
 
-use drape_contact::ExplicitContact;
+use drape_contact::ContactView;
 use drape_model::{Model, State};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -21,7 +21,7 @@ pub struct Frame<'a> {
     /// Reaction forces at the constrained nodes (zero elsewhere), N.
     pub reactions: &'a [Vector3<f64>],
     /// The contact pass (forces, statuses, tools' states), if there are tools.
-    pub contact: Option<&'a ExplicitContact>,
+    pub contact: Option<ContactView<'a>>,
 }
 
 /// Progress of a run, for an observer.

@@ -84,7 +84,7 @@ fn penetration(frame: &Frame<'_>) -> f64 {
     let contact = frame.contact.expect("tools");
     let offset = frame.model.contact_offset;
     let mut worst = 0.0f64;
-    for (tool, state) in contact.tools.iter().zip(&contact.tool_state) {
+    for (tool, state) in contact.tools.iter().zip(contact.tool_state) {
         for x in &frame.state.x {
             worst = worst.max(offset - tool.project(x, state.displacement).gap);
         }

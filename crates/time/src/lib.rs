@@ -51,6 +51,7 @@ mod error;
 mod explicit;
 mod observer;
 mod shared;
+pub mod tangent;
 
 pub use energy::Energies;
 pub use error::{RunError, RunSummary};

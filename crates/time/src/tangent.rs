@@ -82,8 +82,6 @@ pub struct SparseTangent {
     constrained: Vec<bool>,
     /// Per-element slots.
     slots: Vec<f64>,
-    /// Global value index of each slot.
-    slot_value: Vec<u32>,
     /// CSR value → slots.
     value_ptr: Vec<usize>,
     value_slots: Vec<u32>,
@@ -239,7 +237,6 @@ impl SparseTangent {
             constrained_entries,
             constrained,
             slots: vec![0.0; slot_value.len()],
-            slot_value,
             value_ptr,
             value_slots,
             truss_scratch: model
@@ -446,10 +443,7 @@ impl SparseTangent {
                         Ok(self.kind)
                     }
                     Err(faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index }) => {
-                        let dof = self
-                            .symbolic
-                            .perm()
-                            .map_or(index, |p| p.arrays().0[index]);
+                        let dof = self.symbolic.perm().map_or(index, |p| p.arrays().0[index]);
                         Err(FactorError { dof })
                     }
                 }
@@ -502,5 +496,167 @@ impl SparseTangent {
         rows[ptr[j]..ptr[j + 1]]
             .binary_search(&i)
             .map_or(0.0, |k| self.values[ptr[j] + k])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shared::ForcePass;
+    use drape_constitutive::Material;
+    use drape_elements::{ForceTable, SpringBatch};
+    use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
+
+    /// A 3 × 2 carbon blank (quads, trusses or embedded fibres) with two
+    /// holding springs, moved to a sheared, stretched and lifted state.
+    fn model(fibres: FibreRepresentation, element: ElementKind) -> (Model, Vec<Vector3<f64>>) {
+        let blank = RectangleBlank {
+            width: 30.0,
+            height: 20.0,
+            center: Vector3::zeros(),
+            orientation_deg: 0.0,
+            element,
+            meshing: Meshing::Cells([3, 2]),
+            fibres,
+        };
+        let material = Material::preset("carbon-prepreg-2x2").unwrap();
+        let mut model = Model::from_blank(&blank, &material).unwrap();
+        model.springs.push(SpringBatch {
+            table: ForceTable::linear(2.0, 0.5),
+            nodes: vec![0, 5],
+            anchors: vec![
+                Vector3::new(-20.0, -12.0, 1.0),
+                Vector3::new(18.0, 11.0, -2.0),
+            ],
+            rest_length: vec![1.0, 0.5],
+        });
+        let x = model
+            .x0
+            .iter()
+            .map(|p| {
+                Vector3::new(
+                    1.004 * p.x + 0.25 * p.y,
+                    0.998 * p.y + 0.01 * p.x,
+                    0.002 * p.x * p.y + 0.05 * p.x,
+                )
+            })
+            .collect();
+        (model, x)
+    }
+
+    fn flat(v: &[Vector3<f64>]) -> Vec<f64> {
+        v.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
+    }
+
+    #[test]
+    fn the_assembled_matrix_is_the_symmetric_part_of_the_force_jacobian() {
+        for (fibres, element, resin_only) in [
+            (FibreRepresentation::Trusses, ElementKind::Quad, false),
+            (FibreRepresentation::Trusses, ElementKind::Quad, true),
+            (FibreRepresentation::Embedded, ElementKind::Quad, false),
+            (FibreRepresentation::Embedded, ElementKind::Triangle, false),
+        ] {
+            let (mut model, x) = model(fibres, element);
+            if resin_only {
+                model.trusses.clear();
+            }
+            let n = 3 * model.node_count();
+            let dt = 0.01;
+            // A committed history from halfway, so that Uₙ ≠ I and τ̄ₙ ≠ 0.
+            let mut pass = ForcePass::new(&model);
+            let half: Vec<_> = model
+                .x0
+                .iter()
+                .zip(&x)
+                .map(|(a, b)| (a + b) * 0.5)
+                .collect();
+            let initial = model.initial_state().history;
+            pass.evaluate(&model, &half, &initial, dt, 0, 0.0).unwrap();
+            let history = pass.history_new.clone();
+            let mut constrained = vec![false; n];
+            constrained[4] = true; // node 1, y
+            let mut k = SparseTangent::new(&model, constrained.clone()).unwrap();
+            let (mass, factor) = (&model.mass, 3.0e4);
+            k.assemble(&model, &x, &history, dt, mass, factor).unwrap();
+            // Central differences of the gathered internal forces.
+            let h = 1e-6;
+            let mut jac = vec![vec![0.0; n]; n];
+            for j in 0..n {
+                let mut xp = x.clone();
+                xp[j / 3][j % 3] += h;
+                pass.evaluate(&model, &xp, &history, dt, 0, 0.0).unwrap();
+                let fp = flat(&pass.f_int);
+                let mut xm = x.clone();
+                xm[j / 3][j % 3] -= h;
+                pass.evaluate(&model, &xm, &history, dt, 0, 0.0).unwrap();
+                let fm = flat(&pass.f_int);
+                for i in 0..n {
+                    jac[i][j] = (fp[i] - fm[i]) / (2.0 * h);
+                }
+            }
+            let scale = jac.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+            let (mut worst, mut skew) = (0.0f64, 0.0f64);
+            for i in 0..n {
+                for j in 0..n {
+                    let expected = if constrained[i] || constrained[j] {
+                        if i == j { 1.0 } else { 0.0 }
+                    } else {
+                        0.5 * (jac[i][j] + jac[j][i])
+                            + if i == j { factor * mass[i / 3] } else { 0.0 }
+                    };
+                    worst = worst.max((k.entry(i, j) - expected).abs());
+                    skew = skew.max((jac[i][j] - jac[j][i]).abs());
+                }
+            }
+            assert!(
+                worst <= 1e-6 * scale,
+                "{fibres:?} {element:?}: {worst:e} (scale {scale:e})"
+            );
+            eprintln!(
+                "{fibres:?} {element:?} resin only {resin_only}: largest |K − Kᵀ| / max|K| = {:.2e}",
+                skew / scale
+            );
+        }
+    }
+
+    #[test]
+    fn solves_with_cholesky_and_with_ldlt_when_indefinite() {
+        let (model, x) = model(FibreRepresentation::Trusses, ElementKind::Quad);
+        let n = 3 * model.node_count();
+        let history = model.initial_state().history;
+        let mut k = SparseTangent::new(&model, vec![false; n]).unwrap();
+        let b: Vec<f64> = (0..n).map(|i| ((i * 7 + 3) % 11) as f64 - 5.0).collect();
+        // A positive mass term makes the tangent definite, a negative one
+        // (larger than the softest stiffness) indefinite.
+        for (factor, kind) in [
+            (1.0e3, Factorisation::Cholesky),
+            (-50.0, Factorisation::Ldlt),
+        ] {
+            k.assemble(
+                &model,
+                &x,
+                &history,
+                0.01,
+                &model.mass,
+                factor / model.mass[0],
+            )
+            .unwrap();
+            assert_eq!(k.factorise().unwrap(), kind);
+            let mut z = b.clone();
+            k.solve(&mut z);
+            let mut y = vec![0.0; n];
+            k.multiply(&z, &mut y);
+            let err = y
+                .iter()
+                .zip(&b)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            let size = z.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(
+                err <= 1e-9 * size * k.values.iter().fold(0.0f64, |m, v| m.max(v.abs())),
+                "{kind:?}: {err:e}"
+            );
+        }
+        assert_eq!((k.factorisations, k.indefinite), (2, 1));
     }
 }

@@ -475,9 +475,8 @@ impl SparseTangent {
             self.symbolic_matrix.row_idx(),
         );
         for j in 0..self.n {
-            for k in ptr[j]..ptr[j + 1] {
-                let i = rows[k];
-                let v = self.values[k];
+            let range = ptr[j]..ptr[j + 1];
+            for (&i, &v) in rows[range.clone()].iter().zip(&self.values[range]) {
                 y[i] += v * x[j];
                 if i != j {
                     y[j] += v * x[i];

@@ -44,6 +44,7 @@
 //! ```
 
 mod explicit;
+mod implicit;
 mod mesh;
 mod mesh_file;
 mod surface;
@@ -51,6 +52,9 @@ mod tool;
 mod view;
 
 pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes};
+pub use implicit::{
+    CarriedPair, Friction, ImplicitContact, ImplicitSettings, Increment, SolveError, SolveStats,
+};
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};

@@ -24,8 +24,12 @@ pub struct Energies {
     pub contact_work: f64,
     /// Energy dissipated by friction (≥ 0; part of −contact work).
     pub friction_dissipation: f64,
-    /// kinetic + internal + damping − external − boundary − contact −
-    /// initial kinetic.
+    /// Energy the time integrator itself removed (the implicit driver's
+    /// numerical damping; zero for central differences).
+    #[serde(default)]
+    pub numerical_dissipation: f64,
+    /// kinetic + internal + damping + numerical − external − boundary −
+    /// contact − initial kinetic.
     pub balance_error: f64,
 }
 

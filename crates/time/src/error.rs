@@ -45,6 +45,21 @@ pub enum RunError {
         /// The bound.
         bound: f64,
     },
+    /// An implicit increment did not converge down to the smallest
+    /// increment allowed.
+    #[error(
+        "increment {step}, t = {time:.6e} s: no convergence with an increment of {increment:.3e} s: {reason}"
+    )]
+    NoConvergence {
+        /// The increment that failed (the state holds the one before).
+        step: u64,
+        /// Its start time.
+        time: f64,
+        /// The last size tried (s).
+        increment: f64,
+        /// What went wrong in the last attempt.
+        reason: String,
+    },
     /// The settings or the model cannot run.
     #[error("cannot run: {0}")]
     Setup(String),
@@ -69,4 +84,31 @@ pub struct RunSummary {
     pub wall_seconds: f64,
     /// Threads in rayon's pool.
     pub threads: usize,
+    /// The implicit driver's totals (None for explicit runs).
+    pub implicit: Option<ImplicitTotals>,
+}
+
+/// What an implicit run did, in total.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ImplicitTotals {
+    /// Newton iterations of converged increments.
+    pub newton_iterations: u64,
+    /// Newton iterations of attempts that were cut back.
+    pub wasted_iterations: u64,
+    /// Iterations of the condensed contact solves (one solve with the
+    /// factors each).
+    pub contact_iterations: u64,
+    /// Numeric factorisations.
+    pub factorisations: u64,
+    /// Of which fell back to LDLᵀ (indefinite tangent).
+    pub indefinite: u64,
+    /// Increments cut back.
+    pub cutbacks: u64,
+    /// Seconds in numeric factorisations.
+    pub factor_seconds: f64,
+    /// Seconds in tangent assembly.
+    pub assembly_seconds: f64,
+    /// Seconds in the condensed contact solves (their solves with the
+    /// factors included).
+    pub contact_seconds: f64,
 }

@@ -283,6 +283,11 @@ impl<'m> Explicit<'m> {
         self.forces
             .evaluate(model, &state.x, &state.history, 0.0, state.step, state.time)?;
         let resume = self.resume.take();
+        if resume.as_ref().is_some_and(|r| r.implicit.is_some()) {
+            return Err(RunError::Setup(
+                "the checkpoint was written by the implicit driver".into(),
+            ));
+        }
         let mut energy = resume.as_ref().map_or_else(Energies::default, |r| r.energy);
         let kinetic0: f64 = match &resume {
             Some(r) => r.kinetic0,
@@ -484,6 +489,7 @@ impl<'m> Explicit<'m> {
                         .contact
                         .as_ref()
                         .map_or(0.0, |c| c.friction_dissipation),
+                    implicit: None,
                 };
                 observer.checkpoint(state, &driver);
             }
@@ -524,6 +530,7 @@ impl<'m> Explicit<'m> {
                     time: state.time,
                     end_time: end,
                     dt: h,
+                    increment: None,
                 };
                 if observer.progress(&p) == Control::Stop && !at_end {
                     stopped = true;
@@ -541,6 +548,7 @@ impl<'m> Explicit<'m> {
             stopped,
             wall_seconds: started.elapsed().as_secs_f64(),
             threads: rayon::current_num_threads(),
+            implicit: None,
         })
     }
 

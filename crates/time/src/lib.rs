@@ -49,11 +49,15 @@
 mod energy;
 mod error;
 mod explicit;
+mod implicit;
 mod observer;
 mod shared;
 pub mod tangent;
 
 pub use energy::Energies;
-pub use error::{RunError, RunSummary};
+pub use error::{ImplicitTotals, RunError, RunSummary};
 pub use explicit::{Explicit, ExplicitSettings};
-pub use observer::{Control, DriverState, Frame, NoObserver, Observer, Progress};
+pub use implicit::{Implicit, ImplicitSettings, NewtonRecord};
+pub use observer::{
+    Control, DriverState, Frame, ImplicitCarry, IncrementReport, NoObserver, Observer, Progress,
+};

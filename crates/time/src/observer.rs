@@ -33,8 +33,28 @@ pub struct Progress {
     pub time: f64,
     /// Time to reach.
     pub end_time: f64,
-    /// Current Δt.
+    /// Current Δt (the explicit step, or the implicit increment).
     pub dt: f64,
+    /// What the last implicit increment did (None for explicit steps).
+    pub increment: Option<IncrementReport>,
+}
+
+/// One implicit increment, as the progress line shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct IncrementReport {
+    /// Newton iterations of the converged attempt.
+    pub newton: usize,
+    /// Iterations of its condensed contact solves (each one solve with the
+    /// factors).
+    pub contact_iterations: usize,
+    /// Attempts cut back before it converged.
+    pub cutbacks: usize,
+    /// Contacts pressing at its end.
+    pub active: usize,
+    /// Of which sticking.
+    pub stick: usize,
+    /// Of which slipping.
+    pub slip: usize,
 }
 
 /// What an observer asks of the run.
@@ -54,8 +74,9 @@ pub trait Observer {
     fn progress(&mut self, _progress: &Progress) -> Control {
         Control::Continue
     }
-    /// Called every `checkpoint_every` steps with what a restart needs
-    /// ([`crate::Explicit::resume_from`]).
+    /// Called every `checkpoint_every` steps (or increments) with what a
+    /// restart needs ([`crate::Explicit::resume_from`],
+    /// [`crate::Implicit::resume_from`]).
     fn checkpoint(&mut self, _state: &State, _driver: &DriverState) {}
 }
 
@@ -75,6 +96,24 @@ pub struct DriverState {
     pub tools: Vec<drape_contact::ToolState>,
     /// Friction dissipated so far.
     pub friction_dissipation: f64,
+    /// What the implicit driver carries besides (None for explicit runs).
+    #[serde(default)]
+    pub implicit: Option<ImplicitCarry>,
+}
+
+/// The implicit driver's carried state: accelerations (the Bossak scheme
+/// needs aₙ), the tools' accelerations, the contacts and their forces.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ImplicitCarry {
+    /// Nodal accelerations aₙ (mm/s²).
+    pub acceleration: Vec<Vector3<f64>>,
+    /// Each tool's acceleration along its axis (mm/s²).
+    pub tool_acceleration: Vec<f64>,
+    /// The contacts of the last increment, with multipliers and friction
+    /// states.
+    pub contacts: Vec<drape_contact::CarriedPair>,
+    /// Contact force per node at the last increment (N).
+    pub contact_force: Vec<Vector3<f64>>,
 }
 
 /// An observer that does nothing.

@@ -228,3 +228,16 @@ pub(crate) fn check_state(model: &Model, state: &State) -> Result<(), RunError> 
     }
     Ok(())
 }
+
+impl ForcePass {
+    /// The largest element nodal force of the last evaluation: the scale
+    /// of the forces that balance at a node (N).
+    pub fn element_force_scale(&self) -> f64 {
+        use rayon::prelude::*;
+        self.slots
+            .par_iter()
+            .with_min_len(4096)
+            .map(|f| f.amax())
+            .reduce(|| 0.0, f64::max)
+    }
+}

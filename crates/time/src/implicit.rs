@@ -1,0 +1,974 @@
+//! The implicit driver (SPEC §7, "Implicit"): Newton–Raphson per increment
+//! with inertia kept, a sparse tangent factorised by faer, and the paper's
+//! condensed multiplier solve for contact.
+//!
+//! **Integrator: Bossak–Newmark (WBZ-α).** The equation of an increment is
+//! M·((1 − α_m)·a_{n+1} + α_m·aₙ) + f_int(x_{n+1}) + c·M·v_{n+1} =
+//! f_ext(t_{n+1}) + f_contact, with Newmark's β = ¼(1 − α_m)², γ = ½ − α_m
+//! and α_m = (ρ∞ − 1)/(ρ∞ + 1) from the spectral radius at infinity ρ∞
+//! (default 0). Why this one: a flat membrane has no out-of-plane stiffness,
+//! so inertia must stay in (statics is singular); forming is quasi-static,
+//! so the scheme must kill the high frequencies a large increment cannot
+//! follow (ρ∞ = 0 annihilates them in one increment, like backward Euler)
+//! yet stay second-order accurate, so that a slow dynamic run does not
+//! drift: a blank sliding down an incline moves exactly ½·a·t², which
+//! backward Euler misses by a relative h/t. Forces are taken at t_{n+1}
+//! only (α_f = 0), so history-dependent elements and contact need no
+//! force averaging. The run starts from the consistent acceleration
+//! M·a₀ = f₀ + contact (a touching node gets its reaction and friction
+//! first), without which the velocity would drift by O(h·Δa₀).
+//!
+//! **Newton.** Predictor x_{n+1} = xₙ + h·vₙ + ½h²·aₙ, prescribed components
+//! at their values; then iterations with the tangent K̂ =
+//! ((1 − α_m)/(βh²) + c·γ/(βh))·M + sym(∂f_int/∂x) (see
+//! [`crate::tangent`]), factorised each iteration with the symbolic
+//! analysis reused. Converged when, together: the largest residual
+//! component is within `force_tolerance` times the force scale (the largest
+//! element nodal force, external, inertial or contact force), the last
+//! correction within `displacement_tolerance` times the increment's largest
+//! displacement, no node deeper than `gap_tolerance` in a tool nor a
+//! sticking one slipping more, no friction state changed, and every
+//! force-driven tool balanced. A step that raises the residual is halved
+//! (line search, up to four times).
+//!
+//! **Increments.** Grow by 1.5 after an easy increment (≤ 4 iterations),
+//! shrink by 0.75 after a hard one (≥ 8); cut to a quarter when Newton fails
+//! (too many iterations, an element inverted at every step length, a zero
+//! pivot, the contact solve not converging, contact states chattering);
+//! below `min_increment` the run stops with the diagnosis. Increments end
+//! on output frames and on the end time.
+//!
+//! **Energy.** Works by the trapezoidal rule over each increment; what the
+//! integrator removes, D = Δx·M·ā − ΔE_kin − ½·Δx·(F_{n+1} − Fₙ), is
+//! reported as numerical dissipation, so the balance error is the
+//! equilibrium residual's work (checked like the explicit one).
+//!
+//! Not here: the tangent's assembly ([`crate::tangent`]), the contact solve
+//! (`drape_contact::ImplicitContact`).
+
+use std::time::Instant;
+
+use drape_contact::{ImplicitContact, ImplicitContactSettings, Increment};
+use drape_model::{Model, State};
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+use crate::energy::{chunked_sum, chunked_sums};
+use crate::shared::{self, Constraints, ForcePass};
+use crate::tangent::SparseTangent;
+use crate::{
+    Control, DriverState, Energies, Frame, ImplicitCarry, ImplicitTotals, IncrementReport,
+    Observer, Progress, RunError, RunSummary,
+};
+
+/// Settings of an implicit run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImplicitSettings {
+    /// Time to reach (s).
+    pub end_time: f64,
+    /// Output frames after the initial one, equally spaced in time.
+    pub frames: usize,
+    /// First increment (s); default a hundredth of the end time.
+    pub initial_increment: Option<f64>,
+    /// Largest increment (s); default a twentieth of the end time.
+    pub max_increment: Option<f64>,
+    /// Smallest increment before the run gives up (s); default 1e-9 of the
+    /// end time.
+    pub min_increment: Option<f64>,
+    /// Spectral radius ρ∞ ∈ [0, 1] of the Bossak scheme at infinite
+    /// frequency: 0 damps what an increment cannot resolve at once, 1
+    /// conserves energy (trapezoidal rule).
+    pub spectral_radius: f64,
+    /// Newton converges when the residual is within this fraction of the
+    /// force scale...
+    pub force_tolerance: f64,
+    /// ...and the last correction within this fraction of the increment's
+    /// largest displacement.
+    pub displacement_tolerance: f64,
+    /// Largest penetration into a tool, and stick slip, left (mm).
+    pub gap_tolerance: f64,
+    /// Newton iterations per attempt.
+    pub max_iterations: usize,
+    /// α of the mass-proportional damping force −α·m·v (1/s).
+    pub damping: f64,
+    /// Nodes nearer a tool than this take part in the contact solve (mm).
+    pub contact_margin: f64,
+    /// Stop when |energy balance error| exceeds this fraction of the largest
+    /// energy, checked at frames.
+    pub max_energy_error: Option<f64>,
+    /// Stop after this many increments.
+    pub max_increments: Option<u64>,
+    /// Hand the observer a checkpoint every this many increments.
+    pub checkpoint_every: Option<u64>,
+}
+
+impl Default for ImplicitSettings {
+    fn default() -> Self {
+        Self {
+            end_time: 1.0,
+            frames: 10,
+            initial_increment: None,
+            max_increment: None,
+            min_increment: None,
+            spectral_radius: 0.0,
+            force_tolerance: 1e-6,
+            displacement_tolerance: 1e-6,
+            gap_tolerance: 1e-9,
+            max_iterations: 25,
+            damping: 0.0,
+            contact_margin: 5.0,
+            max_energy_error: None,
+            max_increments: None,
+            checkpoint_every: None,
+        }
+    }
+}
+
+/// Residual norms of one Newton iteration, for tests and diagnosis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NewtonRecord {
+    /// Increment (the step count after it).
+    pub increment: u64,
+    /// Iteration within the attempt (0: the predictor).
+    pub iteration: usize,
+    /// Largest residual component (N).
+    pub residual: f64,
+    /// The force scale it is compared with (N).
+    pub scale: f64,
+    /// Largest component of the correction that led here (mm).
+    pub correction: f64,
+}
+
+/// Why an attempt failed, for the cutback and the final diagnosis.
+struct Failure(String);
+
+/// What a converged attempt reports.
+struct Converged {
+    newton: usize,
+    contact_iterations: usize,
+}
+
+/// The Bossak–Newmark parameters of ρ∞.
+fn bossak(rho: f64) -> (f64, f64, f64) {
+    let alpha_m = (rho - 1.0) / (rho + 1.0);
+    let beta = 0.25 * (1.0 - alpha_m) * (1.0 - alpha_m);
+    let gamma = 0.5 - alpha_m;
+    (alpha_m, beta, gamma)
+}
+
+/// The implicit driver with its tangent, contact pass and buffers.
+pub struct Implicit<'m> {
+    model: &'m Model,
+    settings: ImplicitSettings,
+    constraints: Constraints,
+    /// Constrained flag per dof (3·node + component).
+    fixed: Vec<bool>,
+    forces: ForcePass,
+    tangent: SparseTangent,
+    contact: Option<ImplicitContact>,
+    alpha_m: f64,
+    beta: f64,
+    gamma: f64,
+    /// Committed accelerations aₙ.
+    acceleration: Vec<Vector3<f64>>,
+    f_ext: Vec<Vector3<f64>>,
+    /// Forces at the last committed state, for the trapezoidal works.
+    f_int_n: Vec<Vector3<f64>>,
+    f_ext_n: Vec<Vector3<f64>>,
+    f_c_n: Vec<Vector3<f64>>,
+    x: Vec<Vector3<f64>>,
+    v: Vec<Vector3<f64>>,
+    a: Vec<Vector3<f64>>,
+    x_step: Vec<Vector3<f64>>,
+    f_slip: Vec<Vector3<f64>>,
+    f_con: Vec<Vector3<f64>>,
+    r: Vec<f64>,
+    dx: Vec<f64>,
+    reactions: Vec<Vector3<f64>>,
+    resume: Option<DriverState>,
+    totals: ImplicitTotals,
+    /// Every Newton iteration's norms, when recording.
+    record: Option<Vec<NewtonRecord>>,
+    /// Kinetic energy at the start of the run.
+    kinetic0: f64,
+    /// The model's size (bounding-box diagonal, mm).
+    size: f64,
+}
+
+impl<'m> Implicit<'m> {
+    /// Prepares a run of `model`: checks it, builds the constraint list,
+    /// the tangent's pattern and symbolic factorisation, the contact pass.
+    pub fn new(model: &'m Model, settings: ImplicitSettings) -> Result<Self, RunError> {
+        shared::check_model(model, settings.end_time)?;
+        let positive = |name: &str, v: f64| -> Result<(), RunError> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(RunError::Setup(format!("{name} {v} must be positive")))
+            }
+        };
+        for (name, v) in [
+            ("initial increment", settings.initial_increment),
+            ("largest increment", settings.max_increment),
+            ("smallest increment", settings.min_increment),
+        ] {
+            if let Some(v) = v {
+                positive(name, v)?;
+            }
+        }
+        positive("force tolerance", settings.force_tolerance)?;
+        positive("displacement tolerance", settings.displacement_tolerance)?;
+        positive("gap tolerance", settings.gap_tolerance)?;
+        positive("contact margin", settings.contact_margin)?;
+        if !(0.0..=1.0).contains(&settings.spectral_radius) {
+            return Err(RunError::Setup(format!(
+                "spectral radius {} must be in [0, 1]",
+                settings.spectral_radius
+            )));
+        }
+        if settings.max_iterations == 0 {
+            return Err(RunError::Setup(
+                "at least one Newton iteration is needed".into(),
+            ));
+        }
+        if !(settings.damping.is_finite() && settings.damping >= 0.0) {
+            return Err(RunError::Setup(format!(
+                "damping {} must be ≥ 0",
+                settings.damping
+            )));
+        }
+        let n = model.node_count();
+        let constraints = Constraints::new(model);
+        let fixed: Vec<bool> = constraints
+            .constrained
+            .iter()
+            .flat_map(|c| c.iter().copied())
+            .collect();
+        let tangent = SparseTangent::new(model, fixed.clone()).map_err(RunError::Setup)?;
+        let contact = (!model.tools.is_empty()).then(|| {
+            ImplicitContact::new(
+                model.tools.clone(),
+                n,
+                ImplicitContactSettings {
+                    offset: model.contact_offset,
+                    margin: settings.contact_margin,
+                    // The condensed solve leaves a fraction of what Newton
+                    // accepts.
+                    tolerance: 1e-3 * settings.gap_tolerance,
+                    ..ImplicitContactSettings::default()
+                },
+            )
+        });
+        let (alpha_m, beta, gamma) = bossak(settings.spectral_radius);
+        let zeros = vec![Vector3::zeros(); n];
+        Ok(Self {
+            model,
+            settings,
+            constraints,
+            fixed,
+            forces: ForcePass::new(model),
+            tangent,
+            contact,
+            alpha_m,
+            beta,
+            gamma,
+            acceleration: zeros.clone(),
+            f_ext: zeros.clone(),
+            f_int_n: zeros.clone(),
+            f_ext_n: zeros.clone(),
+            f_c_n: zeros.clone(),
+            x: zeros.clone(),
+            v: zeros.clone(),
+            a: zeros.clone(),
+            x_step: zeros.clone(),
+            f_slip: zeros.clone(),
+            f_con: zeros.clone(),
+            r: vec![0.0; 3 * n],
+            dx: vec![0.0; 3 * n],
+            reactions: zeros,
+            resume: None,
+            totals: ImplicitTotals::default(),
+            record: None,
+            kinetic0: 0.0,
+            size: {
+                let lo = model.x0.iter().fold(Vector3::repeat(f64::INFINITY), |m, x| m.inf(x));
+                let hi = model.x0.iter().fold(Vector3::repeat(f64::NEG_INFINITY), |m, x| m.sup(x));
+                (hi - lo).norm()
+            },
+        })
+    }
+
+    /// Records the residual norms of every Newton iteration (see
+    /// [`Self::newton_record`]).
+    pub fn record_newton(&mut self) {
+        self.record = Some(Vec::new());
+    }
+
+    /// The recorded Newton iterations.
+    pub fn newton_record(&self) -> &[NewtonRecord] {
+        self.record.as_deref().unwrap_or(&[])
+    }
+
+    /// The tangent's size: (degrees of freedom, stored entries).
+    pub fn tangent_size(&self) -> (usize, usize) {
+        (self.tangent.dofs(), self.tangent.nonzeros())
+    }
+
+    /// Continues a stopped run from a checkpoint's driver state.
+    pub fn resume_from(&mut self, driver: DriverState) {
+        self.resume = Some(driver);
+    }
+
+    fn increment(&self, t: f64, h: f64) -> Increment {
+        Increment {
+            t_new: t + h,
+            h,
+            beta: self.beta,
+            gamma: self.gamma,
+            alpha_m: self.alpha_m,
+        }
+    }
+
+    /// Accelerations at t = 0 consistent with the forces and the contacts.
+    fn initial_acceleration(&mut self, state: &State) -> Result<(), RunError> {
+        let model = self.model;
+        let damping = self.settings.damping;
+        let n = model.node_count();
+        for i in 0..n {
+            let f = self.f_ext[i] - self.forces.f_int[i] - state.v[i] * (damping * model.mass[i]);
+            for k in 0..3 {
+                self.acceleration[i][k] = if self.constraints.constrained[i][k] {
+                    0.0
+                } else {
+                    f[k] / model.mass[i]
+                };
+            }
+        }
+        // Prescribed components: the motion's second difference.
+        let delta = 1e-4 * self.settings.end_time.max(f64::MIN_POSITIVE);
+        for c in &self.constraints.list {
+            let (i, k) = (c.node as usize, c.component as usize);
+            let p = |t: f64| Constraints::position(model, c, 0.0, 0.0, t);
+            self.acceleration[i][k] = match Constraints::displacement(model, c, 0.0) {
+                Some(_) => (p(2.0 * delta) - 2.0 * p(delta) + p(0.0)) / (delta * delta),
+                None => {
+                    (Constraints::velocity(model, c, delta) - Constraints::velocity(model, c, 0.0))
+                        / delta
+                }
+            };
+        }
+        if let Some(contact) = &mut self.contact {
+            let touch = 1e3 * self.settings.gap_tolerance;
+            let free: Vec<[bool; 3]> = self
+                .constraints
+                .constrained
+                .iter()
+                .map(|c| [!c[0], !c[1], !c[2]])
+                .collect();
+            contact
+                .initial_acceleration(
+                    &state.x,
+                    &state.v,
+                    &model.mass,
+                    &free,
+                    touch,
+                    &mut self.acceleration,
+                )
+                .map_err(|e| RunError::Setup(format!("initial accelerations: {e}")))?;
+        }
+        Ok(())
+    }
+
+    /// Runs from `state` to the end time. On error `state` holds the last
+    /// converged increment.
+    pub fn run(
+        &mut self,
+        state: &mut State,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary, RunError> {
+        let started = Instant::now();
+        let model = self.model;
+        let n = model.node_count();
+        let end = self.settings.end_time;
+        shared::check_state(model, state)?;
+        shared::external_forces(model, state.time, &mut self.f_ext);
+        self.forces
+            .evaluate(model, &state.x, &state.history, 0.0, state.step, state.time)?;
+        let resume = self.resume.take();
+        if resume.as_ref().is_some_and(|r| r.implicit.is_none()) {
+            return Err(RunError::Setup(
+                "the checkpoint was written by the explicit driver".into(),
+            ));
+        }
+        let mut energy = resume.as_ref().map_or_else(Energies::default, |r| r.energy);
+        let kinetic0 = match &resume {
+            Some(r) => r.kinetic0,
+            None => chunked_sum(n, |i| 0.5 * model.mass[i] * state.v[i].norm_squared()),
+        };
+        self.kinetic0 = kinetic0;
+        match &resume {
+            Some(r) => {
+                let carry = r.implicit.as_ref().expect("checked above");
+                if carry.acceleration.len() != n {
+                    return Err(RunError::Setup(
+                        "the checkpoint does not belong to this model".into(),
+                    ));
+                }
+                self.acceleration.clone_from(&carry.acceleration);
+                self.f_c_n.clone_from(&carry.contact_force);
+                if let Some(contact) = &mut self.contact {
+                    contact.restore(
+                        carry.contacts.clone(),
+                        &r.tools,
+                        &carry.tool_acceleration,
+                        r.friction_dissipation,
+                    );
+                    contact.force.clone_from(&carry.contact_force);
+                }
+            }
+            None => self.initial_acceleration(state)?,
+        }
+        self.f_int_n.clone_from(&self.forces.f_int);
+        self.f_ext_n.clone_from(&self.f_ext);
+        let frame_dt = if self.settings.frames > 0 {
+            end / self.settings.frames as f64
+        } else {
+            f64::INFINITY
+        };
+        let mut next_frame = (state.time / frame_dt * (1.0 + 1e-12)).floor() as usize + 1;
+        if state.step == 0 {
+            energy.kinetic = kinetic0;
+            energy.strain = shared::strain_energy(model, state);
+            self.compute_reactions();
+            observer.frame(&Frame {
+                index: 0,
+                model,
+                state,
+                energy: &energy,
+                reactions: &self.reactions,
+                contact: self.contact.as_ref().map(ImplicitContact::view),
+            });
+        }
+        let max_h = self.settings.max_increment.unwrap_or(end / 20.0);
+        let min_h = self.settings.min_increment.unwrap_or(1e-9 * end);
+        let mut h_auto = match &resume {
+            Some(r) => r.dt,
+            None => self.settings.initial_increment.unwrap_or(end / 100.0),
+        }
+        .min(max_h);
+        let (mut h_min_used, mut h_max_used) = (f64::INFINITY, 0.0f64);
+        let mut increments = 0u64;
+        let mut stopped = false;
+        while end - state.time > 1e-9 * h_auto.min(end) {
+            if self.settings.max_increments.is_some_and(|m| increments >= m) {
+                stopped = true;
+                break;
+            }
+            let to_frame = next_frame as f64 * frame_dt - state.time;
+            let mut h = h_auto.min(end - state.time).min(to_frame.max(0.0));
+            // A remainder below a millionth of the increment is round-off.
+            if h <= 1e-6 * h_auto {
+                h = h_auto.min(end - state.time);
+            }
+            let clamped = h < h_auto;
+            let mut cutbacks = 0usize;
+            let converged = loop {
+                match self.attempt(state, h) {
+                    Ok(c) => break c,
+                    Err(Failure(reason)) => {
+                        cutbacks += 1;
+                        self.totals.cutbacks += 1;
+                        h *= 0.25;
+                        if h < min_h {
+                            return Err(RunError::NoConvergence {
+                                step: state.step + 1,
+                                time: state.time,
+                                increment: h / 0.25,
+                                reason,
+                            });
+                        }
+                    }
+                }
+            };
+            // Commit.
+            let (active, stick, slip) = self.commit(state, h, &mut energy);
+            increments += 1;
+            let dt_prev = h;
+            h_min_used = h_min_used.min(h);
+            h_max_used = h_max_used.max(h);
+            if cutbacks > 0 {
+                h_auto = h;
+            } else if converged.newton <= 4 && !clamped {
+                h_auto = (1.5 * h_auto).min(max_h);
+            } else if converged.newton >= 8 {
+                h_auto = (0.75 * h).max(min_h);
+            }
+            if self
+                .settings
+                .checkpoint_every
+                .is_some_and(|k| state.step % k.max(1) == 0)
+            {
+                let driver = self.driver_state(h_auto, dt_prev, energy, kinetic0);
+                observer.checkpoint(state, &driver);
+            }
+            let at_end = end - state.time <= 1e-9 * h_auto.min(end);
+            let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
+            if at_frame || at_end {
+                let mut report = energy;
+                report.strain = shared::strain_energy(model, state);
+                report.viscous = report.internal_work - report.strain;
+                if at_frame {
+                    self.compute_reactions();
+                    observer.frame(&Frame {
+                        index: next_frame,
+                        model,
+                        state,
+                        energy: &report,
+                        reactions: &self.reactions,
+                        contact: self.contact.as_ref().map(ImplicitContact::view),
+                    });
+                    while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
+                        next_frame += 1;
+                    }
+                }
+                if let Some(bound) = self.settings.max_energy_error {
+                    let relative = report.relative_error();
+                    if relative > bound {
+                        return Err(RunError::EnergyBalance {
+                            step: state.step,
+                            time: state.time,
+                            relative,
+                            bound,
+                        });
+                    }
+                }
+            }
+            let p = Progress {
+                step: state.step,
+                time: state.time,
+                end_time: end,
+                dt: h,
+                increment: Some(IncrementReport {
+                    newton: converged.newton,
+                    contact_iterations: converged.contact_iterations,
+                    cutbacks,
+                    active,
+                    stick,
+                    slip,
+                }),
+            };
+            if observer.progress(&p) == Control::Stop && !at_end {
+                stopped = true;
+                break;
+            }
+        }
+        let mut energy = energy;
+        energy.strain = shared::strain_energy(model, state);
+        energy.viscous = energy.internal_work - energy.strain;
+        self.totals.factorisations = self.tangent.factorisations;
+        self.totals.indefinite = self.tangent.indefinite;
+        self.totals.factor_seconds = self.tangent.factor_seconds;
+        Ok(RunSummary {
+            steps: increments,
+            dt_range: (h_min_used, h_max_used),
+            added_mass: 0.0,
+            total_mass: model.mass.iter().sum(),
+            energy,
+            stopped,
+            wall_seconds: started.elapsed().as_secs_f64(),
+            threads: rayon::current_num_threads(),
+            implicit: Some(self.totals),
+        })
+    }
+
+    fn driver_state(&self, h: f64, dt_prev: f64, energy: Energies, kinetic0: f64) -> DriverState {
+        DriverState {
+            dt: h,
+            dt_prev,
+            energy,
+            kinetic0,
+            tools: self
+                .contact
+                .as_ref()
+                .map_or_else(Vec::new, |c| c.tool_state.clone()),
+            friction_dissipation: self.contact.as_ref().map_or(0.0, |c| c.friction_dissipation),
+            implicit: Some(ImplicitCarry {
+                acceleration: self.acceleration.clone(),
+                tool_acceleration: self
+                    .contact
+                    .as_ref()
+                    .map_or_else(Vec::new, |c| c.tool_acceleration.clone()),
+                contacts: self
+                    .contact
+                    .as_ref()
+                    .map_or_else(Vec::new, |c| c.carried().to_vec()),
+                contact_force: self.f_c_n.clone(),
+            }),
+        }
+    }
+
+    /// The residual at the iterate `self.x` (its velocity and acceleration
+    /// into `self.v`, `self.a`): `self.r` gets every force but the contact
+    /// multipliers' (slip forces included), `self.f_slip` and `self.f_con`
+    /// the slip and constraint forces of the last solve. Returns (largest
+    /// residual component with the constraint forces, node, force scale).
+    fn residual(&mut self, state: &State, inc: &Increment) -> (f64, usize, f64) {
+        let model = self.model;
+        let damping = self.settings.damping;
+        let (x_n, v_n, a_n) = (&state.x, &state.v, &self.acceleration);
+        {
+            let (x, v, a) = (&self.x, &mut self.v, &mut self.a);
+            v.par_iter_mut()
+                .zip(a.par_iter_mut())
+                .with_min_len(1024)
+                .enumerate()
+                .for_each(|(i, (vi, ai))| {
+                    *ai = inc.acceleration(x[i] - x_n[i], v_n[i], a_n[i]);
+                    *vi = inc.velocity(v_n[i], a_n[i], *ai);
+                });
+        }
+        for (s, c) in self.f_slip.iter_mut().zip(self.f_con.iter_mut()) {
+            *s = Vector3::zeros();
+            *c = Vector3::zeros();
+        }
+        if let Some(contact) = &self.contact {
+            contact.add_slip_forces(&mut self.f_slip);
+            contact.add_constraint_forces(&mut self.f_con);
+        }
+        let fixed = &self.fixed;
+        let (f_ext, f_int, f_slip, f_con) = (&self.f_ext, &self.forces.f_int, &self.f_slip, &self.f_con);
+        let (v, a) = (&self.v, &self.a);
+        // r = f_ext − f_int − M·ā − c·M·v + slip forces, zero where
+        // prescribed; per node the largest |r + Cᵀλ| and inertia.
+        let (largest, node, inertia) = self
+            .r
+            .par_chunks_mut(3)
+            .with_min_len(1024)
+            .enumerate()
+            .map(|(i, ri)| {
+                let m = model.mass[i];
+                let inertia = inc.inertia(a_n[i], a[i]) * m;
+                let f = f_ext[i] - f_int[i] - inertia - v[i] * (damping * m) + f_slip[i];
+                let mut worst = 0.0f64;
+                for k in 0..3 {
+                    ri[k] = if fixed[3 * i + k] { 0.0 } else { f[k] };
+                    if !fixed[3 * i + k] {
+                        worst = worst.max((ri[k] + f_con[i][k]).abs());
+                    }
+                }
+                (worst, i, inertia.amax())
+            })
+            .reduce(
+                || (0.0, usize::MAX, 0.0),
+                |p, q| {
+                    let worst = if q.0 > p.0 || (q.0 == p.0 && q.1 < p.1) { (q.0, q.1) } else { (p.0, p.1) };
+                    (worst.0, worst.1, p.2.max(q.2))
+                },
+            );
+        let external = f_ext.iter().map(|f| f.amax()).fold(0.0, f64::max);
+        let contact = f_con
+            .iter()
+            .zip(f_slip)
+            .map(|(c, s)| (c + s).amax())
+            .fold(0.0, f64::max);
+        let scale = self
+            .forces
+            .element_force_scale()
+            .max(external)
+            .max(contact)
+            .max(inertia)
+            .max(f64::MIN_POSITIVE);
+        // A NaN anywhere makes the largest component NaN.
+        let largest = if self.r.iter().all(|r| r.is_finite()) {
+            largest
+        } else {
+            f64::NAN
+        };
+        (largest, node, scale)
+    }
+
+    /// One attempt at the increment of size `h` from `state`; the iterate
+    /// is left in `self.x`, `self.v`, `self.a`, the forces in the force
+    /// pass and the contact pass.
+    fn attempt(&mut self, state: &State, h: f64) -> Result<Converged, Failure> {
+        let model = self.model;
+        let inc = self.increment(state.time, h);
+        let t1 = inc.t_new;
+        let settings = self.settings.clone();
+        // Predictor: constant acceleration; prescribed components at their
+        // values.
+        {
+            let (x_n, v_n, a_n) = (&state.x, &state.v, &self.acceleration);
+            self.x
+                .par_iter_mut()
+                .with_min_len(1024)
+                .enumerate()
+                .for_each(|(i, x)| *x = x_n[i] + v_n[i] * h + a_n[i] * (0.5 * h * h));
+        }
+        for c in &self.constraints.list {
+            let (i, k) = (c.node as usize, c.component as usize);
+            self.x[i][k] = Constraints::position(model, c, state.x[i][k], state.time, h);
+        }
+        shared::external_forces(model, t1, &mut self.f_ext);
+        if let Some(contact) = &mut self.contact {
+            contact.begin(&self.x, &self.constraints.movable, inc);
+        }
+        let mass_factor = inc.mass_factor() + settings.damping * self.gamma / (self.beta * h);
+        let floor = 1e-6 * self.size;
+        let mut step_taken = false;
+        let mut alpha = 1.0;
+        let mut merit_prev = f64::INFINITY;
+        let mut correction = 0.0f64;
+        let mut newton = 0usize;
+        let mut contact_iterations = 0usize;
+        let fail = |newton: usize, totals: &mut ImplicitTotals, why: String| {
+            totals.wasted_iterations += newton as u64;
+            Err(Failure(why))
+        };
+        loop {
+            let evaluated = self
+                .forces
+                .evaluate(model, &self.x, &state.history, h, state.step + 1, t1);
+            let mut friction_changes = 0;
+            let (res, node, scale) = match evaluated {
+                Ok(()) => {
+                    if let Some(contact) = &mut self.contact {
+                        if step_taken {
+                            friction_changes = contact.update_friction(&self.x, &state.x);
+                        }
+                        contact.linearise(&self.x, &state.x);
+                    }
+                    self.residual(state, &inc)
+                }
+                Err(e) => (f64::NAN, usize::MAX, {
+                    if !(step_taken && alpha > 1.0 / 16.0) {
+                        return fail(newton, &mut self.totals, e.to_string());
+                    }
+                    f64::NAN
+                }),
+            };
+            // Worse, or not finite.
+            let worse = !(res <= merit_prev);
+            if step_taken && worse && alpha > 1.0 / 16.0 && !(res <= settings.force_tolerance * scale) {
+                // Line search: halve the step.
+                alpha *= 0.5;
+                for (i, x) in self.x.iter_mut().enumerate() {
+                    for k in 0..3 {
+                        x[k] = self.x_step[i][k] + alpha * self.dx[3 * i + k];
+                    }
+                }
+                if let Some(contact) = &mut self.contact {
+                    contact.apply_step(-alpha);
+                }
+                correction *= 0.5;
+                continue;
+            }
+            if !res.is_finite() {
+                return fail(
+                    newton,
+                    &mut self.totals,
+                    format!("the residual is not finite after {newton} iterations"),
+                );
+            }
+            if let Some(record) = &mut self.record {
+                record.push(NewtonRecord {
+                    increment: state.step + 1,
+                    iteration: newton,
+                    residual: res,
+                    scale,
+                    correction,
+                });
+            }
+            let increment = self
+                .x
+                .iter()
+                .zip(&state.x)
+                .map(|(a, b)| (a - b).amax())
+                .fold(0.0, f64::max);
+            let (pen, stick_slip, imbalance) = self.contact.as_ref().map_or((0.0, 0.0, 0.0), |c| {
+                let (p, s) = c.violation();
+                (p, s, c.tool_imbalance())
+            });
+            let converged = res <= settings.force_tolerance * scale
+                && (newton == 0 || correction <= settings.displacement_tolerance * increment.max(floor))
+                && pen <= settings.gap_tolerance
+                && stick_slip <= settings.gap_tolerance
+                && friction_changes == 0
+                && imbalance <= settings.force_tolerance * scale;
+            if converged {
+                self.totals.newton_iterations += newton as u64;
+                self.totals.contact_iterations += contact_iterations as u64;
+                return Ok(Converged {
+                    newton,
+                    contact_iterations,
+                });
+            }
+            if newton >= settings.max_iterations {
+                return fail(
+                    newton,
+                    &mut self.totals,
+                    format!(
+                        "{newton} Newton iterations: residual {res:.3e} N at node {node} (force scale {scale:.3e} N), \
+                         last correction {correction:.3e} mm, penetration {pen:.3e} mm, \
+                         stick slip {stick_slip:.3e} mm, {friction_changes} friction states changed"
+                    ),
+                );
+            }
+            // The Newton step.
+            let assembly = Instant::now();
+            let assembled = self.tangent.assemble(
+                model,
+                &self.x,
+                &state.history,
+                h,
+                &model.mass,
+                mass_factor,
+            );
+            self.totals.assembly_seconds += assembly.elapsed().as_secs_f64();
+            if let Err((batch, e)) = assembled {
+                return fail(newton, &mut self.totals, format!("tangent of {batch}: {e}"));
+            }
+            if let Err(e) = self.tangent.factorise() {
+                return fail(
+                    newton,
+                    &mut self.totals,
+                    format!(
+                        "the tangent has a zero pivot at node {} (component {})",
+                        e.dof / 3,
+                        e.dof % 3
+                    ),
+                );
+            }
+            let fixed = &self.fixed;
+            let tangent = &mut self.tangent;
+            let mut solve = |w: &mut [f64]| {
+                for (wi, &f) in w.iter_mut().zip(fixed) {
+                    if f {
+                        *wi = 0.0;
+                    }
+                }
+                tangent.solve(w);
+                for (wi, &f) in w.iter_mut().zip(fixed) {
+                    if f {
+                        *wi = 0.0;
+                    }
+                }
+            };
+            match &mut self.contact {
+                Some(contact) => {
+                    let started = Instant::now();
+                    let solved = contact.solve(&self.r, &mut solve, &mut self.dx);
+                    self.totals.contact_seconds += started.elapsed().as_secs_f64();
+                    match solved {
+                        Ok(stats) => contact_iterations += stats.iterations,
+                        Err(e) => return fail(newton, &mut self.totals, e.to_string()),
+                    }
+                }
+                None => {
+                    self.dx.copy_from_slice(&self.r);
+                    solve(&mut self.dx);
+                }
+            }
+            newton += 1;
+            self.x_step.copy_from_slice(&self.x);
+            for (i, x) in self.x.iter_mut().enumerate() {
+                for k in 0..3 {
+                    x[k] += self.dx[3 * i + k];
+                }
+            }
+            if let Some(contact) = &mut self.contact {
+                contact.apply_step(1.0);
+            }
+            alpha = 1.0;
+            merit_prev = res;
+            step_taken = true;
+            correction = self.dx.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        }
+    }
+
+    /// Commits the converged attempt: works and numerical dissipation over
+    /// the increment, the state, the contact pass. Returns (active
+    /// contacts, sticking, slipping).
+    fn commit(&mut self, state: &mut State, h: f64, energy: &mut Energies) -> (usize, usize, usize) {
+        let model = self.model;
+        let inc = self.increment(state.time, h);
+        let damping = self.settings.damping;
+        let n = model.node_count();
+        let (x, v, a) = (&self.x, &self.v, &self.a);
+        let (x_n, v_n, a_n) = (&state.x, &state.v, &self.acceleration);
+        let (f_int, f_ext, f_int_n, f_ext_n, f_c_n) =
+            (&self.forces.f_int, &self.f_ext, &self.f_int_n, &self.f_ext_n, &self.f_c_n);
+        let (f_slip, f_con) = (&self.f_slip, &self.f_con);
+        let fixed = &self.fixed;
+        let [w_int, w_ext, w_damp, w_c, w_bc, ke, ke_n, d_num] = chunked_sums(n, |i| {
+            let m = model.mass[i];
+            let dx = x[i] - x_n[i];
+            let f_c = f_slip[i] + f_con[i];
+            let (damp, damp_n) = (v[i] * (damping * m), v_n[i] * (damping * m));
+            let force = f_ext[i] - f_int[i] - damp + f_c;
+            let force_n = f_ext_n[i] - f_int_n[i] - damp_n + f_c_n[i];
+            let inertia = inc.inertia(a_n[i], a[i]) * m;
+            let mut w_bc = 0.0;
+            for k in 0..3 {
+                if fixed[3 * i + k] {
+                    w_bc += (inertia[k] - force[k]) * dx[k];
+                }
+            }
+            [
+                0.5 * (f_int_n[i] + f_int[i]).dot(&dx),
+                0.5 * (f_ext_n[i] + f_ext[i]).dot(&dx),
+                0.5 * (damp_n + damp).dot(&dx),
+                0.5 * (f_c_n[i] + f_c).dot(&dx),
+                w_bc,
+                0.5 * m * v[i].norm_squared(),
+                0.5 * m * v_n[i].norm_squared(),
+                inertia.dot(&dx) - 0.5 * (force - force_n).dot(&dx),
+            ]
+        });
+        energy.internal_work += w_int;
+        energy.external_work += w_ext;
+        energy.damping += w_damp;
+        energy.contact_work += w_c;
+        energy.boundary_work += w_bc;
+        energy.numerical_dissipation += d_num - (ke - ke_n);
+        energy.kinetic = ke;
+        let counts = match &mut self.contact {
+            Some(contact) => {
+                let counts = contact.commit(&self.x, &state.x);
+                energy.friction_dissipation = contact.friction_dissipation;
+                counts
+            }
+            None => (0, 0, 0),
+        };
+        for ((c, s), k) in self.f_c_n.iter_mut().zip(&self.f_slip).zip(&self.f_con) {
+            *c = s + k;
+        }
+        std::mem::swap(&mut state.x, &mut self.x);
+        std::mem::swap(&mut state.v, &mut self.v);
+        std::mem::swap(&mut self.acceleration, &mut self.a);
+        std::mem::swap(&mut state.history, &mut self.forces.history_new);
+        self.f_int_n.copy_from_slice(&self.forces.f_int);
+        self.f_ext_n.copy_from_slice(&self.f_ext);
+        state.time += h;
+        state.step += 1;
+        energy.balance_error = energy.kinetic + energy.internal_work + energy.damping
+            + energy.numerical_dissipation
+            - energy.external_work
+            - energy.boundary_work
+            - energy.contact_work
+            - self.kinetic0;
+        counts
+    }
+
+    /// Reactions at the constrained components, quasi-static part
+    /// f_int − f_ext (as the explicit driver reports them).
+    fn compute_reactions(&mut self) {
+        for r in self.reactions.iter_mut() {
+            *r = Vector3::zeros();
+        }
+        for c in &self.constraints.list {
+            let (i, k) = (c.node as usize, c.component as usize);
+            self.reactions[i][k] = self.f_int_n[i][k] - self.f_ext_n[i][k];
+        }
+    }
+}

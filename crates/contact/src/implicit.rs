@@ -96,9 +96,19 @@ impl Increment {
     }
 }
 
+/// A stick force may exceed μ·λ_N by this fraction before the pair slips:
+/// the multipliers come from an iterative solve, and a node held exactly at
+/// the friction angle must not chatter between stick and slip on
+/// round-off.
+const CONE_SLACK: f64 = 1e-6;
+
+/// A slip shorter than this many times the solve's tolerance is noise: it
+/// neither reverses a slipping pair nor sets its direction.
+const SLIP_NOISE: f64 = 1e3;
+
 /// Settings of the implicit contact pass.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImplicitSettings {
+pub struct ImplicitContactSettings {
     /// Distance of the fabric's mid-surface from a tool at contact: half
     /// the thickness (mm).
     pub offset: f64,
@@ -111,7 +121,7 @@ pub struct ImplicitSettings {
     pub max_iterations: usize,
 }
 
-impl Default for ImplicitSettings {
+impl Default for ImplicitContactSettings {
     fn default() -> Self {
         Self {
             offset: 0.0,
@@ -151,6 +161,13 @@ struct Pair {
     slip: Vector3<f64>,
     /// Whether the rows include this pair's stick rows.
     stick_rows: bool,
+    /// Where the node and the tool were at tₙ if the pair was pressed then,
+    /// or where it closed in this increment: the stick rows hold the slip
+    /// from there at zero.
+    anchor: Vector3<f64>,
+    anchor_tool: f64,
+    /// Pressed at tₙ (carried from the last increment).
+    since_start: bool,
 }
 
 /// A pair's state carried from one increment to the next (and through a
@@ -229,7 +246,7 @@ pub struct ImplicitContact {
     /// Committed acceleration of each tool along its axis.
     pub tool_acceleration: Vec<f64>,
     /// The settings.
-    pub settings: ImplicitSettings,
+    pub settings: ImplicitContactSettings,
     /// Contact force on each node at the last committed increment (N).
     pub force: Vec<Vector3<f64>>,
     /// Each node's status there.
@@ -251,6 +268,11 @@ pub struct ImplicitContact {
     pairs: Vec<Pair>,
     next_pairs: Vec<Pair>,
     carried: Vec<CarriedPair>,
+    /// (node, tool, normal) of the pairs pressing at the last commit.
+    pressed: Vec<(u32, u32, Vector3<f64>)>,
+    /// A normal force below this carries no friction (N): see
+    /// [`Self::set_force_floor`].
+    force_floor: f64,
     rows: Vec<Row>,
     scratch: Scratch,
 }
@@ -280,7 +302,7 @@ fn tangents(n: &Vector3<f64>) -> [Vector3<f64>; 2] {
 
 impl ImplicitContact {
     /// A pass over `node_count` nodes.
-    pub fn new(tools: Vec<Tool>, node_count: usize, settings: ImplicitSettings) -> Self {
+    pub fn new(tools: Vec<Tool>, node_count: usize, settings: ImplicitContactSettings) -> Self {
         let t = tools.len();
         Self {
             tool_state: vec![ToolState::default(); t],
@@ -300,6 +322,8 @@ impl ImplicitContact {
             pairs: Vec::new(),
             next_pairs: Vec::new(),
             carried: Vec::new(),
+            pressed: Vec::new(),
+            force_floor: 0.0,
             rows: Vec::new(),
             scratch: Scratch::default(),
         }
@@ -322,6 +346,12 @@ impl ImplicitContact {
     /// checkpoint.
     pub fn carried(&self) -> &[CarriedPair] {
         &self.carried
+    }
+
+    /// (node, tool, outward normal) of every pair pressing at the last
+    /// committed increment.
+    pub fn pressed(&self) -> &[(u32, u32, Vector3<f64>)] {
+        &self.pressed
     }
 
     /// Restores the carried pairs, tools and outputs of a checkpoint.
@@ -354,6 +384,15 @@ impl ImplicitContact {
                 Friction::Stick => ContactStatus::Stick,
             };
         }
+    }
+
+    /// Normal forces up to `floor` (N) are round-off of the driver's
+    /// equilibrium: such a pair gets neither stick rows nor a slip force
+    /// (its friction would be at most μ·floor, below what the driver's
+    /// convergence test resolves), so that a node touching with nothing to
+    /// press it does not flip between stick and slip.
+    pub fn set_force_floor(&mut self, floor: f64) {
+        self.force_floor = floor;
     }
 
     /// Whether any tool is a force-driven rigid body.
@@ -438,7 +477,6 @@ impl ImplicitContact {
         for (t, tool) in self.tools.iter().enumerate() {
             let axis = tool.motion.direction();
             let d = self.trial[t];
-            let dd = d - self.tool_state[t].displacement;
             for &i in &self.candidates[t] {
                 let iu = i as usize;
                 let p = tool.project(&x[iu], d);
@@ -455,8 +493,6 @@ impl ImplicitContact {
                 {
                     carried += 1;
                 }
-                let s = x[iu] - x_n[iu] - axis * dd;
-                let slip = s - p.normal * p.normal.dot(&s);
                 let mut pair = Pair {
                     tool: t as u32,
                     node: i,
@@ -466,8 +502,11 @@ impl ImplicitContact {
                     friction: Friction::Stick,
                     normal: p.normal,
                     gap,
-                    slip,
+                    slip: Vector3::zeros(),
                     stick_rows: false,
+                    anchor: x[iu],
+                    anchor_tool: d,
+                    since_start: false,
                 };
                 if old < self.pairs.len() && (self.pairs[old].tool, self.pairs[old].node) == key {
                     let o = &self.pairs[old];
@@ -475,15 +514,24 @@ impl ImplicitContact {
                     pair.stick = o.stick;
                     pair.slip_direction = o.slip_direction;
                     pair.friction = o.friction;
+                    pair.anchor = o.anchor;
+                    pair.anchor_tool = o.anchor_tool;
+                    pair.since_start = o.since_start;
                 } else if carried < self.carried.len()
                     && (self.carried[carried].tool, self.carried[carried].node) == key
                 {
+                    // In contact since tₙ: its slip counts from there.
                     let c = &self.carried[carried];
                     pair.lambda = c.lambda;
                     pair.stick = Vector3::from(c.stick);
                     pair.slip_direction = Vector3::from(c.slip_direction);
                     pair.friction = c.friction;
+                    pair.anchor = x_n[iu];
+                    pair.anchor_tool = self.tool_state[t].displacement;
+                    pair.since_start = true;
                 }
+                let s = x[iu] - pair.anchor - axis * (d - pair.anchor_tool);
+                pair.slip = s - p.normal * p.normal.dot(&s);
                 next.push(pair);
             }
         }
@@ -503,7 +551,7 @@ impl ImplicitContact {
 
     fn slip_force(&self, pair: &Pair) -> Option<Vector3<f64>> {
         let mu = self.tools[pair.tool as usize].friction;
-        (mu > 0.0 && pair.friction == Friction::Slip && pair.lambda > 0.0)
+        (mu > 0.0 && pair.friction == Friction::Slip && pair.lambda > self.force_floor)
             .then(|| pair.slip_direction * (mu * pair.lambda))
     }
 
@@ -523,7 +571,7 @@ impl ImplicitContact {
         for pair in &self.pairs {
             pen = pen.max(-pair.gap);
             let sticking = pair.friction == Friction::Stick
-                && pair.lambda > 0.0
+                && pair.lambda > self.force_floor
                 && self.tools[pair.tool as usize].friction > 0.0;
             if sticking {
                 slip = slip.max(pair.slip.norm());
@@ -722,7 +770,7 @@ impl ImplicitContact {
     /// force beyond μ·λ_N turns the pair to slip in its direction; a slip
     /// that runs along its friction force turns back to stick; a pair that
     /// left contact forgets its friction. Returns how many pairs changed.
-    pub fn update_friction(&mut self, x: &[Vector3<f64>], x_n: &[Vector3<f64>]) -> usize {
+    pub fn update_friction(&mut self, x: &[Vector3<f64>]) -> usize {
         let mut changes = 0;
         for pair in &mut self.pairs {
             let tool = &self.tools[pair.tool as usize];
@@ -730,8 +778,17 @@ impl ImplicitContact {
             if mu == 0.0 {
                 continue;
             }
-            if pair.lambda <= 0.0 {
-                if pair.friction == Friction::Slip {
+            let i = pair.node as usize;
+            let here = (x[i], self.trial[pair.tool as usize]);
+            if pair.lambda <= self.force_floor {
+                // Not pressed: when it is again, it sticks from there.
+                if !pair.since_start {
+                    (pair.anchor, pair.anchor_tool) = here;
+                }
+                // Stick rows that held it with no normal force must go.
+                if pair.friction == Friction::Slip
+                    || (pair.stick_rows && pair.stick != Vector3::zeros())
+                {
                     changes += 1;
                 }
                 pair.friction = Friction::Stick;
@@ -739,9 +796,19 @@ impl ImplicitContact {
                 continue;
             }
             match pair.friction {
+                Friction::Stick if !pair.stick_rows => {
+                    // A contact that closed in this increment sticks from
+                    // where it closed; one pressed since tₙ from there.
+                    if !pair.since_start {
+                        (pair.anchor, pair.anchor_tool) = here;
+                    }
+                    // Newly pressed: it was free along the tool in this
+                    // solve; the next one holds it.
+                    changes += 1;
+                }
                 Friction::Stick => {
                     let f = pair.stick.norm();
-                    if f > mu * pair.lambda * (1.0 + 1e-12) {
+                    if f > mu * pair.lambda * (1.0 + CONE_SLACK) {
                         pair.friction = Friction::Slip;
                         pair.slip_direction = pair.stick / f;
                         pair.stick = Vector3::zeros();
@@ -750,21 +817,23 @@ impl ImplicitContact {
                 }
                 Friction::Slip => {
                     let axis = tool.motion.direction();
-                    let i = pair.node as usize;
-                    let dd = self.trial[pair.tool as usize]
-                        - self.tool_state[pair.tool as usize].displacement;
-                    let s = x[i] - x_n[i] - axis * dd;
+                    let s = x[i] - pair.anchor - axis * (here.1 - pair.anchor_tool);
                     let slip = s - pair.normal * pair.normal.dot(&s);
-                    let size = slip.norm();
-                    if size > 0.0 {
-                        if slip.dot(&pair.slip_direction) > 0.0 {
-                            // Moving along its friction force: it has
-                            // stopped sliding.
-                            pair.friction = Friction::Stick;
-                            changes += 1;
-                        } else {
-                            pair.slip_direction = -slip / size;
-                        }
+                    // Along its friction force by more than the solve's
+                    // accuracy: the slip has reversed, the node sticks
+                    // (unless it has switched MAX_FLIPS times already in
+                    // this increment). Otherwise the direction stays as
+                    // the increment found it (from the stick force, or the
+                    // last increment's slip): recomputed from a slip that
+                    // may still be round-off, it would turn at random and
+                    // Newton would not converge.
+                    if slip.dot(&pair.slip_direction) > SLIP_NOISE * self.settings.tolerance {
+                        // Sticking from where it was at tₙ (or where it
+                        // closed): from where it stopped it would keep
+                        // the slip it made against a force it did not
+                        // need, and creep.
+                        pair.friction = Friction::Stick;
+                        changes += 1;
                     }
                 }
             }
@@ -791,6 +860,7 @@ impl ImplicitContact {
                 self.friction_dissipation -= f.dot(&slip);
             }
         }
+        let displacement_n: Vec<f64> = self.tool_state.iter().map(|s| s.displacement).collect();
         for t in 0..self.tools.len() {
             let s = self.tool_state[t];
             let a0 = self.tool_acceleration[t];
@@ -802,12 +872,14 @@ impl ImplicitContact {
             self.tool_acceleration[t] = a;
         }
         self.carried.clear();
+        self.pressed.clear();
         let (mut active, mut stick, mut slip) = (0, 0, 0);
         for pair in &self.pairs {
             if pair.lambda <= 0.0 {
                 continue;
             }
             active += 1;
+            self.pressed.push((pair.node, pair.tool, pair.normal));
             let sliding =
                 pair.friction == Friction::Slip && self.tools[pair.tool as usize].friction > 0.0;
             if sliding {
@@ -815,12 +887,25 @@ impl ImplicitContact {
             } else {
                 stick += 1;
             }
+            // The next increment starts sliding against this one's slip,
+            // when it is more than noise.
+            let mut direction = pair.slip_direction;
+            if sliding {
+                let tool = &self.tools[pair.tool as usize];
+                let i = pair.node as usize;
+                let dd = self.trial[pair.tool as usize] - displacement_n[pair.tool as usize];
+                let s = x[i] - x_n[i] - tool.motion.direction() * dd;
+                let slip_t = s - pair.normal * pair.normal.dot(&s);
+                if slip_t.norm() > SLIP_NOISE * self.settings.tolerance {
+                    direction = -slip_t.normalize();
+                }
+            }
             self.carried.push(CarriedPair {
                 tool: pair.tool,
                 node: pair.node,
                 lambda: pair.lambda,
                 stick: pair.stick.into(),
-                slip_direction: pair.slip_direction.into(),
+                slip_direction: direction.into(),
                 friction: if sliding {
                     Friction::Slip
                 } else {
@@ -947,7 +1032,7 @@ impl ImplicitContact {
                 let mu = self.tools[pair.tool as usize].friction;
                 if mu > 0.0 && pair.friction == Friction::Stick && pair.lambda > 0.0 {
                     let f = pair.stick.norm();
-                    if f > mu * pair.lambda * (1.0 + 1e-12) {
+                    if f > mu * pair.lambda * (1.0 + CONE_SLACK) {
                         pair.friction = Friction::Slip;
                         pair.slip_direction = pair.stick / f;
                         pair.stick = Vector3::zeros();
@@ -982,6 +1067,21 @@ impl ImplicitContact {
                 self.tool_acceleration[t] = self.tool_step[t];
             }
         }
+        // The pairs pressed at t = 0 are in contact since the start of the
+        // first increment.
+        self.carried = self
+            .pairs
+            .iter()
+            .filter(|p| p.lambda > 0.0)
+            .map(|p| CarriedPair {
+                tool: p.tool,
+                node: p.node,
+                lambda: p.lambda,
+                stick: p.stick.into(),
+                slip_direction: p.slip_direction.into(),
+                friction: p.friction,
+            })
+            .collect();
         self.increment = None;
         self.initial = false;
         self.pairs.clear();
@@ -1003,8 +1103,9 @@ impl ImplicitContact {
                 target: pair.gap,
                 bounded: true,
             });
-            pair.stick_rows =
-                tool.friction > 0.0 && pair.friction == Friction::Stick && pair.lambda > 0.0;
+            pair.stick_rows = tool.friction > 0.0
+                && pair.friction == Friction::Stick
+                && pair.lambda > self.force_floor;
             if pair.stick_rows {
                 for t in tangents(&pair.normal) {
                     self.rows.push(Row {
@@ -1332,7 +1433,7 @@ mod tests {
                 },
             ));
         }
-        let settings = ImplicitSettings {
+        let settings = ImplicitContactSettings {
             offset: OFFSET,
             margin: 0.5,
             tolerance: 1e-13,

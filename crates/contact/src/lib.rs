@@ -53,7 +53,8 @@ mod view;
 
 pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes};
 pub use implicit::{
-    CarriedPair, Friction, ImplicitContact, ImplicitSettings, Increment, SolveError, SolveStats,
+    CarriedPair, Friction, ImplicitContact, ImplicitContactSettings, Increment, SolveError,
+    SolveStats,
 };
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};

@@ -28,11 +28,13 @@
 //! correction within `displacement_tolerance` times the increment's largest
 //! displacement, no node deeper than `gap_tolerance` in a tool nor a
 //! sticking one slipping more, no friction state changed, and every
-//! force-driven tool balanced. A step that raises the residual is halved
-//! (line search, up to four times).
+//! force-driven tool balanced. A step that more than doubles the residual
+//! (or inverts an element) is halved, up to four times (line search),
+//! unless friction states changed with it.
 //!
-//! **Increments.** Grow by 1.5 after an easy increment (≤ 4 iterations),
-//! shrink by 0.75 after a hard one (≥ 8); cut to a quarter when Newton fails
+//! **Increments.** Grow by 1.5 after an easy increment (≤ 6 iterations
+//! besides those that followed a change of friction states), shrink by
+//! 0.75 after a hard one (≥ 12); cut to a quarter when Newton fails
 //! (too many iterations, an element inverted at every step length, a zero
 //! pivot, the contact solve not converging, contact states chattering);
 //! below `min_increment` the run stops with the diagnosis. Increments end
@@ -60,6 +62,13 @@ use crate::{
     Control, DriverState, Energies, Frame, ImplicitCarry, ImplicitTotals, IncrementReport,
     Observer, Progress, RunError, RunSummary,
 };
+
+/// Newton iterations of an easy increment (the next one grows) and of a
+/// hard one (the next one shrinks), not counting those that followed a
+/// change of friction states: stick and slip settle pair by pair, which
+/// is no reason to shrink.
+const EASY: usize = 6;
+const HARD: usize = 12;
 
 /// Settings of an implicit run.
 #[derive(Debug, Clone, PartialEq)]
@@ -145,6 +154,8 @@ struct Failure(String);
 /// What a converged attempt reports.
 struct Converged {
     newton: usize,
+    /// Of which followed a change of friction states.
+    switched: usize,
     contact_iterations: usize,
 }
 
@@ -291,8 +302,14 @@ impl<'m> Implicit<'m> {
             record: None,
             kinetic0: 0.0,
             size: {
-                let lo = model.x0.iter().fold(Vector3::repeat(f64::INFINITY), |m, x| m.inf(x));
-                let hi = model.x0.iter().fold(Vector3::repeat(f64::NEG_INFINITY), |m, x| m.sup(x));
+                let lo = model
+                    .x0
+                    .iter()
+                    .fold(Vector3::repeat(f64::INFINITY), |m, x| m.inf(x));
+                let hi = model
+                    .x0
+                    .iter()
+                    .fold(Vector3::repeat(f64::NEG_INFINITY), |m, x| m.sup(x));
                 (hi - lo).norm()
             },
         })
@@ -430,6 +447,16 @@ impl<'m> Implicit<'m> {
         }
         self.f_int_n.clone_from(&self.forces.f_int);
         self.f_ext_n.clone_from(&self.f_ext);
+        // The stiffness at the start sets the force floor of the
+        // convergence test before the first Newton step assembles it.
+        self.tangent
+            .assemble(model, &state.x, &state.history, 0.0, &model.mass, 0.0)
+            .map_err(|(batch, error)| RunError::Element {
+                step: state.step,
+                time: state.time,
+                batch,
+                error,
+            })?;
         let frame_dt = if self.settings.frames > 0 {
             end / self.settings.frames as f64
         } else {
@@ -460,7 +487,11 @@ impl<'m> Implicit<'m> {
         let mut increments = 0u64;
         let mut stopped = false;
         while end - state.time > 1e-9 * h_auto.min(end) {
-            if self.settings.max_increments.is_some_and(|m| increments >= m) {
+            if self
+                .settings
+                .max_increments
+                .is_some_and(|m| increments >= m)
+            {
                 stopped = true;
                 break;
             }
@@ -498,9 +529,9 @@ impl<'m> Implicit<'m> {
             h_max_used = h_max_used.max(h);
             if cutbacks > 0 {
                 h_auto = h;
-            } else if converged.newton <= 4 && !clamped {
+            } else if converged.newton - converged.switched <= EASY && !clamped {
                 h_auto = (1.5 * h_auto).min(max_h);
-            } else if converged.newton >= 8 {
+            } else if converged.newton - converged.switched >= HARD {
                 h_auto = (0.75 * h).max(min_h);
             }
             if self
@@ -562,7 +593,6 @@ impl<'m> Implicit<'m> {
                 break;
             }
         }
-        let mut energy = energy;
         energy.strain = shared::strain_energy(model, state);
         energy.viscous = energy.internal_work - energy.strain;
         self.totals.factorisations = self.tangent.factorisations;
@@ -591,7 +621,10 @@ impl<'m> Implicit<'m> {
                 .contact
                 .as_ref()
                 .map_or_else(Vec::new, |c| c.tool_state.clone()),
-            friction_dissipation: self.contact.as_ref().map_or(0.0, |c| c.friction_dissipation),
+            friction_dissipation: self
+                .contact
+                .as_ref()
+                .map_or(0.0, |c| c.friction_dissipation),
             implicit: Some(ImplicitCarry {
                 acceleration: self.acceleration.clone(),
                 tool_acceleration: self
@@ -636,7 +669,8 @@ impl<'m> Implicit<'m> {
             contact.add_constraint_forces(&mut self.f_con);
         }
         let fixed = &self.fixed;
-        let (f_ext, f_int, f_slip, f_con) = (&self.f_ext, &self.forces.f_int, &self.f_slip, &self.f_con);
+        let (f_ext, f_int, f_slip, f_con) =
+            (&self.f_ext, &self.forces.f_int, &self.f_slip, &self.f_con);
         let (v, a) = (&self.v, &self.a);
         // r = f_ext − f_int − M·ā − c·M·v + slip forces, zero where
         // prescribed; per node the largest |r + Cᵀλ| and inertia.
@@ -661,7 +695,11 @@ impl<'m> Implicit<'m> {
             .reduce(
                 || (0.0, usize::MAX, 0.0),
                 |p, q| {
-                    let worst = if q.0 > p.0 || (q.0 == p.0 && q.1 < p.1) { (q.0, q.1) } else { (p.0, p.1) };
+                    let worst = if q.0 > p.0 || (q.0 == p.0 && q.1 < p.1) {
+                        (q.0, q.1)
+                    } else {
+                        (p.0, p.1)
+                    };
                     (worst.0, worst.1, p.2.max(q.2))
                 },
             );
@@ -671,12 +709,16 @@ impl<'m> Implicit<'m> {
             .zip(f_slip)
             .map(|(c, s)| (c + s).amax())
             .fold(0.0, f64::max);
+        // With nothing loaded every force is round-off: then the scale is
+        // the force that a displacement of a millionth of the model's size
+        // costs the stiffest node (the tangent's largest diagonal).
         let scale = self
             .forces
             .element_force_scale()
             .max(external)
             .max(contact)
             .max(inertia)
+            .max(1e-6 * self.size * self.tangent.max_stiffness)
             .max(f64::MIN_POSITIVE);
         // A NaN anywhere makes the largest component NaN.
         let largest = if self.r.iter().all(|r| r.is_finite()) {
@@ -721,20 +763,21 @@ impl<'m> Implicit<'m> {
         let mut correction = 0.0f64;
         let mut newton = 0usize;
         let mut contact_iterations = 0usize;
+        let mut switched = 0usize;
         let fail = |newton: usize, totals: &mut ImplicitTotals, why: String| {
             totals.wasted_iterations += newton as u64;
             Err(Failure(why))
         };
         loop {
-            let evaluated = self
-                .forces
-                .evaluate(model, &self.x, &state.history, h, state.step + 1, t1);
+            let evaluated =
+                self.forces
+                    .evaluate(model, &self.x, &state.history, h, state.step + 1, t1);
             let mut friction_changes = 0;
             let (res, node, scale) = match evaluated {
                 Ok(()) => {
                     if let Some(contact) = &mut self.contact {
                         if step_taken {
-                            friction_changes = contact.update_friction(&self.x, &state.x);
+                            friction_changes = contact.update_friction(&self.x);
                         }
                         contact.linearise(&self.x, &state.x);
                     }
@@ -747,9 +790,15 @@ impl<'m> Implicit<'m> {
                     f64::NAN
                 }),
             };
-            // Worse, or not finite.
-            let worse = !(res <= merit_prev);
-            if step_taken && worse && alpha > 1.0 / 16.0 && !(res <= settings.force_tolerance * scale) {
+            // More than doubled, or not finite. A residual that rises
+            // because contact or friction states changed is the next
+            // iteration's business, not the step length's.
+            let worse = (res > 2.0 * merit_prev || res.is_nan()) && (friction_changes == 0 || !res.is_finite());
+            if step_taken
+                && worse
+                && alpha > 1.0 / 16.0
+                && (res > settings.force_tolerance * scale || res.is_nan())
+            {
                 // Line search: halve the step.
                 alpha *= 0.5;
                 for (i, x) in self.x.iter_mut().enumerate() {
@@ -779,6 +828,9 @@ impl<'m> Implicit<'m> {
                     correction,
                 });
             }
+            if let Some(contact) = &mut self.contact {
+                contact.set_force_floor(settings.force_tolerance * scale);
+            }
             let increment = self
                 .x
                 .iter()
@@ -789,8 +841,12 @@ impl<'m> Implicit<'m> {
                 let (p, s) = c.violation();
                 (p, s, c.tool_imbalance())
             });
+            if friction_changes > 0 {
+                switched += 1;
+            }
             let converged = res <= settings.force_tolerance * scale
-                && (newton == 0 || correction <= settings.displacement_tolerance * increment.max(floor))
+                && (newton == 0
+                    || correction <= settings.displacement_tolerance * increment.max(floor))
                 && pen <= settings.gap_tolerance
                 && stick_slip <= settings.gap_tolerance
                 && friction_changes == 0
@@ -800,6 +856,7 @@ impl<'m> Implicit<'m> {
                 self.totals.contact_iterations += contact_iterations as u64;
                 return Ok(Converged {
                     newton,
+                    switched,
                     contact_iterations,
                 });
             }
@@ -816,14 +873,9 @@ impl<'m> Implicit<'m> {
             }
             // The Newton step.
             let assembly = Instant::now();
-            let assembled = self.tangent.assemble(
-                model,
-                &self.x,
-                &state.history,
-                h,
-                &model.mass,
-                mass_factor,
-            );
+            let assembled =
+                self.tangent
+                    .assemble(model, &self.x, &state.history, h, &model.mass, mass_factor);
             self.totals.assembly_seconds += assembly.elapsed().as_secs_f64();
             if let Err((batch, e)) = assembled {
                 return fail(newton, &mut self.totals, format!("tangent of {batch}: {e}"));
@@ -889,18 +941,28 @@ impl<'m> Implicit<'m> {
     /// Commits the converged attempt: works and numerical dissipation over
     /// the increment, the state, the contact pass. Returns (active
     /// contacts, sticking, slipping).
-    fn commit(&mut self, state: &mut State, h: f64, energy: &mut Energies) -> (usize, usize, usize) {
+    fn commit(
+        &mut self,
+        state: &mut State,
+        h: f64,
+        energy: &mut Energies,
+    ) -> (usize, usize, usize) {
         let model = self.model;
         let inc = self.increment(state.time, h);
         let damping = self.settings.damping;
         let n = model.node_count();
         let (x, v, a) = (&self.x, &self.v, &self.a);
         let (x_n, v_n, a_n) = (&state.x, &state.v, &self.acceleration);
-        let (f_int, f_ext, f_int_n, f_ext_n, f_c_n) =
-            (&self.forces.f_int, &self.f_ext, &self.f_int_n, &self.f_ext_n, &self.f_c_n);
+        let (f_int, f_ext, f_int_n, f_ext_n, f_c_n) = (
+            &self.forces.f_int,
+            &self.f_ext,
+            &self.f_int_n,
+            &self.f_ext_n,
+            &self.f_c_n,
+        );
         let (f_slip, f_con) = (&self.f_slip, &self.f_con);
         let fixed = &self.fixed;
-        let [w_int, w_ext, w_damp, w_c, w_bc, ke, ke_n, d_num] = chunked_sums(n, |i| {
+        let [w_int, w_ext, w_damp, w_c, w_bc, ke_n, d_num] = chunked_sums(n, |i| {
             let m = model.mass[i];
             let dx = x[i] - x_n[i];
             let f_c = f_slip[i] + f_con[i];
@@ -920,7 +982,6 @@ impl<'m> Implicit<'m> {
                 0.5 * (damp_n + damp).dot(&dx),
                 0.5 * (f_c_n[i] + f_c).dot(&dx),
                 w_bc,
-                0.5 * m * v[i].norm_squared(),
                 0.5 * m * v_n[i].norm_squared(),
                 inertia.dot(&dx) - 0.5 * (force - force_n).dot(&dx),
             ]
@@ -930,16 +991,38 @@ impl<'m> Implicit<'m> {
         energy.damping += w_damp;
         energy.contact_work += w_c;
         energy.boundary_work += w_bc;
-        energy.numerical_dissipation += d_num - (ke - ke_n);
-        energy.kinetic = ke;
         let counts = match &mut self.contact {
             Some(contact) => {
                 let counts = contact.commit(&self.x, &state.x);
                 energy.friction_dissipation = contact.friction_dissipation;
+                // A node pressed on a tool moves with it along the normal:
+                // Newmark's update would leave it the velocity it hit the
+                // tool with (and an acceleration to match), and it would
+                // bounce off at the next increment. The impact is
+                // inelastic, as for fabric on steel; the kinetic energy it
+                // takes is the integrator's, so it lands in the numerical
+                // dissipation through ΔE_kin below.
+                for &(node, tool, normal) in contact.pressed() {
+                    let i = node as usize;
+                    let axis = contact.tools[tool as usize].motion.direction();
+                    let tool_v = axis * contact.tool_state[tool as usize].velocity;
+                    let tool_a = axis * contact.tool_acceleration[tool as usize];
+                    let dv = normal.dot(&(self.v[i] - tool_v));
+                    let da = normal.dot(&(self.a[i] - tool_a));
+                    for k in 0..3 {
+                        if !self.fixed[3 * i + k] {
+                            self.v[i][k] -= normal[k] * dv;
+                            self.a[i][k] -= normal[k] * da;
+                        }
+                    }
+                }
                 counts
             }
             None => (0, 0, 0),
         };
+        let ke = chunked_sum(n, |i| 0.5 * model.mass[i] * self.v[i].norm_squared());
+        energy.numerical_dissipation += d_num - (ke - ke_n);
+        energy.kinetic = ke;
         for ((c, s), k) in self.f_c_n.iter_mut().zip(&self.f_slip).zip(&self.f_con) {
             *c = s + k;
         }
@@ -951,12 +1034,12 @@ impl<'m> Implicit<'m> {
         self.f_ext_n.copy_from_slice(&self.f_ext);
         state.time += h;
         state.step += 1;
-        energy.balance_error = energy.kinetic + energy.internal_work + energy.damping
-            + energy.numerical_dissipation
-            - energy.external_work
-            - energy.boundary_work
-            - energy.contact_work
-            - self.kinetic0;
+        energy.balance_error =
+            energy.kinetic + energy.internal_work + energy.damping + energy.numerical_dissipation
+                - energy.external_work
+                - energy.boundary_work
+                - energy.contact_work
+                - self.kinetic0;
         counts
     }
 

@@ -101,6 +101,9 @@ pub struct SparseTangent {
     pub factorisations: u64,
     /// Factorisations that fell back to LDLᵀ.
     pub indefinite: u64,
+    /// The largest diagonal entry of the stiffness (without the mass term)
+    /// at the last assembly, over the free dofs (N/mm).
+    pub max_stiffness: f64,
 }
 
 /// Upper-local-triangle pairs (p ≤ q) of an element with `dofs` dofs.
@@ -263,6 +266,7 @@ impl SparseTangent {
             factor_seconds: 0.0,
             factorisations: 0,
             indefinite: 0,
+            max_stiffness: 0.0,
         })
     }
 
@@ -390,6 +394,13 @@ impl SparseTangent {
                 }
                 *out = sum;
             });
+        self.max_stiffness = self
+            .diagonal
+            .iter()
+            .zip(&self.constrained)
+            .filter(|(_, c)| !**c)
+            .map(|(&k, _)| self.values[k].abs())
+            .fold(0.0, f64::max);
         for (d, &k) in self.diagonal.iter().enumerate() {
             self.values[k] += mass_factor * mass[d / 3];
         }

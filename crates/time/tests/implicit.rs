@@ -28,9 +28,9 @@ fn strip(fibres: FibreRepresentation) -> Model {
 fn newton_converges_quadratically_on_a_contact_free_stretch() {
     for fibres in [FibreRepresentation::Trusses, FibreRepresentation::Embedded] {
         let mut model = strip(fibres);
-        model
-            .boundary
-            .push(BoundaryCondition::fixed(model.node_set("left").unwrap().to_vec()));
+        model.boundary.push(BoundaryCondition::fixed(
+            model.node_set("left").unwrap().to_vec(),
+        ));
         model.boundary.push(BoundaryCondition {
             nodes: model.node_set("right").unwrap().to_vec(),
             components: [true; 3],
@@ -53,11 +53,13 @@ fn newton_converges_quadratically_on_a_contact_free_stretch() {
         let mut state = model.initial_state();
         let summary = driver.run(&mut state, &mut NoObserver).unwrap();
         assert_eq!(summary.steps, 1);
-        let e = Norms(driver
-            .newton_record()
-            .iter()
-            .map(|r| r.residual / r.scale)
-            .collect());
+        let e = Norms(
+            driver
+                .newton_record()
+                .iter()
+                .map(|r| r.residual / r.scale)
+                .collect(),
+        );
         eprintln!("{fibres:?}: relative residuals {e}");
         let mut quadratic = 0;
         for w in e.0.windows(2) {
@@ -66,7 +68,10 @@ fn newton_converges_quadratically_on_a_contact_free_stretch() {
                 quadratic += 1;
             }
         }
-        assert!(quadratic >= 1, "{fibres:?}: no asymptotic iterations in {e}");
+        assert!(
+            quadratic >= 1,
+            "{fibres:?}: no asymptotic iterations in {e}"
+        );
     }
 }
 

@@ -16,7 +16,7 @@ use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBla
 use drape_model::{
     Amplitude, BoundaryCondition, Model, Motion, NodalLoad, State, Tool, ToolMotion,
 };
-use drape_time::{Explicit, ExplicitSettings, Frame, Observer};
+use drape_time::{Explicit, ExplicitSettings, Frame, Implicit, ImplicitSettings, Observer};
 use nalgebra::{Matrix3, Vector3};
 
 use super::{Case, Check};
@@ -60,12 +60,44 @@ impl<F: FnMut(&Frame<'_>)> Observer for Frames<F> {
     }
 }
 
-fn run(model: &Model, settings: ExplicitSettings, observer: &mut dyn Observer) -> State {
+/// Which driver a case runs with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Driver {
+    /// Central differences.
+    Explicit,
+    /// Newton increments with the condensed contact solve, default
+    /// settings (end time, frames and damping from the explicit ones).
+    Implicit,
+}
+
+fn run(
+    driver: Driver,
+    model: &Model,
+    settings: ExplicitSettings,
+    observer: &mut dyn Observer,
+) -> State {
     let mut state = model.initial_state();
-    Explicit::new(model, settings)
-        .expect("driver")
-        .run(&mut state, observer)
-        .expect("run");
+    match driver {
+        Driver::Explicit => {
+            Explicit::new(model, settings)
+                .expect("driver")
+                .run(&mut state, observer)
+                .expect("run");
+        }
+        Driver::Implicit => {
+            let implicit = ImplicitSettings {
+                end_time: settings.end_time,
+                frames: settings.frames,
+                damping: settings.damping,
+                max_energy_error: settings.max_energy_error,
+                ..ImplicitSettings::default()
+            };
+            Implicit::new(model, implicit)
+                .expect("driver")
+                .run(&mut state, observer)
+                .expect("run");
+        }
+    }
     state
 }
 
@@ -102,6 +134,11 @@ fn penetration(frame: &Frame<'_>) -> f64 {
 /// is round-off over ~10⁴ steps), a sticking blank's slide to 1e-9 mm, the
 /// penetration to 1e-9 of the thickness (the plane's correction is exact).
 fn incline() -> Vec<Check> {
+    incline_with(Driver::Explicit)
+}
+
+/// [`incline`] with either driver.
+pub fn incline_with(driver: Driver) -> Vec<Check> {
     let time = 0.02;
     let pairs = [
         (10.0, 0.3),
@@ -116,7 +153,7 @@ fn incline() -> Vec<Check> {
     ];
     let mut checks = Vec::new();
     for (alpha_deg, mu) in pairs {
-        let (moved, pen, h) = incline_run(alpha_deg, mu, time);
+        let (moved, pen, h) = incline_run(driver, alpha_deg, mu, time);
         let a = alpha_deg.to_radians();
         let label = format!("α = {alpha_deg:.2}°, μ = {mu}");
         // The friction angle itself (the third pair) counts as sticking,
@@ -151,7 +188,7 @@ fn incline() -> Vec<Check> {
 
 /// Mean displacement down the slope after `time`, largest penetration over
 /// the frames, thickness.
-fn incline_run(alpha_deg: f64, mu: f64, time: f64) -> (f64, f64, f64) {
+fn incline_run(driver: Driver, alpha_deg: f64, mu: f64, time: f64) -> (f64, f64, f64) {
     let material = glass();
     let h = material.thickness;
     let blank = RectangleBlank {
@@ -188,7 +225,7 @@ fn incline_run(alpha_deg: f64, mu: f64, time: f64) -> (f64, f64, f64) {
         frames: 20,
         ..ExplicitSettings::default()
     };
-    let state = run(&model, settings, &mut observer);
+    let state = run(driver, &model, settings, &mut observer);
     let downhill = rot * Vector3::x();
     let moved = state
         .x
@@ -269,9 +306,14 @@ fn bent_strip(
 /// is left: the frames' scatter of the damped sliding, ≈ 0.1 %), the worst
 /// frame against e^(μθ) within 1 %, and every touching node slipping.
 fn capstan() -> Vec<Check> {
+    capstan_with(Driver::Explicit)
+}
+
+/// [`capstan`] with either driver.
+pub fn capstan_with(driver: Driver) -> Vec<Check> {
     let mut checks = Vec::new();
     for (theta_deg, mu) in [(90.0, 0.3), (180.0, 0.2), (180.0, 0.3)] {
-        let run = capstan_run(theta_deg, mu);
+        let run = capstan_run(driver, theta_deg, mu);
         let theta = f64::to_radians(theta_deg);
         let exact = (mu * theta).exp();
         let label = format!("θ = {theta_deg}°, μ = {mu}");
@@ -346,7 +388,7 @@ struct CapstanRun {
     legs: [f64; 2],
 }
 
-fn capstan_run(theta_deg: f64, mu: f64) -> CapstanRun {
+fn capstan_run(driver: Driver, theta_deg: f64, mu: f64) -> CapstanRun {
     let material = glass();
     let h = material.thickness;
     let (ds, width, leg) = (2.0, 10.0, 20.0);
@@ -432,7 +474,7 @@ fn capstan_run(theta_deg: f64, mu: f64) -> CapstanRun {
         damping,
         ..ExplicitSettings::default()
     };
-    run(&model, settings, &mut observer);
+    run(driver, &model, settings, &mut observer);
     CapstanRun {
         samples,
         slipping_fraction,
@@ -460,7 +502,7 @@ struct Rest {
 
 /// Runs `model` (constant loads) to `end` with mass-proportional damping,
 /// recording the penetration at every frame and the force balance at the end.
-fn settle(model: &Model, end: f64, damping: f64) -> Rest {
+fn settle(driver: Driver, model: &Model, end: f64, damping: f64) -> Rest {
     // The applied force, from the model's data alone.
     let mut applied = model.gravity * model.mass.iter().sum::<f64>();
     for load in &model.loads {
@@ -487,7 +529,7 @@ fn settle(model: &Model, end: f64, damping: f64) -> Rest {
         damping,
         ..ExplicitSettings::default()
     };
-    run(model, settings, &mut observer);
+    run(driver, model, settings, &mut observer);
     rest
 }
 
@@ -532,6 +574,11 @@ fn blank_model(side: [f64; 2], cells: [usize; 2], center: Vector3<f64>) -> Model
 /// total contact force balances the applied loads and weight to 1e-3 of
 /// their size.
 fn no_penetration() -> Vec<Check> {
+    no_penetration_with(Driver::Explicit)
+}
+
+/// [`no_penetration`] with either driver.
+pub fn no_penetration_with(driver: Driver) -> Vec<Check> {
     let h = glass().thickness;
     let offset = 0.5 * h;
     let gravity = Vector3::new(0.0, 0.0, -G);
@@ -718,7 +765,7 @@ fn no_penetration() -> Vec<Check> {
     let mut checks = Vec::new();
     for (name, mut model, end, damping, region) in cases {
         model.gravity = gravity;
-        let rest = settle(&model, end, damping);
+        let rest = settle(driver, &model, end, damping);
         // Touching nodes by region, in order of first appearance.
         let mut counts: Vec<(&str, usize)> = Vec::new();
         for x in &rest.touching {
@@ -768,6 +815,11 @@ fn no_penetration() -> Vec<Check> {
 /// also carries the damping drag α·m·V, 0.02 % of it, and the strip's
 /// elastic vibration), every touching node slipping there.
 fn pinching() -> Vec<Check> {
+    pinching_with(Driver::Explicit)
+}
+
+/// [`pinching`] with either driver.
+pub fn pinching_with(driver: Driver) -> Vec<Check> {
     let (f, mu, speed, damping) = (10.0, 0.2, 20.0, 200.0);
     let (t_clamp, t_ramp, end) = (2e-3, 1e-3, 12e-3);
     let h = glass().thickness;
@@ -830,7 +882,7 @@ fn pinching() -> Vec<Check> {
         damping,
         ..ExplicitSettings::default()
     };
-    run(&model, settings, &mut observer);
+    run(driver, &model, settings, &mut observer);
     let plateau = 2.0 * mu * f;
     // Sliding: the second half of the pull.
     let window: Vec<&PinchFrame> = frames

@@ -17,11 +17,15 @@
 use std::path::{Path, PathBuf};
 
 use drape_io::results::{
-    DrawInMm, EnergyRow, EnergySummary, FrameData, ResultsDir, ResultsError, RunInfo, Summary,
+    DrawInMm, EnergyRow, EnergySummary, FrameData, ImplicitRunInfo, ResultsDir, ResultsError,
+    RunInfo, Summary,
 };
-use drape_io::scene::Scene;
+use drape_io::scene::{Scene, Solver};
 use drape_model::{Measures, State};
-use drape_time::{Control, DriverState, Energies, Explicit, Frame, Observer, Progress};
+use drape_time::{
+    Control, DriverState, Energies, Explicit, Frame, Implicit, Observer, Progress, RunError,
+    RunSummary,
+};
 use serde::{Deserialize, Serialize};
 
 pub use drape_time::Control as RunControl;
@@ -220,14 +224,29 @@ pub fn run_scene_with(
         callback: progress,
     };
     let started = std::time::Instant::now();
-    let mut settings = scene.settings.clone();
-    settings.checkpoint_every = options.checkpoint_every;
-    let outcome = Explicit::new(model, settings).and_then(|mut explicit| {
-        if let Some(d) = driver {
-            explicit.resume_from(d);
+    let solver = scene.spec.simulation.solver;
+    let outcome: Result<RunSummary, RunError> = match solver {
+        Solver::Explicit => {
+            let mut settings = scene.settings.clone();
+            settings.checkpoint_every = options.checkpoint_every;
+            Explicit::new(model, settings).and_then(|mut explicit| {
+                if let Some(d) = driver {
+                    explicit.resume_from(d);
+                }
+                explicit.run(&mut state, &mut recorder)
+            })
         }
-        explicit.run(&mut state, &mut recorder)
-    });
+        Solver::Implicit => {
+            let mut settings = scene.implicit.clone();
+            settings.checkpoint_every = options.checkpoint_every;
+            Implicit::new(model, settings).and_then(|mut implicit| {
+                if let Some(d) = driver {
+                    implicit.resume_from(d);
+                }
+                implicit.run(&mut state, &mut recorder)
+            })
+        }
+    };
     let wall_s = started.elapsed().as_secs_f64();
     if let Some(e) = recorder.error.take() {
         return Err(e);
@@ -278,7 +297,31 @@ pub fn run_scene_with(
             wall_s,
             steps,
             threads: rayon::current_num_threads(),
-            solver: "explicit".to_owned(),
+            solver: match solver {
+                Solver::Explicit => "explicit",
+                Solver::Implicit => "implicit",
+            }
+            .to_owned(),
+            implicit: outcome
+                .as_ref()
+                .ok()
+                .and_then(|s| s.implicit)
+                .map(|t| ImplicitRunInfo {
+                    newton_iterations: t.newton_iterations,
+                    wasted_iterations: t.wasted_iterations,
+                    contact_iterations: t.contact_iterations,
+                    factorisations: t.factorisations,
+                    indefinite: t.indefinite,
+                    cutbacks: t.cutbacks,
+                    factor_s: t.factor_seconds,
+                    assembly_s: t.assembly_seconds,
+                    contact_s: t.contact_seconds,
+                    factor_share: if wall_s > 0.0 {
+                        t.factor_seconds / wall_s
+                    } else {
+                        0.0
+                    },
+                }),
         },
     };
     let results = &recorder.results;

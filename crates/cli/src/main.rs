@@ -215,10 +215,29 @@ impl Reporter {
         } else {
             1.0
         };
-        let message = format!(
-            "step {} t = {:.4e} s, max shear {:.1}°",
-            p.progress.step, p.progress.time, p.max_shear_deg
-        );
+        let message = match &p.progress.increment {
+            None => format!(
+                "step {} t = {:.4e} s, max shear {:.1}°",
+                p.progress.step, p.progress.time, p.max_shear_deg
+            ),
+            Some(i) => format!(
+                "increment {} t = {:.4e} s (h {:.2e}): Newton {}, PCG {}, contacts {} ({} stick, {} slip){}, max shear {:.1}°",
+                p.progress.step,
+                p.progress.time,
+                p.progress.dt,
+                i.newton,
+                i.contact_iterations,
+                i.active,
+                i.stick,
+                i.slip,
+                if i.cutbacks > 0 {
+                    format!(", {} cutbacks", i.cutbacks)
+                } else {
+                    String::new()
+                },
+                p.max_shear_deg
+            ),
+        };
         match &self.bar {
             Some(bar) => {
                 bar.set_position((fraction * 1000.0) as u64);
@@ -253,7 +272,16 @@ fn print_summary(s: &Summary, out: &Path) {
         println!("reason            {r}");
     }
     println!("scene             {}", s.scene);
-    println!("time reached      {:.6} s in {} steps", s.time, s.run.steps);
+    println!(
+        "time reached      {:.6} s in {} {}",
+        s.time,
+        s.run.steps,
+        if s.run.solver == "implicit" {
+            "increments"
+        } else {
+            "steps"
+        }
+    );
     println!(
         "max shear         {:.2}° at ({:.1}, {:.1}, {:.1}) mm",
         s.max_shear_deg, s.max_shear_at[0], s.max_shear_at[1], s.max_shear_at[2]
@@ -276,6 +304,20 @@ fn print_summary(s: &Summary, out: &Path) {
         "run               {:.1} s wall, {} threads, {}",
         s.run.wall_s, s.run.threads, s.run.solver
     );
+    if let Some(i) = &s.run.implicit {
+        println!(
+            "implicit          {} Newton iterations ({} more in {} cutbacks), {} PCG iterations, \
+             {} factorisations ({} indefinite), factorisation {:.1} s ({:.0} % of the run)",
+            i.newton_iterations,
+            i.wasted_iterations,
+            i.cutbacks,
+            i.contact_iterations,
+            i.factorisations,
+            i.indefinite,
+            i.factor_s,
+            100.0 * i.factor_share
+        );
+    }
     println!("results           {}", out.display());
 }
 

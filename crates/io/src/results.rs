@@ -125,8 +125,37 @@ pub struct RunInfo {
     pub steps: u64,
     /// Threads.
     pub threads: usize,
-    /// "explicit".
+    /// "explicit" or "implicit".
     pub solver: String,
+    /// What the implicit driver did (absent for explicit runs).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub implicit: Option<ImplicitRunInfo>,
+}
+
+/// The implicit driver's totals in `summary.json`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct ImplicitRunInfo {
+    /// Newton iterations of the converged increments.
+    pub newton_iterations: u64,
+    /// Newton iterations of attempts that were cut back.
+    pub wasted_iterations: u64,
+    /// Iterations of the condensed contact solves (one solve with the
+    /// factors each).
+    pub contact_iterations: u64,
+    /// Numeric factorisations of the tangent.
+    pub factorisations: u64,
+    /// Of which were not positive definite (LDLᵀ).
+    pub indefinite: u64,
+    /// Increments cut back.
+    pub cutbacks: u64,
+    /// Seconds in numeric factorisations.
+    pub factor_s: f64,
+    /// Seconds in tangent assembly.
+    pub assembly_s: f64,
+    /// Seconds in the condensed contact solves.
+    pub contact_s: f64,
+    /// factor_s / wall_s.
+    pub factor_share: f64,
 }
 
 /// `summary.json`.
@@ -176,7 +205,7 @@ const OUTPUT_FILES: [&str; 6] = [
 
 /// The `energy.csv` header.
 const ENERGY_HEADER: &str = "time,step,kinetic,strain,internal_work,viscous,damping,external_work,\
-boundary_work,contact_work,friction_dissipation,balance_error";
+boundary_work,contact_work,friction_dissipation,numerical_dissipation,balance_error";
 
 /// Maps an I/O error on `path` into a [`ResultsError`].
 fn at(path: &Path) -> impl FnOnce(std::io::Error) -> ResultsError + '_ {
@@ -299,7 +328,9 @@ impl ResultsDir {
 
     /// Writes `energy.csv`: one row per entry of `rows`, energies in mJ
     /// (N·mm), with the header
-    /// `time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,balance_error`.
+    /// `time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,numerical_dissipation,balance_error`
+    /// (numerical dissipation: what the implicit integrator removed; zero
+    /// for explicit runs).
     pub fn write_energy(&self, rows: &[EnergyRow]) -> Result<(), ResultsError> {
         let mut csv = String::with_capacity(64 + rows.len() * 200);
         csv.push_str(ENERGY_HEADER);
@@ -317,6 +348,7 @@ impl ResultsDir {
                 e.boundary_work,
                 e.contact_work,
                 e.friction_dissipation,
+                e.numerical_dissipation,
                 e.balance_error,
             ] {
                 csv.push(',');

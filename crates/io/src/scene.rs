@@ -32,7 +32,7 @@ use drape_contact::{Amplitude, ProfileSegment, Surface, Tool, ToolMotion};
 use drape_elements::{ForceTable, SpringBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{BoundaryCondition, Model, ModelError, Motion, NodalLoad};
-use drape_time::ExplicitSettings;
+use drape_time::{ExplicitSettings, ImplicitSettings};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -57,6 +57,9 @@ pub enum Solver {
     /// Central differences with lumped mass.
     #[default]
     Explicit,
+    /// Newton increments (Bossak–Newmark) with a sparse tangent and the
+    /// condensed contact solve.
+    Implicit,
 }
 
 fn default_frames() -> usize {
@@ -99,6 +102,45 @@ pub struct SimulationSpec {
     /// Broad-phase margin of the contact search (mm).
     #[serde(default = "default_margin")]
     pub contact_margin: f64,
+    /// Implicit: first increment (s), default end_time/100.
+    #[serde(default)]
+    pub initial_increment: Option<f64>,
+    /// Implicit: largest increment (s), default end_time/20.
+    #[serde(default)]
+    pub max_increment: Option<f64>,
+    /// Implicit: smallest increment before giving up (s), default
+    /// 1e-9·end_time.
+    #[serde(default)]
+    pub min_increment: Option<f64>,
+    /// Implicit: spectral radius ρ∞ ∈ [0, 1] of the Bossak scheme.
+    #[serde(default)]
+    pub spectral_radius: f64,
+    /// Implicit: residual tolerance, a fraction of the force scale.
+    #[serde(default = "default_force_tolerance")]
+    pub force_tolerance: f64,
+    /// Implicit: correction tolerance, a fraction of the increment's
+    /// displacement.
+    #[serde(default = "default_displacement_tolerance")]
+    pub displacement_tolerance: f64,
+    /// Implicit: penetration and stick slip left (mm).
+    #[serde(default = "default_gap_tolerance")]
+    pub gap_tolerance: f64,
+    /// Implicit: Newton iterations per attempt.
+    #[serde(default = "default_newton_iterations")]
+    pub max_iterations: usize,
+}
+
+fn default_force_tolerance() -> f64 {
+    ImplicitSettings::default().force_tolerance
+}
+fn default_displacement_tolerance() -> f64 {
+    ImplicitSettings::default().displacement_tolerance
+}
+fn default_gap_tolerance() -> f64 {
+    ImplicitSettings::default().gap_tolerance
+}
+fn default_newton_iterations() -> usize {
+    ImplicitSettings::default().max_iterations
 }
 
 /// A material: a preset's name or a full table.
@@ -462,8 +504,10 @@ pub struct Scene {
     pub spec: SceneFile,
     /// The model.
     pub model: Model,
-    /// The driver's settings.
+    /// The explicit driver's settings.
     pub settings: ExplicitSettings,
+    /// The implicit driver's settings (`[simulation] solver = "implicit"`).
+    pub implicit: ImplicitSettings,
 }
 
 /// Where the error is: a dotted field path, checked against the source to
@@ -596,12 +640,13 @@ impl Scene {
             text,
             overridden: &overridden,
         };
-        let (model, settings) = build(&spec, &at)?;
+        let (model, settings, implicit) = build(&spec, &at)?;
         Ok(Self {
             file: path.to_owned(),
             spec,
             model,
             settings,
+            implicit,
         })
     }
 }
@@ -845,7 +890,10 @@ fn mesh_blank(
     Ok((model, low))
 }
 
-fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings), SceneError> {
+fn build(
+    spec: &SceneFile,
+    at: &Locator<'_>,
+) -> Result<(Model, ExplicitSettings, ImplicitSettings), SceneError> {
     let sim = &spec.simulation;
     positive(at, "simulation.end_time", sim.end_time)?;
     if sim.frames == 0 {
@@ -879,6 +927,37 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
         positive(at, "simulation.max_energy_error", e)?;
     }
     positive(at, "simulation.contact_margin", sim.contact_margin)?;
+    for (field, value) in [
+        ("simulation.initial_increment", sim.initial_increment),
+        ("simulation.max_increment", sim.max_increment),
+        ("simulation.min_increment", sim.min_increment),
+    ] {
+        if let Some(v) = value {
+            positive(at, field, v)?;
+        }
+    }
+    if !(0.0..=1.0).contains(&sim.spectral_radius) {
+        return Err(at.error(
+            "simulation.spectral_radius",
+            format!(
+                "{} is not allowed: expected a number in [0, 1]",
+                sim.spectral_radius
+            ),
+        ));
+    }
+    positive(at, "simulation.force_tolerance", sim.force_tolerance)?;
+    positive(
+        at,
+        "simulation.displacement_tolerance",
+        sim.displacement_tolerance,
+    )?;
+    positive(at, "simulation.gap_tolerance", sim.gap_tolerance)?;
+    if sim.max_iterations == 0 {
+        return Err(at.error(
+            "simulation.max_iterations",
+            "0 is not allowed: expected at least 1 Newton iteration",
+        ));
+    }
 
     let fabric = &spec.fabric;
     let material = match &fabric.material {
@@ -1200,5 +1279,21 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
         contact_margin: sim.contact_margin,
         ..ExplicitSettings::default()
     };
-    Ok((model, settings))
+    let implicit = ImplicitSettings {
+        end_time: sim.end_time,
+        frames: sim.frames,
+        initial_increment: sim.initial_increment,
+        max_increment: sim.max_increment,
+        min_increment: sim.min_increment,
+        spectral_radius: sim.spectral_radius,
+        force_tolerance: sim.force_tolerance,
+        displacement_tolerance: sim.displacement_tolerance,
+        gap_tolerance: sim.gap_tolerance,
+        max_iterations: sim.max_iterations,
+        damping: sim.damping,
+        contact_margin: sim.contact_margin,
+        max_energy_error: sim.max_energy_error,
+        ..ImplicitSettings::default()
+    };
+    Ok((model, settings, implicit))
 }

@@ -355,6 +355,7 @@ fn writes_a_complete_results_directory() {
         boundary_work: 3.5,
         contact_work: -0.25,
         friction_dissipation: 0.125,
+        numerical_dissipation: 0.0625,
         balance_error: -1e-9,
     };
     let rows: Vec<EnergyRow> = (0..3)
@@ -369,12 +370,12 @@ fn writes_a_complete_results_directory() {
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
         lines[0],
-        "time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,balance_error"
+        "time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,numerical_dissipation,balance_error"
     );
     assert_eq!(lines.len(), 4);
     assert_eq!(
         lines[2],
-        "0.01,100,2,2,2.5,0.5,1e-12,0,3.5,-0.25,0.125,-1e-9"
+        "0.01,100,2,2,2.5,0.5,1e-12,0,3.5,-0.25,0.125,0.0625,-1e-9"
     );
 
     let measures = model.measures(&state, 45.0).unwrap();
@@ -415,6 +416,7 @@ fn writes_a_complete_results_directory() {
             steps: 1000,
             threads: 2,
             solver: "explicit".into(),
+            implicit: None,
         },
     };
     out.write_summary(&summary).unwrap();

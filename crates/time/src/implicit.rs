@@ -793,7 +793,8 @@ impl<'m> Implicit<'m> {
             // More than doubled, or not finite. A residual that rises
             // because contact or friction states changed is the next
             // iteration's business, not the step length's.
-            let worse = (res > 2.0 * merit_prev || res.is_nan()) && (friction_changes == 0 || !res.is_finite());
+            let worse = (res > 2.0 * merit_prev || res.is_nan())
+                && (friction_changes == 0 || !res.is_finite());
             if step_taken
                 && worse
                 && alpha > 1.0 / 16.0

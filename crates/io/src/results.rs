@@ -21,7 +21,8 @@
 //! [`ElementFields`]. Point data: `displacement` (x − x₀, mm), `velocity`
 //! (mm/s), `contact_force` (N), `contact_status` (0 open, 1 stick, 2 slip;
 //! zeros without tools). Cell data: `shear_angle_deg`,
-//! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_tension_warp`,
+//! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_direction_warp`,
+//! `fibre_direction_weft` (unit vectors), `fibre_tension_warp`,
 //! `fibre_tension_weft` (N/mm), `resin_stress` (3 components: 11, 22, 12 in
 //! fibre axes, MPa), `thickness` (mm). The encoding (inline base64 binary
 //! with a `UInt64` header) and why are in the `vtk` submodule's docs.

@@ -22,10 +22,12 @@ const POINT_ARRAYS: [&str; 4] = [
     "contact_force",
     "contact_status",
 ];
-const CELL_ARRAYS: [&str; 7] = [
+const CELL_ARRAYS: [&str; 9] = [
     "shear_angle_deg",
     "fibre_stretch_warp",
     "fibre_stretch_weft",
+    "fibre_direction_warp",
+    "fibre_direction_weft",
     "fibre_tension_warp",
     "fibre_tension_weft",
     "resin_stress",

@@ -44,6 +44,8 @@
 mod pictures;
 mod vtk;
 
+pub use pictures::maps::MapPanel;
+
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -401,6 +403,21 @@ impl ResultsDir {
         let path = self.dir.join(name);
         crate::atomic::write(&path, bytes).map_err(at(&path))
     }
+}
+
+/// Writes the PNG `path`: `panels` side by side, each a map of one value
+/// per membrane element of `model` drawn on the flat blank (the reference
+/// positions) with its colour bar: the picture of a comparison.
+pub fn write_flat_maps(
+    path: &Path,
+    model: &Model,
+    panels: &[MapPanel<'_>],
+) -> Result<(), ResultsError> {
+    let png = pictures::maps::flat_maps(model, panels).map_err(|e| ResultsError {
+        path: path.to_owned(),
+        source: std::io::Error::other(e),
+    })?;
+    crate::atomic::write(path, &png).map_err(at(path))
 }
 
 /// Removes `path` unless it does not exist.

@@ -138,7 +138,9 @@ fn check(spec: &NetSpec) -> Result<(), FishnetError> {
     if !spec.orientation_deg.is_finite() {
         return bad("orientation_deg", "must be finite".into());
     }
-    if !((spec.direction.norm() - 1.0).abs() < 1e-9) {
+    // Written so that a NaN component fails too.
+    let unit = (spec.direction.norm() - 1.0).abs() < 1e-9;
+    if !unit {
         return bad("direction", "must be a unit vector".into());
     }
     let [sx, sy] = spec.seed;

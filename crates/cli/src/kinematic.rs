@@ -44,6 +44,8 @@ pub struct KinematicReport {
     pub results: NetResults,
     /// The net's counts.
     pub stats: NetStats,
+    /// Index of the mould among the scene's tools.
+    pub mould: usize,
 }
 
 /// Drapes `scene`'s blank on its mould as a pin-jointed net (the scene's
@@ -143,6 +145,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         net,
         results,
         stats,
+        mould: setup.mould,
     })
 }
 
@@ -230,17 +233,17 @@ fn differences(indices: impl Iterator<Item = usize>, c: &Comparison) -> ProfileD
 /// The forming run `mechanical` of `scene` against its kinematic net: the
 /// net's shear read at each element's reference centroid
 /// ([`Net::shear_at`]: bilinear between cell centres), element by element
-/// and along the diagonal and median.
+/// and along the diagonal and median. Empty when the run's element fields
+/// cannot be evaluated (a collapsed element) or `kinematic` was draped on a
+/// tool `scene` does not have.
 pub fn compare(scene: &Scene, kinematic: &KinematicReport, mechanical: &RunReport) -> Comparison {
     let model = &scene.model;
     let Ok(fields) = model.element_fields(&mechanical.state) else {
         return Comparison::default();
     };
-    let setup = scene
-        .kinematic
-        .as_ref()
-        .expect("a kinematic report has a setup");
-    let tool = &model.tools[setup.mould];
+    let Some(tool) = model.tools.get(kinematic.mould) else {
+        return Comparison::default();
+    };
     let displacement = tool
         .prescribed_displacement(mechanical.state.time)
         .unwrap_or(0.0);

@@ -16,6 +16,12 @@
 
 use std::path::{Path, PathBuf};
 
+mod kinematic;
+pub use kinematic::{
+    Comparison, ComparisonReport, ComparisonSummary, KinematicError, KinematicReport,
+    ProfileDifference, compare, compare_scene, kinematic_scene,
+};
+
 use drape_io::results::{
     DrawInMm, EnergyRow, EnergySummary, FrameData, ResultsDir, ResultsError, RunInfo, Summary,
 };

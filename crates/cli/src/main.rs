@@ -1,4 +1,4 @@
-//! The `drape` command: run, new, sweep, inspect.
+//! The `drape` command: run, new, sweep, inspect, kinematic, compare.
 //!
 //! Exit codes: 0 done, 1 the run failed (diverged or could not write its
 //! results; what it reached is kept), 2 bad input (nothing is written).
@@ -73,6 +73,33 @@ enum Command {
         /// The output directory.
         dir: PathBuf,
     },
+    /// Drape the scene's blank on its mould as a pin-jointed net (kinematic
+    /// draping, in milliseconds) and write the results a run writes.
+    Kinematic {
+        /// The scene file (TOML); its [kinematic] table or the defaults.
+        scene: PathBuf,
+        /// Output directory (default: results/<scene name>-kinematic).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scene value: --set kinematic.spacing=5 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Run the scene both ways, kinematic net and forming run, and write
+    /// them side by side with their difference.
+    Compare {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Output directory (default: results/<scene name>-compare).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scene value: --set tools.0.friction=0 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Worker threads of the forming run (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
 }
 
 /// Templates shipped with the binary.
@@ -132,6 +159,13 @@ fn main() -> ExitCode {
             threads,
         } => with_threads(threads, || sweep(&scene, out, &set)),
         Command::Inspect { dir } => inspect(&dir),
+        Command::Kinematic { scene, out, set } => kinematic(&scene, out, &set),
+        Command::Compare {
+            scene,
+            out,
+            set,
+            threads,
+        } => with_threads(threads, || compare(&scene, out, &set)),
     };
     match result {
         Ok(code) => code,
@@ -466,4 +500,82 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
         .unwrap_or(0);
     println!("frames            {frames}");
     Ok(ExitCode::SUCCESS)
+}
+
+fn kinematic_error(e: drape::KinematicError) -> anyhow::Error {
+    match e {
+        drape::KinematicError::Input(message) => bad(message),
+        drape::KinematicError::Results(e) => anyhow!(e).context("writing results"),
+    }
+}
+
+fn print_net(stats: &drape_fishnet::NetStats) {
+    println!(
+        "net               {} of {} cells draped, {} crossings placed, {} surface queries",
+        stats.draped_cells, stats.outline_cells, stats.placed, stats.queries
+    );
+}
+
+fn kinematic(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
+    let scene = load(scene_path, &parse_sets(set)?)?;
+    let out = out.unwrap_or_else(|| default_out(scene_path, "-kinematic"));
+    let report = drape::kinematic_scene(&scene, &out).map_err(kinematic_error)?;
+    print_summary(&report.summary, &out);
+    print_net(&report.stats);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
+    let scene = load(scene_path, &parse_sets(set)?)?;
+    if let Err(e) = &scene.kinematic {
+        return Err(bad(e.to_string()));
+    }
+    let out = out.unwrap_or_else(|| default_out(scene_path, "-compare"));
+    let mut reporter = Reporter::new();
+    let report =
+        drape::compare_scene(&scene, &out, &mut |p| reporter.update(p)).map_err(kinematic_error)?;
+    reporter.finish();
+    let s = &report.comparison.summary;
+    println!("kinematic net     {}", out.join("kinematic").display());
+    print_net(&report.kinematic.stats);
+    println!(
+        "forming run       {} ({}), {}",
+        report.mechanical.summary.status,
+        out.join("mechanical").display(),
+        report
+            .mechanical
+            .summary
+            .reason
+            .as_deref()
+            .unwrap_or("no problem reported")
+    );
+    println!(
+        "max shear         run {:.2}°, net {:.2}°",
+        s.mechanical_max_shear_deg, s.kinematic_max_shear_deg
+    );
+    println!(
+        "compared          {} of {} elements, {} on the mould",
+        s.compared, s.elements, s.on_mould
+    );
+    for (name, d) in [
+        ("all elements", &s.all),
+        ("diagonal", &s.diagonal),
+        ("median", &s.median),
+    ] {
+        println!(
+            "{name:<17} |Δγ| max {:.2}°, rms {:.2}° ({} elements); on the mould max {:.2}°, rms {:.2}° ({})",
+            d.max_abs_deg,
+            d.rms_deg,
+            d.points,
+            d.max_abs_on_mould_deg,
+            d.rms_on_mould_deg,
+            d.points_on_mould
+        );
+    }
+    println!("comparison        {}", out.display());
+    Ok(if report.mechanical.summary.status == "failed" {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
 }

@@ -21,7 +21,8 @@
 //! [`ElementFields`]. Point data: `displacement` (x − x₀, mm), `velocity`
 //! (mm/s), `contact_force` (N), `contact_status` (0 open, 1 stick, 2 slip;
 //! zeros without tools). Cell data: `shear_angle_deg`,
-//! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_tension_warp`,
+//! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_direction_warp`,
+//! `fibre_direction_weft` (unit vectors), `fibre_tension_warp`,
 //! `fibre_tension_weft` (N/mm), `resin_stress` (3 components: 11, 22, 12 in
 //! fibre axes, MPa), `thickness` (mm). The encoding (inline base64 binary
 //! with a `UInt64` header) and why are in the `vtk` submodule's docs.
@@ -42,6 +43,8 @@
 
 mod pictures;
 mod vtk;
+
+pub use pictures::maps::MapPanel;
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -400,6 +403,21 @@ impl ResultsDir {
         let path = self.dir.join(name);
         crate::atomic::write(&path, bytes).map_err(at(&path))
     }
+}
+
+/// Writes the PNG `path`: `panels` side by side, each a map of one value
+/// per membrane element of `model` drawn on the flat blank (the reference
+/// positions) with its colour bar: the picture of a comparison.
+pub fn write_flat_maps(
+    path: &Path,
+    model: &Model,
+    panels: &[MapPanel<'_>],
+) -> Result<(), ResultsError> {
+    let png = pictures::maps::flat_maps(model, panels).map_err(|e| ResultsError {
+        path: path.to_owned(),
+        source: std::io::Error::other(e),
+    })?;
+    crate::atomic::write(path, &png).map_err(at(path))
 }
 
 /// Removes `path` unless it does not exist.

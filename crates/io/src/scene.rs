@@ -27,6 +27,9 @@
 
 use std::path::{Path, PathBuf};
 
+mod kinematic;
+pub use kinematic::{KinematicSetup, KinematicSpec};
+
 use drape_constitutive::Material;
 use drape_contact::{Amplitude, ProfileSegment, Surface, Tool, ToolMotion};
 use drape_elements::{ForceTable, SpringBatch};
@@ -451,6 +454,9 @@ pub struct SceneFile {
     /// `[output]`.
     #[serde(default)]
     pub output: OutputSpec,
+    /// `[kinematic]`: the pin-jointed net of `drape kinematic`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kinematic: Option<KinematicSpec>,
 }
 
 /// A scene ready to run.
@@ -464,6 +470,10 @@ pub struct Scene {
     pub model: Model,
     /// The driver's settings.
     pub settings: ExplicitSettings,
+    /// The kinematic drape (`drape kinematic`), or why the scene has none:
+    /// without a `[kinematic]` table a default that cannot be found is not
+    /// an error for the other commands.
+    pub kinematic: Result<KinematicSetup, SceneError>,
 }
 
 /// Where the error is: a dotted field path, checked against the source to
@@ -597,11 +607,16 @@ impl Scene {
             overridden: &overridden,
         };
         let (model, settings) = build(&spec, &at)?;
+        let kinematic = kinematic::setup(&spec, &model, &at);
+        if spec.kinematic.is_some() {
+            kinematic.clone()?;
+        }
         Ok(Self {
             file: path.to_owned(),
             spec,
             model,
             settings,
+            kinematic,
         })
     }
 }

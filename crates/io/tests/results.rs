@@ -22,10 +22,12 @@ const POINT_ARRAYS: [&str; 4] = [
     "contact_force",
     "contact_status",
 ];
-const CELL_ARRAYS: [&str; 7] = [
+const CELL_ARRAYS: [&str; 9] = [
     "shear_angle_deg",
     "fibre_stretch_warp",
     "fibre_stretch_weft",
+    "fibre_direction_warp",
+    "fibre_direction_weft",
     "fibre_tension_warp",
     "fibre_tension_weft",
     "resin_stress",
@@ -162,6 +164,18 @@ fn check_vtu(path: &Path, model: &Model, state: &State, time: f64, cell_type: u8
         .flat_map(|(x, x0)| [x.x - x0.x, x.y - x0.y, x.z - x0.z])
         .collect();
     assert_eq!(displacement, u);
+    for name in ["fibre_direction_warp", "fibre_direction_weft"] {
+        let a = named(child(piece, "CellData"), name);
+        assert_eq!(a.attribute("NumberOfComponents"), Some("3"));
+        let v = f64s(&payload(a));
+        assert_eq!(v.len(), 3 * n_cells);
+        for d in v.chunks_exact(3) {
+            assert!(
+                (d[0].hypot(d[1]).hypot(d[2]) - 1.0).abs() < 1e-12,
+                "{name}: {d:?}"
+            );
+        }
+    }
     let resin = named(child(piece, "CellData"), "resin_stress");
     assert_eq!(resin.attribute("NumberOfComponents"), Some("3"));
     assert_eq!(f64s(&payload(resin)).len(), 3 * n_cells);

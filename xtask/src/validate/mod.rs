@@ -22,6 +22,7 @@ use std::process::ExitCode;
 mod constitutive;
 mod contact;
 mod explicit;
+mod fishnet;
 mod kinematics;
 
 /// Every case of every crate, in the order they run and are reported.
@@ -31,6 +32,7 @@ pub fn registry() -> Vec<Case> {
         constitutive::CASES,
         explicit::CASES,
         contact::CASES,
+        fishnet::CASES,
     ]
     .concat()
 }

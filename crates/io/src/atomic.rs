@@ -28,7 +28,7 @@ pub fn write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
-/// Whether `name` is a temporary of [`write`]: `.<name>.tmp<digits>`.
+/// Whether `name` is a temporary of [`write()`]: `.<name>.tmp<digits>`.
 pub fn is_temporary(name: &str) -> bool {
     name.strip_prefix('.')
         .and_then(|rest| rest.rsplit_once(".tmp"))
@@ -37,7 +37,7 @@ pub fn is_temporary(name: &str) -> bool {
         })
 }
 
-/// Removes the temporaries [`write`] left in `dir` (not in its
+/// Removes the temporaries [`write()`] left in `dir` (not in its
 /// subfolders), returning how many. Only for a folder no one else is
 /// writing into (the caller holds its lock): a live writer's temporary
 /// would go too.

@@ -1508,15 +1508,15 @@ impl InpReader {
                         "*NODE, INPUT=… is not supported: use *INCLUDE".into(),
                     );
                 }
-                if let Some(system) = k.get("SYSTEM") {
-                    if !system.eq_ignore_ascii_case("R") {
-                        return unsupported(
-                            self,
-                            format!(
-                                "*NODE, SYSTEM={system} is not supported: give Cartesian coordinates"
-                            ),
-                        );
-                    }
+                if let Some(system) = k.get("SYSTEM")
+                    && !system.eq_ignore_ascii_case("R")
+                {
+                    return unsupported(
+                        self,
+                        format!(
+                            "*NODE, SYSTEM={system} is not supported: give Cartesian coordinates"
+                        ),
+                    );
                 }
                 if let Some(part) = &self.part {
                     if !self.parts_with_nodes.contains(part) {
@@ -1579,10 +1579,8 @@ impl InpReader {
                 let elements = k.name == "ELSET";
                 let name = required(self, if elements { "ELSET" } else { "NSET" })?;
                 let key = self.set_entry(elements, &name, at);
-                if !elements {
-                    if let Some(elset) = k.get("ELSET") {
-                        self.add_member(false, &key, Member::ElementSet(elset.to_owned()), at);
-                    }
+                if !elements && let Some(elset) = k.get("ELSET") {
+                    self.add_member(false, &key, Member::ElementSet(elset.to_owned()), at);
                 }
                 let generate = k.has("GENERATE");
                 self.block = if elements {

@@ -424,8 +424,13 @@ fn read_summary(dir: &Path) -> Option<Summary> {
 fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
     if !dir.is_dir() {
         return Err(bad(format!(
-            "{}: no such folder: --resume takes the output folder of a stopped run",
-            dir.display()
+            "{}: {}: --resume takes the output folder of a stopped run",
+            dir.display(),
+            if dir.exists() {
+                "not a folder"
+            } else {
+                "no such folder"
+            }
         )));
     }
     let checkpoint_every = checked_interval(checkpoint_every)?;
@@ -630,9 +635,29 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
 }
 
 fn inspect(dir: &Path) -> Result<ExitCode> {
+    if !dir.is_dir() {
+        return Err(bad(format!(
+            "{}: {}: inspect takes a run's output folder",
+            dir.display(),
+            if dir.exists() {
+                "not a folder"
+            } else {
+                "no such folder"
+            }
+        )));
+    }
     let path = dir.join("summary.json");
-    let text =
-        std::fs::read_to_string(&path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            bad(format!(
+                "{}: no summary.json: no run has finished writing here (one may still be \
+                 running, or was killed)",
+                dir.display()
+            ))
+        } else {
+            bad(format!("{}: {e}", path.display()))
+        }
+    })?;
     let summary: Summary = serde_json::from_str(&text)
         .map_err(|e| bad(format!("{}: not a drape summary: {e}", path.display())))?;
     print_summary(&summary, dir);

@@ -476,7 +476,9 @@ fn writes_a_complete_results_directory() {
         2,
     );
 
-    // Reusing the directory starts a new run: no frame of the old one stays.
+    // Reusing the directory (once the first run has let it go) starts a
+    // new run: no frame of the old one stays.
+    drop(out);
     let mut again = ResultsDir::create(&dir).unwrap();
     assert!(!dir.join("series.pvd").exists());
     assert!(!dir.join("frames/frame_00001.vtu").exists());
@@ -549,4 +551,47 @@ fn errors_name_the_path_instead_of_panicking() {
         .write_profiles(&drape_model::Measures::default())
         .unwrap_err();
     assert!(error.path.ends_with("profiles.csv"), "{error}");
+}
+
+#[test]
+fn one_run_per_folder_and_a_killed_runs_temporaries_are_cleared() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    // What a run killed between writing and renaming leaves.
+    std::fs::create_dir_all(dir.join("frames")).unwrap();
+    for left in [".summary.json.tmp4242", "frames/.frame_00003.vtu.tmp4242"] {
+        std::fs::write(dir.join(left), b"half").unwrap();
+    }
+    std::fs::write(dir.join("notes.txt"), b"mine").unwrap();
+    let first = ResultsDir::create(&dir).unwrap();
+    assert!(!dir.join(".summary.json.tmp4242").exists());
+    assert!(!dir.join("frames/.frame_00003.vtu.tmp4242").exists());
+    assert!(
+        dir.join("notes.txt").exists(),
+        "a user's file is left alone"
+    );
+
+    // A second claim while the first holds the folder: refused, naming the
+    // holder, and nothing removed.
+    first.write_energy(&[]).unwrap();
+    let busy = ResultsDir::create(&dir).err().unwrap();
+    assert_eq!(
+        busy.source.kind(),
+        std::io::ErrorKind::ResourceBusy,
+        "{busy}"
+    );
+    assert!(
+        busy.to_string().contains(&format!(
+            "another drape run (process {})",
+            std::process::id()
+        )),
+        "{busy}"
+    );
+    assert!(ResultsDir::reopen(&dir, &[]).is_err());
+    assert!(dir.join("energy.csv").exists());
+    drop(first);
+    // Released with its holder.
+    let again = ResultsDir::create(&dir).unwrap();
+    assert!(!dir.join("energy.csv").exists());
+    drop(again);
 }

@@ -414,6 +414,13 @@ impl<'m> Explicit<'m> {
         self.resume = Some(driver);
     }
 
+    /// The contact pass as the last step left it (forces, statuses,
+    /// tools' states), if the model has tools: what a frame written after
+    /// [`Self::run`] returns (a run stopped between frames) shows.
+    pub fn contact(&self) -> Option<&ExplicitContact> {
+        self.contact.as_ref()
+    }
+
     /// Runs from `state` to the end time. On error `state` holds the last
     /// good step.
     pub fn run(

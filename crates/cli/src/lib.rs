@@ -172,6 +172,19 @@ impl Observer for Recorder<'_> {
     }
 }
 
+/// Checks that `scene` can run, before anything is written: the settings,
+/// a forced time step against the stable one, a blank that starts inside a
+/// tool, a force-driven tool that would pass through the blank in one step
+/// (see [`drape_time::guard::check_tools_at_start`]). The error is the
+/// reason; the warnings are what the run will also report.
+pub fn check_scene(scene: &Scene) -> Result<Vec<String>, String> {
+    match Explicit::new(&scene.model, scene.settings.clone()) {
+        Ok(explicit) => Ok(explicit.warnings().to_vec()),
+        Err(drape_time::RunError::Setup(reason)) => Err(reason),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// Runs `scene`, writing its results into `out` (created if needed), and
 /// calling `progress` every few steps (return [`Control::Stop`] to stop).
 ///
@@ -222,11 +235,14 @@ pub fn run_scene_with(
     let started = std::time::Instant::now();
     let mut settings = scene.settings.clone();
     settings.checkpoint_every = options.checkpoint_every;
+    let mut warnings = Vec::new();
     let outcome = Explicit::new(model, settings).and_then(|mut explicit| {
         if let Some(d) = driver {
             explicit.resume_from(d);
         }
-        explicit.run(&mut state, &mut recorder)
+        let outcome = explicit.run(&mut state, &mut recorder);
+        warnings = explicit.warnings().to_vec();
+        outcome
     });
     let wall_s = started.elapsed().as_secs_f64();
     if let Some(e) = recorder.error.take() {
@@ -240,12 +256,21 @@ pub fn run_scene_with(
             s.energy,
         ),
         Ok(s) => ("completed", None, s.steps, s.energy),
-        Err(e) => (
-            "failed",
-            Some(e.to_string()),
-            state.step,
-            recorder.last_energy,
-        ),
+        Err(e) => {
+            let mut reason = e.to_string();
+            // The driver puts back the last state that passed the guard
+            // when the run had exploded: say which one the results are.
+            let fell_back = matches!(e, drape_time::RunError::Unstable { .. })
+                || e.step_and_time()
+                    .is_some_and(|(step, _)| state.step + 1 < step);
+            if fell_back {
+                reason.push_str(&format!(
+                    "; the results are those of t = {:.6e} s (step {}), the last state that passed the checks",
+                    state.time, state.step
+                ));
+            }
+            ("failed", Some(reason), state.step, recorder.last_energy)
+        }
     };
     let locking = scene.spec.output.locking_angle_deg;
     let measures = model.measures(&state, locking).unwrap_or_default();
@@ -271,7 +296,10 @@ pub fn run_scene_with(
         max_fibre_tension_n: measures.max_fibre_tension_n,
         area_above_locking_mm2: measures.area_above_locking,
         energy: EnergySummary {
-            balance_error: energy.relative_error(),
+            balance_error: drape_time::guard::relative_balance_error(
+                &energy,
+                drape_time::guard::energy_floor(model),
+            ),
             kinetic_to_internal: energy.kinetic_to_internal(),
         },
         run: RunInfo {
@@ -280,6 +308,7 @@ pub fn run_scene_with(
             threads: rayon::current_num_threads(),
             solver: "explicit".to_owned(),
         },
+        warnings,
     };
     let results = &recorder.results;
     results.write_energy(&recorder.rows)?;

@@ -155,6 +155,9 @@ pub struct Summary {
     pub energy: EnergySummary,
     /// Run statistics.
     pub run: RunInfo,
+    /// What the run found doubtful but not wrong enough to stop it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// An output directory being filled by a run.

@@ -32,7 +32,7 @@ use drape_contact::{Amplitude, ProfileSegment, Surface, Tool, ToolMotion};
 use drape_elements::{ForceTable, SpringBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{BoundaryCondition, Model, ModelError, Motion, NodalLoad};
-use drape_time::ExplicitSettings;
+use drape_time::{ExplicitSettings, GuardSettings};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -68,6 +68,9 @@ fn default_safety() -> f64 {
 fn default_margin() -> f64 {
     5.0
 }
+fn default_true() -> bool {
+    true
+}
 
 /// `[simulation]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -93,9 +96,18 @@ pub struct SimulationSpec {
     /// Mass-proportional damping α (1/s).
     #[serde(default)]
     pub damping: f64,
-    /// Stop when the energy balance error exceeds this fraction.
+    /// Stop when the energy balance error exceeds this fraction (default
+    /// [`drape_time::GuardSettings`]' 1 %).
     #[serde(default)]
     pub max_energy_error: Option<f64>,
+    /// The scene is quasi-static: stop when the kinetic energy exceeds the
+    /// internal work.
+    #[serde(default)]
+    pub quasi_static: bool,
+    /// The instability guard (speed, reach, energy balance); off leaves
+    /// only a `max_energy_error` given explicitly.
+    #[serde(default = "default_true")]
+    pub instability_guard: bool,
     /// Broad-phase margin of the contact search (mm).
     #[serde(default = "default_margin")]
     pub contact_margin: f64,
@@ -1196,7 +1208,16 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
         mass_scaling: sim.mass_scaling_dt,
         damping: sim.damping,
         frames: sim.frames,
-        max_energy_error: sim.max_energy_error,
+        guard: GuardSettings {
+            enabled: sim.instability_guard,
+            max_energy_error: sim.max_energy_error.or(GuardSettings::default()
+                .max_energy_error
+                .filter(|_| sim.instability_guard)),
+            max_kinetic_ratio: sim
+                .quasi_static
+                .then_some(drape_time::guard::QUASI_STATIC_KINETIC_RATIO),
+            ..GuardSettings::default()
+        },
         contact_margin: sim.contact_margin,
         ..ExplicitSettings::default()
     };

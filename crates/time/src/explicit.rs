@@ -8,6 +8,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::energy::{chunked_sum, chunked_sums, chunked_sums_into};
+use crate::guard::{self, Guard, GuardSettings};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
 /// Settings of an explicit run.
@@ -17,8 +18,10 @@ pub struct ExplicitSettings {
     pub end_time: f64,
     /// Fraction of the stable step used.
     pub safety_factor: f64,
-    /// A fixed Δt instead of the stable estimate (not checked: the user's
-    /// responsibility).
+    /// A fixed Δt instead of the stable estimate. [`Explicit::new`] refuses
+    /// one above the estimate (at safety factor 1) of the initial mesh; if
+    /// the deformed mesh's estimate falls below it later, the run warns
+    /// and the guard watches.
     pub time_step: Option<f64>,
     /// Target Δt for selective mass scaling: nodes of elements whose stable
     /// step is smaller get mass until it is reached.
@@ -29,9 +32,9 @@ pub struct ExplicitSettings {
     pub frames: usize,
     /// Steps between stable-Δt re-estimates.
     pub time_step_interval: u64,
-    /// Stop when |energy balance error| exceeds this fraction of the largest
-    /// energy, checked at frames.
-    pub max_energy_error: Option<f64>,
+    /// The instability guard ([`crate::guard`]): energy balance bound,
+    /// speed and reach checks, the quasi-static bound.
+    pub guard: GuardSettings,
     /// Stop after this many steps.
     pub max_steps: Option<u64>,
     /// Broad-phase margin of the contact pass (mm).
@@ -58,7 +61,7 @@ impl Default for ExplicitSettings {
             damping: 0.0,
             frames: 10,
             time_step_interval: 20,
-            max_energy_error: None,
+            guard: GuardSettings::default(),
             max_steps: None,
             contact_margin: 5.0,
             checkpoint_every: None,
@@ -107,6 +110,11 @@ pub struct Explicit<'m> {
     resume: Option<DriverState>,
     /// Partial sums of the step's works.
     work_partials: Vec<[f64; 5]>,
+    guard: Guard,
+    /// Start-up and run warnings.
+    warnings: Vec<String>,
+    /// Which tools have touched the blank.
+    tool_touched: Vec<bool>,
 }
 
 impl<'m> Explicit<'m> {
@@ -175,6 +183,7 @@ impl<'m> Explicit<'m> {
             )
         });
         let movable = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
+        let guard = Guard::new(model, settings.guard.clone(), settings.end_time);
         let mut driver = Self {
             model,
             settings,
@@ -183,6 +192,9 @@ impl<'m> Explicit<'m> {
             prescribed: vec![0.0; constraints.len()],
             resume: None,
             work_partials: Vec::new(),
+            guard,
+            warnings: Vec::new(),
+            tool_touched: vec![false; model.tools.len()],
             slots: vec![Vector3::zeros(); layout.len],
             layout,
             mass: model.mass.clone(),
@@ -224,7 +236,36 @@ impl<'m> Explicit<'m> {
                 driver.share_truss_mass();
             }
         }
+        let estimate = driver.estimated_time_step(&model.x0);
+        if let Some(forced) = driver.settings.time_step {
+            let stable = estimate / driver.settings.safety_factor;
+            if !(forced > 0.0 && forced.is_finite()) {
+                return Err(RunError::Setup(format!(
+                    "the time step {forced:e} s must be a positive number"
+                )));
+            }
+            if forced > stable {
+                return Err(RunError::Setup(format!(
+                    "the time step {forced:.4e} s is {:.3}× the stable time step {stable:.4e} s of this \
+                     model (the elements' estimate; drape would use {estimate:.4e} s at safety factor {}): \
+                     central differences would diverge. Remove time_step or lower it, or raise the \
+                     stable step with mass scaling",
+                    forced / stable,
+                    driver.settings.safety_factor
+                )));
+            }
+        }
+        let dt = driver.settings.time_step.unwrap_or(estimate);
+        driver.warnings =
+            guard::check_tools_at_start(model, &model.x0, dt).map_err(RunError::Setup)?;
         Ok(driver)
+    }
+
+    /// What the run found doubtful: start-up warnings (a blank closer to a
+    /// tool than its half thickness, a force-driven tool with nothing in
+    /// its path) and, after [`Self::run`], the run's own.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// The trusses' mass shares, and the dashpots of kinked yarns that
@@ -327,9 +368,14 @@ impl<'m> Explicit<'m> {
     /// batch with dashpots ([`ExplicitSettings::fibre_damping`]) has its
     /// step shortened by the damping, by √(1 + ξ²) − ξ.
     pub fn stable_time_step(&self, x: &[Vector3<f64>]) -> f64 {
-        if let Some(dt) = self.settings.time_step {
-            return dt;
-        }
+        self.settings
+            .time_step
+            .unwrap_or_else(|| self.estimated_time_step(x))
+    }
+
+    /// The elements' estimate of the stable step times the safety factor,
+    /// whether or not a time step is forced.
+    fn estimated_time_step(&self, x: &[Vector3<f64>]) -> f64 {
         let model = self.model;
         let smallest = |len: usize, dt_e: &(dyn Fn(usize) -> f64 + Sync)| {
             (0..len)
@@ -476,8 +522,24 @@ impl<'m> Explicit<'m> {
     }
 
     /// Runs from `state` to the end time. On error `state` holds the last
-    /// good step.
+    /// good step, or the last output frame that passed the guard when the
+    /// guard stopped the run or the last step does not pass it.
     pub fn run(
+        &mut self,
+        state: &mut State,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary, RunError> {
+        let result = self.advance(state, observer);
+        if let Err(e) = &result {
+            let unstable = matches!(e, RunError::Unstable { .. });
+            if !matches!(e, RunError::Setup(_)) {
+                self.guard.fall_back(state, unstable, &self.movable);
+            }
+        }
+        result
+    }
+
+    fn advance(
         &mut self,
         state: &mut State,
         observer: &mut dyn Observer,
@@ -514,6 +576,8 @@ impl<'m> Explicit<'m> {
             f64::INFINITY
         };
         let mut next_frame = (state.time / frame_dt).floor() as usize + 1;
+        self.guard.begin(state);
+        let mut forced_warned = false;
         if state.step == 0 {
             energy.kinetic = kinetic0;
             energy.strain = self.strain_energy(state);
@@ -548,6 +612,17 @@ impl<'m> Explicit<'m> {
             // at the same steps as an uninterrupted one.
             if state.step > 0 && state.step % self.settings.time_step_interval.max(1) == 0 {
                 dt = self.stable_time_step(&state.x);
+                if self.settings.time_step.is_some() && !forced_warned {
+                    let stable = self.estimated_time_step(&state.x) / self.settings.safety_factor;
+                    if dt > stable {
+                        forced_warned = true;
+                        self.warnings.push(format!(
+                            "from step {} (t = {:.6e} s) the time step {dt:.4e} s is above the \
+                             deformed mesh's stable estimate {stable:.4e} s",
+                            state.step, state.time
+                        ));
+                    }
+                }
             }
             if !(dt > 0.0 && dt.is_finite()) {
                 return Err(RunError::Setup(format!(
@@ -611,6 +686,9 @@ impl<'m> Explicit<'m> {
                         damping,
                     },
                 );
+                for (touched, f) in self.tool_touched.iter_mut().zip(&contact.tool_force) {
+                    *touched |= *f != 0.0;
+                }
                 // A partly constrained node keeps its prescribed components;
                 // its constraint takes the contact force there.
                 for (j, c) in self.constraints.iter().enumerate() {
@@ -635,10 +713,16 @@ impl<'m> Explicit<'m> {
                     if constrained[i].iter().any(|&c| c) && dt_avg > 0.0 {
                         // The force the constraint applies: m·a − (f_ext − f_int − damping).
                         let contact = f_c.map_or(Vector3::zeros(), |f| f[i]);
-                        let r = (vn[i] - v[i]) * (m[i] / dt_avg) - (fe[i] - fi[i] - damp + contact);
+                        let inertia = (vn[i] - v[i]) * (m[i] / dt_avg);
+                        let r = inertia - (fe[i] - fi[i] - damp + contact);
+                        // At the first step the velocity changes over the
+                        // half step from t₀: its inertia works over the mean
+                        // velocity there, ½m(v½² − v₀²), not over the step's
+                        // first half displacement (twice that from rest).
+                        let dx_inertia = if dt_prev > 0.0 { dx } else { v_mid * dt_avg };
                         for k in 0..3 {
                             if constrained[i][k] {
-                                w_bc += r[k] * dx[k];
+                                w_bc += r[k] * dx[k] + inertia[k] * (dx_inertia[k] - dx[k]);
                             }
                         }
                     }
@@ -683,6 +767,18 @@ impl<'m> Explicit<'m> {
             state.time = t_new;
             state.step += 1;
             steps += 1;
+            let unstable = |what| RunError::Unstable {
+                step: state.step,
+                time: state.time,
+                what,
+            };
+            self.guard
+                .nodes(&state.x, &state.v, &self.movable)
+                .map_err(unstable)?;
+            if let Some(contact) = &self.contact {
+                let travel = contact.tool_state.iter().map(|t| t.displacement);
+                self.guard.tools(model, travel).map_err(unstable)?;
+            }
             dt_prev = h;
             dt_min = dt_min.min(h);
             dt_max = dt_max.max(h);
@@ -711,6 +807,14 @@ impl<'m> Explicit<'m> {
             let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
             if at_frame || at_end {
                 let report = self.energies_at(state, &energy, kinetic0, h);
+                self.guard
+                    .energy(&report, state.time)
+                    .map_err(|what| RunError::Unstable {
+                        step: state.step,
+                        time: state.time,
+                        what,
+                    })?;
+                self.guard.accept(state);
                 if at_frame {
                     self.compute_reactions();
                     observer.frame(&Frame {
@@ -723,17 +827,6 @@ impl<'m> Explicit<'m> {
                     });
                     while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
                         next_frame += 1;
-                    }
-                }
-                if let Some(bound) = self.settings.max_energy_error {
-                    let relative = report.relative_error();
-                    if relative > bound {
-                        return Err(RunError::EnergyBalance {
-                            step: state.step,
-                            time: state.time,
-                            relative,
-                            bound,
-                        });
                     }
                 }
             }
@@ -752,6 +845,14 @@ impl<'m> Explicit<'m> {
             }
         }
         let energy = self.energies_at(state, &energy, kinetic0, dt_prev);
+        for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {
+            if tool.is_force_driven() && !touched && !stopped {
+                self.warnings.push(format!(
+                    "force-driven tool `{}` never touched the blank: its force acted on nothing",
+                    tool.name
+                ));
+            }
+        }
         Ok(RunSummary {
             steps,
             dt_range: (dt_min, dt_max),
@@ -761,6 +862,7 @@ impl<'m> Explicit<'m> {
             stopped,
             wall_seconds: started.elapsed().as_secs_f64(),
             threads: rayon::current_num_threads(),
+            warnings: self.warnings.clone(),
         })
     }
 

@@ -19,7 +19,8 @@
 //! Points are the current positions; cells are the membrane elements in
 //! batch order (VTK triangles and quads), so cell `i` is entry `i` of
 //! [`ElementFields`]. Point data: `displacement` (x − x₀, mm), `velocity`
-//! (mm/s), `contact_force` (N), `contact_status` (0 open, 1 stick, 2 slip;
+//! (mm/s), `contact_force` (N), `contact_status` (0 open, 1 stick, 2 slip:
+//! 1 and 2 are in contact, a node resting on a tool at zero gap included;
 //! zeros without tools). Cell data: `shear_angle_deg`,
 //! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_tension_warp`,
 //! `fibre_tension_weft` (N/mm), `resin_stress` (3 components: 11, 22, 12 in

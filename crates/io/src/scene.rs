@@ -1112,6 +1112,19 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
             return Err(at.error(&format!("{here}.rest_length"), "expected a length ≥ 0"));
         }
         let offset = finite3(at, &format!("{here}.anchor_offset"), s.anchor_offset)?;
+        // Anchored at its node, a spring starts at zero length: a force
+        // there pulls in no direction, and near the anchor its transverse
+        // stiffness F/l has no bound (no time step is stable).
+        let (start, _) = table.force_and_stiffness(offset.norm() - s.rest_length);
+        if offset == Vector3::zeros() && start != 0.0 {
+            return Err(at.error(
+                &here,
+                format!(
+                    "a spring anchored at its own node starts at zero length, where its force of {start} N \
+                     has no direction: give an anchor_offset, or no force at the start (preload, rest_length)"
+                ),
+            ));
+        }
         model.springs.push(SpringBatch {
             table,
             anchors: held

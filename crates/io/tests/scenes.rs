@@ -120,3 +120,58 @@ fn a_tool_file_that_does_not_exist_names_the_field() {
     assert_eq!(e.line, Some(13), "{e}");
     assert!(e.message.contains("missing-punch.stl"), "{e}");
 }
+
+#[test]
+fn a_preloaded_spring_anchored_at_its_node_is_refused() {
+    let spring =
+        |keys: &str| format!("{GOOD}\n[[springs]]\nnodes = \"corners\"\nstiffness = 2\n{keys}\n");
+    let e = error_of(&spring("preload = 3"));
+    let text = e.to_string();
+    assert!(
+        text.contains("springs[0]")
+            && text.contains("force of 3 N")
+            && text.contains("no direction"),
+        "{text}"
+    );
+    // A rest length at the node: F(−L₀) = −2·1.5 N at the start.
+    assert!(
+        error_of(&spring("rest_length = 1.5"))
+            .to_string()
+            .contains("force of -3 N")
+    );
+    // An anchor offset gives the force a direction; no preload, no force.
+    for keys in ["preload = 3\nanchor_offset = [0, 0, -5]", ""] {
+        Scene::parse(&spring(keys), Path::new("good.toml"), &[]).unwrap();
+    }
+}
+
+#[test]
+fn guard_keys_reach_the_settings() {
+    let scene = Scene::parse(GOOD, Path::new("good.toml"), &[]).unwrap();
+    let guard = &scene.settings.guard;
+    assert!(
+        guard.enabled && guard.max_energy_error == Some(0.05) && guard.max_kinetic_ratio.is_none()
+    );
+    let set = |k: &str, v: &str| [(k.to_owned(), v.to_owned())];
+    let scene = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &set("simulation.quasi_static", "true"),
+    )
+    .unwrap();
+    assert_eq!(scene.settings.guard.max_kinetic_ratio, Some(1.0));
+    let scene = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &set("simulation.instability_guard", "false"),
+    )
+    .unwrap();
+    assert!(!scene.settings.guard.enabled && scene.settings.guard.max_energy_error.is_none());
+    let scene = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &set("simulation.max_energy_error", "0.2"),
+    )
+    .unwrap();
+    assert_eq!(scene.settings.guard.max_energy_error, Some(0.2));
+}

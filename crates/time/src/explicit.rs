@@ -409,8 +409,8 @@ impl<'m> Explicit<'m> {
         add(model
             .springs
             .iter()
-            .flat_map(|b| b.nodes.iter().map(move |&n| (b, n)))
-            .map(|(b, n)| b.stable_time_step(self.mass[n as usize]))
+            .flat_map(|b| (0..b.len()).map(move |e| (b, e)))
+            .map(|(b, e)| b.element_stable_time_step(e, x, self.mass[b.nodes[e] as usize]))
             .fold(f64::INFINITY, f64::min));
         self.settings.safety_factor / inverse_square.sqrt()
     }
@@ -576,6 +576,10 @@ impl<'m> Explicit<'m> {
             f64::INFINITY
         };
         let mut next_frame = (state.time / frame_dt).floor() as usize + 1;
+        // The guard looks at the energy at every frame, and at least
+        // `guard::MIN_ENERGY_CHECKS` times a run whatever the frames.
+        let check_dt = end / self.settings.frames.max(guard::MIN_ENERGY_CHECKS) as f64;
+        let mut next_check = (state.time / check_dt).floor() + 1.0;
         self.guard.begin(state);
         let mut forced_warned = false;
         if state.step == 0 {
@@ -805,7 +809,8 @@ impl<'m> Explicit<'m> {
             }
             let at_end = end - state.time <= 1e-6 * dt;
             let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
-            if at_frame || at_end {
+            let at_check = state.time >= next_check * check_dt * (1.0 - 1e-12);
+            if at_frame || at_end || at_check {
                 let report = self.energies_at(state, &energy, kinetic0, h);
                 self.guard
                     .energy(&report, state.time)
@@ -814,7 +819,12 @@ impl<'m> Explicit<'m> {
                         time: state.time,
                         what,
                     })?;
-                self.guard.accept(state);
+                while next_check * check_dt <= state.time * (1.0 + 1e-12) {
+                    next_check += 1.0;
+                }
+                if at_frame || at_end {
+                    self.guard.accept(state);
+                }
                 if at_frame {
                     self.compute_reactions();
                     observer.frame(&Frame {
@@ -845,6 +855,16 @@ impl<'m> Explicit<'m> {
             }
         }
         let energy = self.energies_at(state, &energy, kinetic0, dt_prev);
+        if stopped {
+            // A run stopped between checks still reports only what passes.
+            self.guard
+                .energy(&energy, state.time)
+                .map_err(|what| RunError::Unstable {
+                    step: state.step,
+                    time: state.time,
+                    what,
+                })?;
+        }
         for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {
             if tool.is_force_driven() && !touched && !stopped {
                 self.warnings.push(format!(

@@ -258,14 +258,11 @@ pub fn run_scene_with(
         Ok(s) => ("completed", None, s.steps, s.energy),
         Err(e) => {
             let mut reason = e.to_string();
-            // The driver puts back the last state that passed the guard
-            // when the run had exploded: say which one the results are.
-            let fell_back = matches!(e, drape_time::RunError::Unstable { .. })
-                || e.step_and_time()
-                    .is_some_and(|(step, _)| state.step + 1 < step);
-            if fell_back {
+            // The driver puts back the last output frame: say which one the
+            // results are.
+            if e.step_and_time().is_some() {
                 reason.push_str(&format!(
-                    "; the results are those of t = {:.6e} s (step {}), the last state that passed the checks",
+                    "; the results are those of t = {:.6e} s (step {}), the last output frame",
                     state.time, state.step
                 ));
             }

@@ -205,8 +205,7 @@ fn bad_input_exits_2_names_the_place_and_writes_nothing() {
 fn a_diverging_run_exits_1_and_keeps_what_it_reached() {
     let dir = temp("diverge");
     let out = dir.join("out");
-    // 10⁹ N on the edge midpoints: the blank flies apart within a few
-    // frames, the guard stops it.
+    // 10⁹ N on the edge midpoints: the blank is torn apart.
     let scene = dir.join("scene.toml");
     std::fs::write(
         &scene,
@@ -241,20 +240,25 @@ amplitude = { kind = "ramp", duration = 0.001 }
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "failed");
     let reason = summary["reason"].as_str().unwrap();
+    assert!(reason.contains("step"), "{reason}");
+    // What the summary reports is the last frame written, which passed
+    // every check, not the torn state of the failing step.
+    assert!(reason.contains("the last output frame"), "{reason}");
+    let failed_at: f64 = reason["step ".len()..]
+        .split("t = ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let time = summary["time"].as_f64().unwrap();
+    assert!(time < failed_at, "{time} vs {failed_at}");
+    let frames = std::fs::read_dir(out.join("frames")).unwrap().count();
+    let frame_dt = 0.001 / 10.0;
     assert!(
-        reason.contains("step") && reason.contains("unstable"),
-        "{reason}"
+        ((frames - 1) as f64 * frame_dt - time).abs() < 0.1 * frame_dt,
+        "{frames} frames, t = {time}"
     );
-    // What the summary reports is the last frame that passed: nowhere near
-    // the exploded positions.
-    assert!(
-        reason.contains("the last state that passed the checks"),
-        "{reason}"
-    );
-    let at = &summary["max_shear_at"];
-    for k in 0..3 {
-        assert!(at[k].as_f64().unwrap().abs() < 200.0, "{at}");
-    }
     assert!(out.join("frames/frame_00000.vtu").is_file());
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -33,7 +33,7 @@ pub enum RunError {
         what: &'static str,
     },
     /// The instability guard found the run diverging ([`crate::guard`]).
-    #[error("step {step}, t = {time:.6e} s: the run is unstable: {what}")]
+    #[error("step {step}, t = {time:.6e} s: stopped by the instability guard: {what}")]
     Unstable {
         /// The step.
         step: u64,

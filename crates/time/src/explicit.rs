@@ -7,7 +7,7 @@ use drape_model::{Model, Motion, SlotLayout, State};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::energy::{chunked_sum, chunked_sums, chunked_sums_into};
+use crate::energy::{chunked_sum, chunked_sums_into};
 use crate::guard::{self, Guard, GuardSettings};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
@@ -108,8 +108,9 @@ pub struct Explicit<'m> {
     prescribed: Vec<f64>,
     /// Where to pick up, for a resumed run.
     resume: Option<DriverState>,
-    /// Partial sums of the step's works.
+    /// Partial sums of the step's works, and of the energies at a check.
     work_partials: Vec<[f64; 5]>,
+    energy_partials: Vec<[f64; 6]>,
     guard: Guard,
     /// Start-up and run warnings.
     warnings: Vec<String>,
@@ -192,6 +193,7 @@ impl<'m> Explicit<'m> {
             prescribed: vec![0.0; constraints.len()],
             resume: None,
             work_partials: Vec::new(),
+            energy_partials: Vec::new(),
             guard,
             warnings: Vec::new(),
             tool_touched: vec![false; model.tools.len()],
@@ -522,8 +524,8 @@ impl<'m> Explicit<'m> {
     }
 
     /// Runs from `state` to the end time. On error `state` holds the last
-    /// good step, or the last output frame that passed the guard when the
-    /// guard stopped the run or the last step does not pass it.
+    /// output frame (or the start), which passed every check: a failed run
+    /// reports no state on its way to the failure.
     pub fn run(
         &mut self,
         state: &mut State,
@@ -531,9 +533,8 @@ impl<'m> Explicit<'m> {
     ) -> Result<RunSummary, RunError> {
         let result = self.advance(state, observer);
         if let Err(e) = &result {
-            let unstable = matches!(e, RunError::Unstable { .. });
             if !matches!(e, RunError::Setup(_)) {
-                self.guard.fall_back(state, unstable, &self.movable);
+                self.guard.fall_back(state);
             }
         }
         result
@@ -908,28 +909,32 @@ impl<'m> Explicit<'m> {
     /// half increment (x_{n+1} − x_n)/2 at the forces of n+1 (reactions
     /// taken quasi-static there), so that they match the full-step kinetic
     /// energy to O(Δt²).
-    fn energies_at(&self, state: &State, acc: &Energies, kinetic0: f64, h: f64) -> Energies {
+    fn energies_at(&mut self, state: &State, acc: &Energies, kinetic0: f64, h: f64) -> Energies {
         let n = self.model.node_count();
         let damping = self.settings.damping;
-        let f_c = self.contact.as_ref().map(|c| &c.force);
-        let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums(n, |i| {
+        let mut partials = std::mem::take(&mut self.energy_partials);
+        let this = &*self;
+        let f_c = this.contact.as_ref().map(|c| &c.force);
+        let terms = |i: usize| {
             let half = state.v[i] * (0.5 * h);
-            let (fi, fe) = (self.f_int[i], self.f_ext[i]);
+            let (fi, fe) = (this.f_int[i], this.f_ext[i]);
             let mut w_bc = 0.0;
             for k in 0..3 {
-                if self.constrained[i][k] {
+                if this.constrained[i][k] {
                     w_bc += (fi[k] - fe[k]) * half[k];
                 }
             }
             [
-                0.5 * self.mass[i] * self.full_step_velocity(state, i, h).norm_squared(),
+                0.5 * this.mass[i] * this.full_step_velocity(state, i, h).norm_squared(),
                 fi.dot(&half),
                 fe.dot(&half),
-                damping * self.mass[i] * state.v[i].dot(&half),
+                damping * this.mass[i] * state.v[i].dot(&half),
                 w_bc,
                 f_c.map_or(0.0, |f| f[i].dot(&half)),
             ]
-        });
+        };
+        let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums_into(n, terms, &mut partials);
+        self.energy_partials = partials;
         let mut e = *acc;
         e.kinetic = kinetic;
         e.internal_work += w_int;

@@ -16,8 +16,8 @@
 //! the element or node and what went wrong. Besides non-finite values and
 //! failing elements, the [`guard`] stops a run whose nodes fly off, whose
 //! energy balance breaks or that leaves the quasi-static range it declared;
-//! the state passed in then keeps the last good output frame (or the last
-//! good step, when that state itself passes the guard).
+//! the state passed in then holds the last output frame, which passed every
+//! check.
 //!
 //! ```
 //! use drape_constitutive::Material;

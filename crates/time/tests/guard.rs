@@ -398,36 +398,46 @@ fn an_exponentially_growing_balance_error_stops_the_run_early() {
         balance_error: error,
         ..Energies::default()
     };
-    // The bias extension that diverged: 3e-6, 1.3e-3, 0.08 mJ of error on
-    // 0.13, 5.6, 46 mJ of work at 10, 20, 30 % of the run.
+    // The bias extension that diverged: 3e-6, 1.3e-3, 0.08, 2.0 mJ of error
+    // on 0.13, 5.6, 46, 238 mJ of work at 10, 20, 30, 40 % of the run.
     assert_eq!(guard.energy(&frame(3.2e-6, 0.13), 0.1), Ok(()));
     assert_eq!(guard.energy(&frame(1.3e-3, 5.6), 0.2), Ok(()));
-    match guard.energy(&frame(0.08, 46.0), 0.3) {
+    assert_eq!(guard.energy(&frame(0.08, 46.0), 0.3), Ok(()));
+    match guard.energy(&frame(2.04, 238.0), 0.4) {
         Err(Instability::EnergyGrowth { growth, relative }) => {
-            assert!(
-                (growth[0] - 1.3e-3 / 3.2e-6).abs() < 1e-9
-                    && (growth[1] - 0.08 / 1.3e-3).abs() < 1e-9
-            );
-            assert!((relative - 0.08 / 46.0).abs() < 1e-15);
+            let r = [3.2e-6 / 0.13, 1.3e-3 / 5.6, 0.08 / 46.0, 2.04 / 238.0];
+            for (k, g) in growth.iter().enumerate() {
+                assert!((g / (r[k + 1] / r[k]) - 1.0).abs() < 1e-12, "{growth:?}");
+            }
+            assert!((relative - r[3]).abs() < 1e-15);
         }
         other => panic!("{other:?}"),
     }
-    // A sound run's error wanders without growing tenfold twice, and below
-    // 1e-3 its growth does not count.
+    // An impact makes the error jump once: no steady growth.
     let mut guard = Guard::new(&model, GuardSettings::default(), 1.0);
-    for (k, (error, work)) in [
-        (1e-8, 1.0),
-        (2e-7, 10.0),
-        (5e-6, 100.0),
-        (4e-5, 500.0),
-        (1e-3, 900.0),
-        (2e-3, 1e3),
+    for (k, error) in [1e-8, 2e-8, 3e-3, 3.1e-3, 3.3e-3, 3.2e-3]
+        .into_iter()
+        .enumerate()
+    {
+        assert_eq!(
+            guard.energy(&frame(error, 1.0), 0.1 * (k + 1) as f64),
+            Ok(()),
+            "{k}"
+        );
+    }
+    // A sound run's relative error wanders, and below 1e-3 its growth does
+    // not count.
+    let mut guard = Guard::new(&model, GuardSettings::default(), 1.0);
+    // (The deep drawing's first frames, then a wander above 1e-3.)
+    for (k, relative) in [
+        1.6e-7, 1.2e-6, 1.3e-6, 1.7e-6, 7.8e-6, 2.8e-6, 1e-3, 2e-3, 1.5e-3, 3e-3, 2.5e-3,
     ]
     .into_iter()
     .enumerate()
     {
+        let t = 0.05 * (k + 1) as f64;
         assert_eq!(
-            guard.energy(&frame(error, work), 0.1 * (k + 1) as f64),
+            guard.energy(&frame(relative * 100.0, 100.0), t),
             Ok(()),
             "{k}"
         );

@@ -229,10 +229,17 @@ pub fn random_scene(rng: &mut Rng) -> String {
     if rng.chance(0.2) {
         let _ = write!(
             s,
-            "\n[[springs]]\nnodes = [\"corners\", \"edge_midpoints\"]\nstiffness = {:e}\npreload = {:?}\n",
+            "\n[[springs]]\nnodes = [\"corners\", \"edge_midpoints\"]\nstiffness = {:e}\n",
             rng.log_uniform(-1.0, 2.0),
-            rng.uniform(0.0, 5.0)
         );
+        // A preload needs an anchor away from the node, or it is refused
+        // (now and then it is not given one, to see it refused).
+        if rng.chance(0.5) {
+            let _ = writeln!(s, "preload = {:?}", rng.uniform(0.0, 5.0));
+            if rng.chance(0.8) {
+                let _ = writeln!(s, "anchor_offset = [0, 0, {:?}]", -rng.uniform(1.0, 50.0));
+            }
+        }
     }
     s.push_str("\n[output]\nvtu = false\npictures = false\n");
     s

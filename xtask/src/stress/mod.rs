@@ -579,7 +579,9 @@ const CASES: &[Case] = &[
         name: "crimp 0, 300×100 mm, yarn dashpots off (the old step)",
         quick: false,
         run: |ctx| {
-            let text = bias([300.0, 100.0], [30, 10], 0.03, 25.0, 75_000.0, 0.0, 30.0);
+            // Not declared quasi-static: the guard's energy checks alone.
+            let text = bias([300.0, 100.0], [30, 10], 0.03, 25.0, 75_000.0, 0.0, 30.0)
+                .replace("quasi_static = true\n", "");
             let mut run = Run::scene(text);
             run.tweak = Some(|scene| scene.settings.fibre_damping = 0.0);
             ctx.row(Expect::Caught, run)
@@ -926,7 +928,12 @@ mod tests {
             };
         let good = ran("completed", None, 1e-6, None);
         let broken = ran("completed", None, 0.2, None);
-        let failed = ran("failed", Some("step 3: the run is unstable: …"), 0.0, None);
+        let failed = ran(
+            "failed",
+            Some("step 3: stopped by the instability guard: …"),
+            0.0,
+            None,
+        );
         let nan = ran("completed", None, 1e-6, Some("energy.csv line 3"));
         let refused = Outcome::Refused("time step too large".into());
         assert!(

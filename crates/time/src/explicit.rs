@@ -42,7 +42,7 @@ pub struct ExplicitSettings {
     /// Hand the observer a checkpoint every this many steps.
     pub checkpoint_every: Option<u64>,
     /// Fraction of critical damping of a dashpot along every truss whose
-    /// fibre law has a kink ([`drape_constitutive::FibreLaw::has_kink`]),
+    /// fibre law has a kink (`FibreLaw::has_kink` in drape-constitutive),
     /// for that truss's own two-mass mode: an uncrimped yarn switches
     /// between taut and slack, and without it central differences grow in
     /// resonance bands below the linear stability limit. 0.06 is

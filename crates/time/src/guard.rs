@@ -465,14 +465,13 @@ impl Guard {
             self.high.add_scalar(self.reach),
         );
         let limit = self.speed_limit_squared;
-        let bad = (0..x.len())
-            .into_par_iter()
-            .with_min_len(1024)
-            .find_first(|&i| {
-                let p = &x[i];
-                let outside = (0..3).any(|k| p[k] < low[k] || p[k] > high[k]);
-                outside || (movable[i] && v[i].norm_squared() > limit)
-            });
+        // Sequential: two comparisons a node cost less than rayon's split
+        // at the sizes drape runs (the step's element pass dominates).
+        let bad = (0..x.len()).find(|&i| {
+            let p = &x[i];
+            let outside = (0..3).any(|k| p[k] < low[k] || p[k] > high[k]);
+            outside || (movable[i] && v[i].norm_squared() > limit)
+        });
         let Some(i) = bad else {
             return Ok(());
         };

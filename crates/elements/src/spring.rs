@@ -253,7 +253,16 @@ mod tests {
         let far = [Vector3::new(10.0, 0.0, 0.0)];
         let dt = |x: &[Vector3<f64>]| springs.element_stable_time_step(0, x, m);
         assert!((dt(&near) - 2.0 * (m / 60.0f64).sqrt()).abs() < 1e-15);
-        assert!((dt(&far) - 2.0 * (m / 10.0f64).sqrt()).abs() < 1e-15);
+        // At 10 mm it is still F/l = 105/10 (k + F₀/l: a preload always adds).
+        assert!((dt(&far) - 2.0 * (m / 10.5f64).sqrt()).abs() < 1e-15);
+        // Without a preload, F/l = k on a zero rest length: the slope.
+        let plain = SpringBatch {
+            table: ForceTable::linear(10.0, 0.0),
+            ..springs.clone()
+        };
+        assert!(
+            (plain.element_stable_time_step(0, &far, m) - 2.0 * (m / 10.0f64).sqrt()).abs() < 1e-15
+        );
         // The transverse stiffness is the tangent's: F/l across n.
         let k = springs.element_tangent(0, &near);
         assert!((k[(1, 1)] - 60.0).abs() < 1e-12);

@@ -296,6 +296,19 @@ impl Observer for Recorder<'_> {
     }
 }
 
+/// Checks that `scene` can run, before anything is written: the settings,
+/// a forced time step against the stable one, a blank that starts inside a
+/// tool, a force-driven tool that would pass through the blank in one step
+/// (see [`drape_time::guard::check_tools_at_start`]). The error is the
+/// reason; the warnings are what the run will also report.
+pub fn check_scene(scene: &Scene) -> Result<Vec<String>, String> {
+    match Explicit::new(&scene.model, scene.settings.clone()) {
+        Ok(explicit) => Ok(explicit.warnings().to_vec()),
+        Err(drape_time::RunError::Setup(reason)) => Err(reason),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// Runs `scene`, writing its results into `out` (created if needed), and
 /// calling `progress` every few steps (return [`Control::Stop`] to stop).
 ///
@@ -416,6 +429,7 @@ pub fn run_in(
         callback: progress,
     };
     let started = std::time::Instant::now();
+    let mut warnings = Vec::new();
     let outcome = Explicit::new(model, settings).and_then(|mut explicit| {
         if let Some(d) = driver {
             explicit.resume_from(d);
@@ -426,6 +440,7 @@ pub fn run_in(
                 recorder.stop_frame(model, &state, &s.energy, explicit.contact());
             }
         }
+        warnings = explicit.warnings().to_vec();
         outcome
     });
     let wall_s = started.elapsed().as_secs_f64();
@@ -447,7 +462,18 @@ pub fn run_in(
             ("stopped", Some(reason), s.energy)
         }
         Ok(s) => ("completed", None, s.energy),
-        Err(e) => ("failed", Some(e.to_string()), recorder.last_energy),
+        Err(e) => {
+            let mut reason = e.to_string();
+            // The driver puts back the last output frame: say which one the
+            // results are.
+            if e.step_and_time().is_some() {
+                reason.push_str(&format!(
+                    "; the results are those of t = {:.6e} s (step {}), the last output frame",
+                    state.time, state.step
+                ));
+            }
+            ("failed", Some(reason), recorder.last_energy)
+        }
     };
     let locking = scene.spec.output.locking_angle_deg;
     let measures = model.measures(&state, locking).unwrap_or_default();
@@ -473,7 +499,10 @@ pub fn run_in(
         max_fibre_tension_n: measures.max_fibre_tension_n,
         area_above_locking_mm2: measures.area_above_locking,
         energy: EnergySummary {
-            balance_error: energy.relative_error(),
+            balance_error: drape_time::guard::relative_balance_error(
+                &energy,
+                drape_time::guard::energy_floor(model),
+            ),
             kinetic_to_internal: energy.kinetic_to_internal(),
         },
         run: RunInfo {
@@ -483,6 +512,7 @@ pub fn run_in(
             threads: rayon::current_num_threads(),
             solver: "explicit".to_owned(),
         },
+        warnings,
     };
     let results = &recorder.results;
     results.write_energy(&recorder.rows)?;

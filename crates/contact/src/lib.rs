@@ -49,7 +49,9 @@ mod mesh_file;
 mod surface;
 mod tool;
 
-pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes};
+pub use explicit::{
+    ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes, TOUCHING,
+};
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};

@@ -201,15 +201,9 @@ fn bad_input_exits_2_names_the_place_and_writes_nothing() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
-#[test]
-fn a_diverging_run_exits_1_and_keeps_what_it_reached() {
-    let dir = temp("diverge");
-    let out = dir.join("out");
-    // 10⁹ N on the edge midpoints: the blank is torn apart.
-    let scene = dir.join("scene.toml");
-    std::fs::write(
-        &scene,
-        r#"[simulation]
+/// 10⁹ N on the edge midpoints of a clamped blank: it is torn apart, and
+/// the run fails.
+const TORN: &str = r#"[simulation]
 end_time = 0.001
 frames = 10
 
@@ -226,9 +220,14 @@ motion = { kind = "fixed" }
 nodes = "edge_midpoints"
 force = [0, 0, 1e9]
 amplitude = { kind = "ramp", duration = 0.001 }
-"#,
-    )
-    .unwrap();
+"#;
+
+#[test]
+fn a_diverging_run_exits_1_and_keeps_what_it_reached() {
+    let dir = temp("diverge");
+    let out = dir.join("out");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, TORN).unwrap();
     let o = drape(&[
         "run",
         scene.to_str().unwrap(),
@@ -564,13 +563,11 @@ fn lock_ctrl_c_resume_elsewhere_and_stale_checkpoint() {
 
     // A new run into the folder (one that fails at once) leaves no stale
     // checkpoint behind to resume.
+    let torn = dir.join("torn.toml");
+    std::fs::write(&torn, TORN).unwrap();
     let o = drape(&[
         "run",
-        "scenes/bias-extension.toml",
-        "--set",
-        "simulation.time_step=3e-5",
-        "--set",
-        "simulation.max_energy_error=0.05",
+        torn.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
     ]);

@@ -914,6 +914,16 @@ impl ImplicitContact {
             });
         }
         self.write_outputs_from_carried();
+        // A node resting on a tool at zero gap with nothing pressing it
+        // reads in contact, as in the explicit pass (`TOUCHING`).
+        let touch = crate::TOUCHING * self.settings.offset;
+        for pair in &self.pairs {
+            let i = pair.node as usize;
+            if pair.lambda <= 0.0 && pair.gap <= touch && self.status[i] == ContactStatus::Open {
+                self.status[i] = ContactStatus::Stick;
+                self.tool_of[i] = pair.tool;
+            }
+        }
         for pair in &self.pairs {
             if pair.lambda <= 0.0 {
                 continue;

@@ -51,7 +51,9 @@ mod surface;
 mod tool;
 mod view;
 
-pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes};
+pub use explicit::{
+    ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes, TOUCHING,
+};
 pub use implicit::{
     CarriedPair, Friction, ImplicitContact, ImplicitContactSettings, Increment, SolveError,
     SolveStats,

@@ -56,6 +56,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::energy::{chunked_sum, chunked_sums};
+use crate::guard::{self, Guard, GuardSettings};
 use crate::shared::{self, Constraints, ForcePass};
 use crate::tangent::SparseTangent;
 use crate::{
@@ -102,9 +103,12 @@ pub struct ImplicitSettings {
     pub damping: f64,
     /// Nodes nearer a tool than this take part in the contact solve (mm).
     pub contact_margin: f64,
-    /// Stop when |energy balance error| exceeds this fraction of the largest
-    /// energy, checked at frames.
-    pub max_energy_error: Option<f64>,
+    /// The instability guard ([`crate::guard`]), as for the explicit
+    /// driver: node speed and reach and the force-driven tools' travel
+    /// after every increment, the energy balance (numerical dissipation
+    /// counted) at frames and at least `guard::MIN_ENERGY_CHECKS` times a
+    /// run.
+    pub guard: GuardSettings,
     /// Stop after this many increments.
     pub max_increments: Option<u64>,
     /// Hand the observer a checkpoint every this many increments.
@@ -126,7 +130,7 @@ impl Default for ImplicitSettings {
             max_iterations: 25,
             damping: 0.0,
             contact_margin: 5.0,
-            max_energy_error: None,
+            guard: GuardSettings::default(),
             max_increments: None,
             checkpoint_every: None,
         }
@@ -204,6 +208,11 @@ pub struct Implicit<'m> {
     kinetic0: f64,
     /// The model's size (bounding-box diagonal, mm).
     size: f64,
+    guard: Guard,
+    /// Start-up and run warnings.
+    warnings: Vec<String>,
+    /// Which tools have touched the blank.
+    tool_touched: Vec<bool>,
 }
 
 impl<'m> Implicit<'m> {
@@ -272,6 +281,11 @@ impl<'m> Implicit<'m> {
         });
         let (alpha_m, beta, gamma) = bossak(settings.spectral_radius);
         let zeros = vec![Vector3::zeros(); n];
+        // No step-size check of force-driven tools: they are unknowns of the
+        // contact solve, which cannot let them through the blank.
+        let warnings =
+            guard::check_tools_at_start(model, &model.x0, 0.0).map_err(RunError::Setup)?;
+        let guard = Guard::new(model, settings.guard.clone(), settings.end_time);
         Ok(Self {
             model,
             settings,
@@ -301,6 +315,9 @@ impl<'m> Implicit<'m> {
             totals: ImplicitTotals::default(),
             record: None,
             kinetic0: 0.0,
+            guard,
+            warnings,
+            tool_touched: vec![false; model.tools.len()],
             size: {
                 let lo = model
                     .x0
@@ -329,6 +346,20 @@ impl<'m> Implicit<'m> {
     /// The tangent's size: (degrees of freedom, stored entries).
     pub fn tangent_size(&self) -> (usize, usize) {
         (self.tangent.dofs(), self.tangent.nonzeros())
+    }
+
+    /// What the run found doubtful: start-up warnings (a blank closer to a
+    /// tool than its half thickness, a force-driven tool with nothing in
+    /// its path) and, after [`Self::run`], the run's own.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// The contact pass as the last converged increment left it, if the
+    /// model has tools (for a frame written after a run stopped between
+    /// frames).
+    pub fn contact(&self) -> Option<drape_contact::ContactView<'_>> {
+        self.contact.as_ref().map(ImplicitContact::view)
     }
 
     /// Continues a stopped run from a checkpoint's driver state.
@@ -397,8 +428,23 @@ impl<'m> Implicit<'m> {
     }
 
     /// Runs from `state` to the end time. On error `state` holds the last
-    /// converged increment.
+    /// output frame (or the start), which passed every check, as for the
+    /// explicit driver.
     pub fn run(
+        &mut self,
+        state: &mut State,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary, RunError> {
+        let result = self.advance(state, observer);
+        if let Err(e) = &result {
+            if !matches!(e, RunError::Setup(_)) {
+                self.guard.fall_back(state);
+            }
+        }
+        result
+    }
+
+    fn advance(
         &mut self,
         state: &mut State,
         observer: &mut dyn Observer,
@@ -409,8 +455,15 @@ impl<'m> Implicit<'m> {
         let end = self.settings.end_time;
         shared::check_state(model, state)?;
         shared::external_forces(model, state.time, &mut self.f_ext);
-        self.forces
-            .evaluate(model, &state.x, &state.history, 0.0, state.step, state.time)?;
+        self.forces.evaluate(
+            model,
+            &state.x,
+            None,
+            &state.history,
+            0.0,
+            state.step,
+            state.time,
+        )?;
         let resume = self.resume.take();
         if resume.as_ref().is_some_and(|r| r.implicit.is_none()) {
             return Err(RunError::Setup(
@@ -463,6 +516,11 @@ impl<'m> Implicit<'m> {
             f64::INFINITY
         };
         let mut next_frame = (state.time / frame_dt * (1.0 + 1e-12)).floor() as usize + 1;
+        // The guard looks at the energy at every frame, and at least
+        // `guard::MIN_ENERGY_CHECKS` times a run whatever the frames.
+        let check_dt = end / self.settings.frames.max(guard::MIN_ENERGY_CHECKS) as f64;
+        let mut next_check = (state.time / check_dt * (1.0 + 1e-12)).floor() + 1.0;
+        self.guard.begin(state);
         if state.step == 0 {
             energy.kinetic = kinetic0;
             energy.strain = shared::strain_energy(model, state);
@@ -524,6 +582,21 @@ impl<'m> Implicit<'m> {
             // Commit.
             let (active, stick, slip) = self.commit(state, h, &mut energy);
             increments += 1;
+            let unstable = |what| RunError::Unstable {
+                step: state.step,
+                time: state.time,
+                what,
+            };
+            self.guard
+                .nodes(&state.x, &state.v, &self.constraints.movable)
+                .map_err(unstable)?;
+            if let Some(contact) = &self.contact {
+                for (touched, f) in self.tool_touched.iter_mut().zip(&contact.tool_force) {
+                    *touched |= *f != 0.0;
+                }
+                let travel = contact.tool_state.iter().map(|t| t.displacement);
+                self.guard.tools(model, travel).map_err(unstable)?;
+            }
             let dt_prev = h;
             h_min_used = h_min_used.min(h);
             h_max_used = h_max_used.max(h);
@@ -544,10 +617,24 @@ impl<'m> Implicit<'m> {
             }
             let at_end = end - state.time <= 1e-9 * h_auto.min(end);
             let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
-            if at_frame || at_end {
+            let at_check = state.time >= next_check * check_dt * (1.0 - 1e-12);
+            if at_frame || at_end || at_check {
                 let mut report = energy;
                 report.strain = shared::strain_energy(model, state);
                 report.viscous = report.internal_work - report.strain;
+                self.guard
+                    .energy(&report, state.time)
+                    .map_err(|what| RunError::Unstable {
+                        step: state.step,
+                        time: state.time,
+                        what,
+                    })?;
+                while next_check * check_dt <= state.time * (1.0 + 1e-12) {
+                    next_check += 1.0;
+                }
+                if at_frame || at_end {
+                    self.guard.accept(state);
+                }
                 if at_frame {
                     self.compute_reactions();
                     observer.frame(&Frame {
@@ -560,17 +647,6 @@ impl<'m> Implicit<'m> {
                     });
                     while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
                         next_frame += 1;
-                    }
-                }
-                if let Some(bound) = self.settings.max_energy_error {
-                    let relative = report.relative_error();
-                    if relative > bound {
-                        return Err(RunError::EnergyBalance {
-                            step: state.step,
-                            time: state.time,
-                            relative,
-                            bound,
-                        });
                     }
                 }
             }
@@ -595,6 +671,24 @@ impl<'m> Implicit<'m> {
         }
         energy.strain = shared::strain_energy(model, state);
         energy.viscous = energy.internal_work - energy.strain;
+        if stopped {
+            // A run stopped between checks still reports only what passes.
+            self.guard
+                .energy(&energy, state.time)
+                .map_err(|what| RunError::Unstable {
+                    step: state.step,
+                    time: state.time,
+                    what,
+                })?;
+        }
+        for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {
+            if tool.is_force_driven() && !touched && !stopped {
+                self.warnings.push(format!(
+                    "force-driven tool `{}` never touched the blank: its force acted on nothing",
+                    tool.name
+                ));
+            }
+        }
         self.totals.factorisations = self.tangent.factorisations;
         self.totals.indefinite = self.tangent.indefinite;
         self.totals.factor_seconds = self.tangent.factor_seconds;
@@ -607,6 +701,7 @@ impl<'m> Implicit<'m> {
             stopped,
             wall_seconds: started.elapsed().as_secs_f64(),
             threads: rayon::current_num_threads(),
+            warnings: self.warnings.clone(),
             implicit: Some(self.totals),
         })
     }
@@ -771,7 +866,7 @@ impl<'m> Implicit<'m> {
         loop {
             let evaluated =
                 self.forces
-                    .evaluate(model, &self.x, &state.history, h, state.step + 1, t1);
+                    .evaluate(model, &self.x, None, &state.history, h, state.step + 1, t1);
             let mut friction_changes = 0;
             let (res, node, scale) = match evaluated {
                 Ok(()) => {

@@ -95,6 +95,10 @@ impl Constraints {
     }
 }
 
+/// The velocities and, per truss batch, the coefficients of the dashpots
+/// along kinked yarns (see [`ForcePass::evaluate`]).
+pub(crate) type Dashpots<'a> = (&'a [Vector3<f64>], &'a [Vec<f64>]);
+
 /// The internal force pass: every batch writes its elements' nodal forces
 /// into its own slots (in parallel), the layout gathers them per node in a
 /// fixed order.
@@ -125,11 +129,16 @@ impl ForcePass {
 
     /// The internal forces at `x` into `self.f_int`, the new histories (from
     /// the committed `history`, over a step `dt`) into `self.history_new`.
-    /// `step` and `time` only name the failure.
+    /// `dashpots`: the velocities and, per truss batch, the coefficients of
+    /// the dashpots along kinked yarns (an empty list for a batch without;
+    /// the explicit driver's `fibre_damping`). `step` and `time` only name
+    /// the failure.
+    #[allow(clippy::too_many_arguments)]
     pub fn evaluate(
         &mut self,
         model: &Model,
         x: &[Vector3<f64>],
+        dashpots: Option<Dashpots<'_>>,
         history: &[Vec<f64>],
         dt: f64,
         step: u64,
@@ -143,8 +152,12 @@ impl ForcePass {
         };
         for (i, b) in model.trusses.iter().enumerate() {
             let start = self.layout.truss_offsets[i];
-            b.forces_into(x, &mut self.slots[start..start + 2 * b.len()])
+            let slots = &mut self.slots[start..start + 2 * b.len()];
+            b.forces_into(x, slots)
                 .map_err(|e| fail(format!("truss batch {i}"), e))?;
+            if let Some((v, c)) = dashpots.filter(|(_, c)| !c[i].is_empty()) {
+                b.add_damping_into(x, v, &c[i], slots);
+            }
         }
         for (i, b) in model.membranes.iter().enumerate() {
             let start = self.layout.membrane_offsets[i];

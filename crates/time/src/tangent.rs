@@ -581,7 +581,8 @@ mod tests {
                 .map(|(a, b)| (a + b) * 0.5)
                 .collect();
             let initial = model.initial_state().history;
-            pass.evaluate(&model, &half, &initial, dt, 0, 0.0).unwrap();
+            pass.evaluate(&model, &half, None, &initial, dt, 0, 0.0)
+                .unwrap();
             let history = pass.history_new.clone();
             let mut constrained = vec![false; n];
             constrained[4] = true; // node 1, y
@@ -594,11 +595,13 @@ mod tests {
             for j in 0..n {
                 let mut xp = x.clone();
                 xp[j / 3][j % 3] += h;
-                pass.evaluate(&model, &xp, &history, dt, 0, 0.0).unwrap();
+                pass.evaluate(&model, &xp, None, &history, dt, 0, 0.0)
+                    .unwrap();
                 let fp = flat(&pass.f_int);
                 let mut xm = x.clone();
                 xm[j / 3][j % 3] -= h;
-                pass.evaluate(&model, &xm, &history, dt, 0, 0.0).unwrap();
+                pass.evaluate(&model, &xm, None, &history, dt, 0, 0.0)
+                    .unwrap();
                 let fm = flat(&pass.f_int);
                 for i in 0..n {
                     jac[i][j] = (fp[i] - fm[i]) / (2.0 * h);

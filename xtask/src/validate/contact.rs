@@ -89,7 +89,7 @@ fn run(
                 end_time: settings.end_time,
                 frames: settings.frames,
                 damping: settings.damping,
-                max_energy_error: settings.max_energy_error,
+                guard: settings.guard.clone(),
                 ..ImplicitSettings::default()
             };
             Implicit::new(model, implicit)

@@ -22,6 +22,7 @@ use std::process::ExitCode;
 mod constitutive;
 mod contact;
 mod explicit;
+mod fishnet;
 mod implicit;
 mod kinematics;
 
@@ -32,6 +33,7 @@ pub fn registry() -> Vec<Case> {
         constitutive::CASES,
         explicit::CASES,
         contact::CASES,
+        fishnet::CASES,
         implicit::CASES,
     ]
     .concat()

@@ -396,6 +396,81 @@ fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// The implicit driver through the facade: the summary reports its
+/// totals, a checkpoint carries its accelerations and contact pairs, and a
+/// resumed run ends where an uninterrupted one does, bit for bit; an
+/// explicit checkpoint is refused by the implicit driver.
+#[test]
+fn an_implicit_run_resumes_bit_for_bit() {
+    use drape::{Checkpoint, RunControl, RunOptions, run_scene, run_scene_with};
+    use drape_io::scene::Scene;
+    let dir = temp("resume-implicit");
+    let path = dir.join("draped.toml");
+    std::fs::write(&path, DRAPED).unwrap();
+    let set = [("simulation.solver".to_owned(), "implicit".to_owned())];
+    let scene = Scene::from_file(&path, &set).unwrap();
+    let straight = run_scene(&scene, &dir.join("straight"), &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(
+        straight.summary.status, "completed",
+        "{:?}",
+        straight.summary.reason
+    );
+    assert_eq!(straight.summary.run.solver, "implicit");
+    let totals = straight.summary.run.implicit.expect("implicit totals");
+    assert!(totals.newton_iterations >= straight.state.step);
+    assert!(totals.factorisations >= totals.newton_iterations);
+    assert!((0.0..1.0).contains(&totals.factor_share));
+    let increments = straight.state.step;
+    assert!(increments > 6, "{increments} increments");
+
+    let mut interrupted = scene.clone();
+    interrupted.implicit.max_increments = Some(increments - 2);
+    let out = dir.join("resumed");
+    let options = RunOptions {
+        checkpoint_every: Some(3),
+        ..RunOptions::default()
+    };
+    let first = run_scene_with(&interrupted, &out, options, &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(first.summary.status, "stopped");
+    let checkpoint = Checkpoint::read(&out).unwrap();
+    assert!(checkpoint.state.step > 0 && checkpoint.state.step < increments);
+
+    // An explicit run of the same scene cannot pick it up.
+    let mut explicit = scene.clone();
+    explicit.spec.simulation.solver = drape_io::scene::Solver::Explicit;
+    let refused = run_scene_with(
+        &explicit,
+        &dir.join("wrong"),
+        RunOptions {
+            resume: Some(checkpoint.clone()),
+            ..RunOptions::default()
+        },
+        &mut |_| RunControl::Continue,
+    );
+    let reason = refused.map(|r| r.summary.reason.unwrap_or_default());
+    assert!(
+        format!("{reason:?}").contains("written by the implicit driver"),
+        "{reason:?}"
+    );
+
+    let options = RunOptions {
+        resume: Some(checkpoint),
+        ..RunOptions::default()
+    };
+    let resumed = run_scene_with(&scene, &out, options, &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(resumed.summary.status, "completed");
+    assert_eq!(resumed.state.step, straight.state.step);
+    let bits = |s: &drape_model::State| -> Vec<u64> {
+        s.x.iter()
+            .flat_map(|p| p.iter().map(|v| v.to_bits()))
+            .collect()
+    };
+    assert_eq!(bits(&resumed.state), bits(&straight.state));
+    let csv = |d: &str| std::fs::read_to_string(dir.join(d).join("energy.csv")).unwrap();
+    assert_eq!(csv("resumed"), csv("straight"));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 /// A draping run far longer than any test waits for (10 s of forming at
 /// a 2e-6 s step: millions of steps), stopped by SIGINT.
 fn long_draped() -> String {

@@ -1,5 +1,6 @@
 //! How a run ends: its summary, or why it stopped early.
 
+use drape_contact::ContactFault;
 use drape_elements::ElementError;
 
 use crate::Energies;
@@ -44,6 +45,17 @@ pub enum RunError {
         relative: f64,
         /// The bound.
         bound: f64,
+    },
+    /// The contact guard refused a step: a node inside a tool by more than
+    /// the step can explain (see [`ContactFault`]).
+    #[error("step {step}, t = {time:.6e} s: contact fault: {fault}")]
+    ContactFault {
+        /// The step that failed.
+        step: u64,
+        /// Its time.
+        time: f64,
+        /// The node, the tool, the gap and why.
+        fault: ContactFault,
     },
     /// The settings or the model cannot run.
     #[error("cannot run: {0}")]

@@ -957,12 +957,19 @@ mod tests {
         assert!((previous_gap - (1.0 - offset)).abs() < 1e-6);
         assert_eq!((x, v), before, "nothing is corrected");
         let message = fault.to_string();
-        assert!(message.contains("node 0") && message.contains("`ring`"), "{message}");
+        assert!(
+            message.contains("node 0") && message.contains("`ring`"),
+            "{message}"
+        );
         // The same drift in front of the face (below it) is an ordinary
         // contact: the node is within its travel of the face.
         let mut x = vec![Vector3::new(120.0, 0.0, -offset + 0.5e-3)];
         let mut v = vec![Vector3::new(0.0, 0.0, 1.0)];
-        assert!(contact.enforce(&mut x, &mut v, &[1e-6], &[true], 2.0 * dt, dt).is_ok());
+        assert!(
+            contact
+                .enforce(&mut x, &mut v, &[1e-6], &[true], 2.0 * dt, dt)
+                .is_ok()
+        );
         assert!((x[0].z + offset).abs() < 1e-12);
     }
 

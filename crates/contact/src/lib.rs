@@ -52,7 +52,8 @@ mod surface;
 mod tool;
 
 pub use explicit::{
-    ContactFault, ContactSettings, ContactStatus, ContactStep, ExplicitContact, FaultKind, StepTimes,
+    ContactFault, ContactSettings, ContactStatus, ContactStep, ExplicitContact, FaultKind,
+    StepTimes,
 };
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};

@@ -335,7 +335,8 @@ impl MeshSurface {
                             self.rim.edges[tri as usize][i as usize]
                         }
                         TrianglePointLocation::OnVertex(i) => {
-                            self.rim.vertices[self.mesh.indices()[tri as usize][i as usize] as usize]
+                            self.rim.vertices
+                                [self.mesh.indices()[tri as usize][i as usize] as usize]
                         }
                         _ => false,
                     };

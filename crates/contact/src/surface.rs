@@ -595,10 +595,8 @@ impl Surface {
                 };
                 let q = Vector2::new(r, d.z);
                 let last = profile.len() - 1;
-                let (mut best, mut best_d2) = (
-                    (Vector2::zeros(), Vector2::zeros(), false),
-                    f64::INFINITY,
-                );
+                let (mut best, mut best_d2) =
+                    ((Vector2::zeros(), Vector2::zeros(), false), f64::INFINITY);
                 for (k, s) in profile.iter().enumerate() {
                     let (p, n, clamp) = s.closest(&q);
                     let d2 = (q - p).norm_squared();
@@ -886,8 +884,7 @@ mod tests {
             Surface::plane(Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.3, -0.2, 1.0)).unwrap(),
             Surface::sphere(Vector3::new(5.0, -3.0, 20.0), 60.0).unwrap(),
             Surface::hemispherical_punch(Vector3::new(0.0, 0.0, 20.0), 75.0, 150.0).unwrap(),
-            Surface::hemispherical_punch_down(Vector3::new(3.0, 0.0, 16.5), 75.0, 150.0)
-                .unwrap(),
+            Surface::hemispherical_punch_down(Vector3::new(3.0, 0.0, 16.5), 75.0, 150.0).unwrap(),
             Surface::die(Vector3::new(0.0, 0.0, -0.3), 80.0, 10.0, 150.0, 250.0).unwrap(),
             Surface::ring(Vector3::new(0.0, 0.0, 0.3), 95.0, 250.0, 5.0, 20.0).unwrap(),
             Surface::ring(Vector3::new(0.0, 0.0, 0.3), 95.0, 250.0, 5.0, 5.0).unwrap(),

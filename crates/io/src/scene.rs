@@ -990,7 +990,9 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
                 if !(edge_radius.is_finite() && *edge_radius >= 0.0) {
                     return Err(at.error(
                         &format!("{g}.edge_radius"),
-                        format!("{edge_radius} is not allowed: expected a radius ≥ 0 (0: a sharp edge)"),
+                        format!(
+                            "{edge_radius} is not allowed: expected a radius ≥ 0 (0: a sharp edge)"
+                        ),
                     ));
                 }
                 if !(*outer_radius > inner_radius + edge_radius) {

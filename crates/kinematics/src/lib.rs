@@ -46,8 +46,8 @@ pub mod reference;
 
 pub use fibre::{FibreKinematics, fibre_stretch, shear_angle, truss_stretch};
 pub use membrane::{
-    DEGENERATE_DET_C, Degeneracy, PolarDecomposition, add_nodal_forces, deformation_gradient, first_piola, polar_decomposition,
-    right_cauchy_green, right_stretch, rotated_strain_increment,
+    DEGENERATE_DET_C, Degeneracy, PolarDecomposition, add_nodal_forces, deformation_gradient,
+    first_piola, polar_decomposition, right_cauchy_green, right_stretch, rotated_strain_increment,
 };
 pub use nalgebra::{Matrix2, Matrix3x2, Vector2, Vector3};
 pub use reference::{LocalFrame, ReferencePoint, quad_point, triangle_point};

@@ -77,7 +77,9 @@ impl std::fmt::Display for Degeneracy {
             what.push("folded (turned over against the elements around it)".to_owned());
         }
         if self.over_stretched() {
-            what.push(format!("over-stretched ({l1:.3e} times its length along one direction)"));
+            what.push(format!(
+                "over-stretched ({l1:.3e} times its length along one direction)"
+            ));
         }
         if what.is_empty() {
             what.push(format!(
@@ -351,12 +353,27 @@ mod tests {
         let Err(KinematicsError::DegenerateMembrane(d)) = polar_decomposition(&f) else {
             panic!("not degenerate")
         };
-        assert!((d.stretches[0] / 1.4e4 - 1.0).abs() < 1e-12, "{:?}", d.stretches);
-        assert!((d.stretches[1] / 1e-3 - 1.0).abs() < 1e-6, "{:?}", d.stretches);
-        assert!((d.det_ratio - (1.4e4f64 * 1e-3).powi(2) / (1.4e4f64.powi(2) + 1e-6).powi(2)).abs() < 1e-25);
+        assert!(
+            (d.stretches[0] / 1.4e4 - 1.0).abs() < 1e-12,
+            "{:?}",
+            d.stretches
+        );
+        assert!(
+            (d.stretches[1] / 1e-3 - 1.0).abs() < 1e-6,
+            "{:?}",
+            d.stretches
+        );
+        assert!(
+            (d.det_ratio - (1.4e4f64 * 1e-3).powi(2) / (1.4e4f64.powi(2) + 1e-6).powi(2)).abs()
+                < 1e-25
+        );
         assert!(d.over_stretched());
         let m = KinematicsError::DegenerateMembrane(d).to_string();
-        for part in ["principal stretches 1.4000e4 and 1.0000e-3", "det C/(tr C)²", "over-stretched"] {
+        for part in [
+            "principal stretches 1.4000e4 and 1.0000e-3",
+            "det C/(tr C)²",
+            "over-stretched",
+        ] {
             assert!(m.contains(part), "{m}");
         }
         // Squeezed flat without stretching: collapsed.
@@ -373,7 +390,10 @@ mod tests {
             ..d
         };
         let m = judged.to_string();
-        assert!(m.contains("folded") && !m.contains("collapsed") && !m.contains("judged"), "{m}");
+        assert!(
+            m.contains("folded") && !m.contains("collapsed") && !m.contains("judged"),
+            "{m}"
+        );
     }
 
     #[test]

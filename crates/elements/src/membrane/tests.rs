@@ -459,7 +459,10 @@ fn a_degenerate_element_says_whether_it_folded_or_collapsed() {
     assert_eq!((d.inverted, d.folded), (Some(false), Some(true)), "{e}");
     assert!((d.stretches[0] - 1.0).abs() < 1e-9 && (d.stretches[1] - 1e-9).abs() < 1e-15);
     let message = e.to_string();
-    assert!(message.contains("folded") && message.contains("element 2"), "{message}");
+    assert!(
+        message.contains("folded") && message.contains("element 2"),
+        "{message}"
+    );
     // Squeezed the same amount without turning over: collapsed.
     x[3].x = 2.0 + 1e-9;
     x[7].x = 2.0 + 1e-9;

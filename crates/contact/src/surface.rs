@@ -469,9 +469,8 @@ impl Surface {
         outer_radius: f64,
     ) -> Result<Self, SurfaceError> {
         let (a, f) = (opening_radius, fillet_radius);
-        if !(a > 0.0 && f > 0.0 && depth > 0.0 && outer_radius > a + f)
-            || ![a, f, depth, outer_radius].iter().all(|v| v.is_finite())
-        {
+        let finite = [a, f, depth, outer_radius].iter().all(|v| v.is_finite());
+        if !(finite && a > 0.0 && f > 0.0 && depth > 0.0 && outer_radius > a + f) {
             return Err(SurfaceError::Invalid {
                 what: "a die needs positive opening, fillet and depth and an outer radius beyond opening + fillet",
             });
@@ -520,9 +519,8 @@ impl Surface {
         thickness: f64,
     ) -> Result<Self, SurfaceError> {
         let (ri, ro, rho, t) = (inner_radius, outer_radius, edge_radius, thickness);
-        if ![ri, ro, rho, t].iter().all(|v| v.is_finite())
-            || !(ri > 0.0 && rho >= 0.0 && ro > ri + rho && t > 0.0 && t >= rho)
-        {
+        let finite = [ri, ro, rho, t].iter().all(|v| v.is_finite());
+        if !(finite && ri > 0.0 && rho >= 0.0 && ro > ri + rho && t > 0.0 && t >= rho) {
             return Err(SurfaceError::Invalid {
                 what: "a ring needs 0 < inner radius, an outer radius beyond inner + edge radius, \
                        an edge radius ≥ 0 and a thickness > 0 of at least the edge radius",

@@ -964,7 +964,7 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
                     positive(at, &format!("{g}.fillet_radius"), *fillet_radius)?,
                 );
                 positive(at, &format!("{g}.depth"), *depth)?;
-                if !(*outer_radius > a + f) {
+                if outer_radius.is_nan() || *outer_radius <= a + f {
                     return Err(at.error(
                         &format!("{g}.outer_radius"),
                         format!("{outer_radius} is not allowed: expected more than opening + fillet radius ({})", a + f),
@@ -995,7 +995,7 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
                         ),
                     ));
                 }
-                if !(*outer_radius > inner_radius + edge_radius) {
+                if outer_radius.is_nan() || *outer_radius <= inner_radius + edge_radius {
                     return Err(at.error(
                         &format!("{g}.outer_radius"),
                         format!(

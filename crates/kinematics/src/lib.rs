@@ -37,7 +37,7 @@
 //!
 //! Conventions: the reference local frame of a membrane point is an
 //! orthonormal pair (e₁, e₂) in its reference tangent plane (see
-//! [`reference`]); all 2×2 tensors (C, U, τ̄, Δε̄) are written in it. Shear
+//! [`reference`](mod@reference)); all 2×2 tensors (C, U, τ̄, Δε̄) are written in it. Shear
 //! angles are in radians here; degrees are for input and output files only.
 
 pub mod fibre;

@@ -16,10 +16,16 @@
 
 use std::path::{Path, PathBuf};
 
+mod kinematic;
+pub use kinematic::{
+    Comparison, ComparisonReport, ComparisonSummary, KinematicError, KinematicReport,
+    ProfileDifference, compare, compare_scene, kinematic_scene,
+};
+
 use drape_io::results::{
     DrawInMm, EnergyRow, EnergySummary, FrameData, ResultsDir, ResultsError, RunInfo, Summary,
 };
-use drape_io::scene::Scene;
+use drape_io::scene::{Scene, SceneFile};
 use drape_model::{Measures, State};
 use drape_time::{Control, DriverState, Energies, Explicit, Frame, Observer, Progress};
 use serde::{Deserialize, Serialize};
@@ -52,12 +58,26 @@ pub type FacadeError = ResultsError;
 
 /// Everything a stopped run needs to continue: written atomically to
 /// `checkpoint.json` in its output directory.
+///
+/// It carries the scene as it ran (every value after `--set`, the files it
+/// reads as absolute paths, see [`Scene::resolved_spec`]), not a path to
+/// the scene file: a run resumes from any directory, and always with the
+/// scene it started with, whatever became of the file since. The files
+/// the scene reads beside itself (meshes) are fingerprinted: a resume
+/// refuses to continue with a changed one.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Checkpoint {
-    /// The scene file.
-    pub scene: PathBuf,
-    /// The `--set` overrides it ran with.
+    /// The scene file the run started from, for messages.
+    pub scene_file: PathBuf,
+    /// The `--set` overrides it started with (their values are in `scene`).
     pub overrides: Vec<(String, String)>,
+    /// The scene as it runs.
+    pub scene: SceneFile,
+    /// The files the scene reads, as they were when the run started.
+    pub inputs: Vec<InputFile>,
+    /// Steps between checkpoints, kept by a resumed run.
+    #[serde(default)]
+    pub checkpoint_every: Option<u64>,
     /// The state.
     pub state: State,
     /// The driver's carried state.
@@ -66,6 +86,48 @@ pub struct Checkpoint {
     pub rows: Vec<EnergyRow>,
     /// The frames written so far: (index, time).
     pub frames: Vec<(usize, f64)>,
+}
+
+/// A file a scene reads (a mesh), with its size and a fingerprint of its
+/// bytes.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct InputFile {
+    /// The file (absolute).
+    pub path: PathBuf,
+    /// Its size in bytes.
+    pub bytes: u64,
+    /// FNV-1a of its bytes (a change detector, not a security measure).
+    pub fingerprint: u64,
+}
+
+impl InputFile {
+    /// Reads and fingerprints `path`.
+    pub fn of(path: &Path) -> std::io::Result<Self> {
+        let bytes = std::fs::read(path)?;
+        Ok(Self {
+            path: path.to_owned(),
+            bytes: bytes.len() as u64,
+            fingerprint: fnv1a(&bytes),
+        })
+    }
+}
+
+/// 64-bit FNV-1a: stable across Rust releases and platforms (std's
+/// `DefaultHasher` promises neither), a few lines rather than a dependency.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// What a checkpoint records of the run's scene: written into each one.
+#[derive(Debug, Clone)]
+struct SceneRecord {
+    scene_file: PathBuf,
+    overrides: Vec<(String, String)>,
+    scene: SceneFile,
+    inputs: Vec<InputFile>,
+    checkpoint_every: Option<u64>,
 }
 
 impl Checkpoint {
@@ -77,17 +139,73 @@ impl Checkpoint {
     /// Reads the checkpoint of the output directory `out`.
     pub fn read(out: &Path) -> Result<Self, String> {
         let path = Self::path(out);
-        let text =
-            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        serde_json::from_str(&text)
-            .map_err(|e| format!("{}: not a drape checkpoint: {e}", path.display()))
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            if e.kind() == std::io::ErrorKind::NotFound {
+                format!(
+                    "{}: no checkpoint to resume from (a run writes one with \
+                     --checkpoint-every N)",
+                    path.display()
+                )
+            } else {
+                format!("{}: {e}", path.display())
+            }
+        })?;
+        serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}: not a checkpoint this drape can read ({e})",
+                path.display()
+            )
+        })
+    }
+
+    /// The scene to continue with: the checkpoint's own copy, after
+    /// checking that the files it reads are those the run started with and
+    /// that the state fits its model.
+    pub fn scene(&self) -> Result<Scene, String> {
+        for input in &self.inputs {
+            match InputFile::of(&input.path) {
+                Ok(now) if now == *input => {}
+                Ok(_) => {
+                    return Err(format!(
+                        "{} has changed since the run started: the run cannot continue with a \
+                         different mesh (restore the file, or start a new run)",
+                        input.path.display()
+                    ));
+                }
+                Err(e) => {
+                    return Err(format!(
+                        "{}: {e}: the run needs the files it started with",
+                        input.path.display()
+                    ));
+                }
+            }
+        }
+        let scene = Scene::from_spec(self.scene.clone(), &self.scene_file)
+            .map_err(|e| format!("the checkpoint's scene: {e}"))?;
+        if self.state.x.len() != scene.model.node_count() {
+            return Err(format!(
+                "the checkpoint's state has {} nodes, its scene's model {}: a damaged checkpoint",
+                self.state.x.len(),
+                scene.model.node_count()
+            ));
+        }
+        Ok(scene)
+    }
+
+    /// Whether the scene file now says something else than the scene the
+    /// run started with (read with the same overrides); `None` when it
+    /// cannot be read or parsed any more, which also means it changed.
+    pub fn scene_file_matches(&self) -> Option<bool> {
+        let now = Scene::from_file(&self.scene_file, &self.overrides).ok()?;
+        Some(now.resolved_spec() == self.scene)
     }
 }
 
 /// How to run beyond the scene itself.
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
-    /// Write a checkpoint every this many steps.
+    /// Write a checkpoint every this many steps (a resumed run keeps its
+    /// checkpoint's interval unless this is given).
     pub checkpoint_every: Option<u64>,
     /// The `--set` overrides, recorded in checkpoints.
     pub overrides: Vec<(String, String)>,
@@ -97,8 +215,9 @@ pub struct RunOptions {
 
 struct Recorder<'a> {
     results: ResultsDir,
-    scene: PathBuf,
-    overrides: Vec<(String, String)>,
+    record: SceneRecord,
+    /// The step of the last checkpoint written (or resumed from).
+    last_checkpoint: Option<(u64, f64)>,
     write_frames: bool,
     rows: Vec<EnergyRow>,
     max_shear_deg: f64,
@@ -144,9 +263,13 @@ impl Observer for Recorder<'_> {
         if self.error.is_some() {
             return;
         }
+        let r = &self.record;
         let checkpoint = Checkpoint {
-            scene: self.scene.clone(),
-            overrides: self.overrides.clone(),
+            scene_file: r.scene_file.clone(),
+            overrides: r.overrides.clone(),
+            scene: r.scene.clone(),
+            inputs: r.inputs.clone(),
+            checkpoint_every: r.checkpoint_every,
             state: state.clone(),
             driver: driver.clone(),
             rows: self.rows.clone(),
@@ -156,8 +279,9 @@ impl Observer for Recorder<'_> {
         let written = serde_json::to_vec(&checkpoint)
             .map_err(std::io::Error::other)
             .and_then(|bytes| drape_io::atomic::write(&path, &bytes));
-        if let Err(source) = written {
-            self.error = Some(ResultsError { path, source });
+        match written {
+            Ok(()) => self.last_checkpoint = Some((state.step, state.time)),
+            Err(source) => self.error = Some(ResultsError { path, source }),
         }
     }
 
@@ -169,6 +293,19 @@ impl Observer for Recorder<'_> {
             progress: *progress,
             max_shear_deg: self.max_shear_deg,
         })
+    }
+}
+
+/// Checks that `scene` can run, before anything is written: the settings,
+/// a forced time step against the stable one, a blank that starts inside a
+/// tool, a force-driven tool that would pass through the blank in one step
+/// (see [`drape_time::guard::check_tools_at_start`]). The error is the
+/// reason; the warnings are what the run will also report.
+pub fn check_scene(scene: &Scene) -> Result<Vec<String>, String> {
+    match Explicit::new(&scene.model, scene.settings.clone()) {
+        Ok(explicit) => Ok(explicit.warnings().to_vec()),
+        Err(drape_time::RunError::Setup(reason)) => Err(reason),
+        Err(e) => Err(e.to_string()),
     }
 }
 
@@ -193,25 +330,97 @@ pub fn run_scene_with(
     options: RunOptions,
     progress: &mut dyn FnMut(&RunProgress) -> Control,
 ) -> Result<RunReport, FacadeError> {
+    let results = open_output(out, options.resume.as_ref())?;
+    run_in(scene, results, options, progress)
+}
+
+/// Claims the output directory `out` for a run (see [`ResultsDir`]): locks
+/// it (another run writing there is an error of kind `ResourceBusy`),
+/// clears what a killed run left, and then, for a new run, removes the
+/// results and checkpoint of an earlier one, or, to continue from
+/// `resume`, keeps the frames it lists. Nothing is run: a caller can tell
+/// an unusable folder from a failed run.
+pub fn open_output(out: &Path, resume: Option<&Checkpoint>) -> Result<ResultsDir, ResultsError> {
+    match resume {
+        Some(c) => ResultsDir::reopen(out, &c.frames),
+        None => {
+            let results = ResultsDir::create(out)?;
+            remove_checkpoint(out)?;
+            Ok(results)
+        }
+    }
+}
+
+/// Removes the checkpoint of `out`, if any.
+fn remove_checkpoint(out: &Path) -> Result<(), ResultsError> {
+    let path = Checkpoint::path(out);
+    match std::fs::remove_file(&path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(ResultsError { path, source: e }),
+        _ => Ok(()),
+    }
+}
+
+/// [`run_scene_with`] into an output directory already claimed by
+/// [`open_output`] (with the same `options.resume`).
+///
+/// A run that completes removes its checkpoint (there is nothing left to
+/// resume); one that stops early (on request) writes a last frame of where
+/// it stopped, and its summary says `stopped` and from which checkpoint it
+/// can continue.
+pub fn run_in(
+    scene: &Scene,
+    results: ResultsDir,
+    options: RunOptions,
+    progress: &mut dyn FnMut(&RunProgress) -> Control,
+) -> Result<RunReport, FacadeError> {
     let model = &scene.model;
-    let (results, mut state, rows, driver) = match options.resume {
+    let (record, mut state, rows, driver, last_checkpoint) = match options.resume {
         Some(c) => (
-            ResultsDir::reopen(out, &c.frames)?,
+            SceneRecord {
+                scene_file: c.scene_file,
+                overrides: c.overrides,
+                scene: c.scene,
+                inputs: c.inputs,
+                checkpoint_every: options.checkpoint_every.or(c.checkpoint_every),
+            },
             c.state,
             c.rows,
             Some(c.driver),
-        ),
-        None => (
-            ResultsDir::create(out)?,
-            model.initial_state(),
-            Vec::new(),
             None,
         ),
+        None => {
+            let mut inputs = Vec::new();
+            for path in scene.input_files() {
+                let input = InputFile::of(&path).map_err(|source| ResultsError {
+                    path: path.clone(),
+                    source,
+                })?;
+                inputs.push(input);
+            }
+            (
+                SceneRecord {
+                    // Absolute: a resume may start from anywhere.
+                    scene_file: std::path::absolute(&scene.file).unwrap_or(scene.file.clone()),
+                    overrides: options.overrides,
+                    scene: scene.resolved_spec(),
+                    inputs,
+                    checkpoint_every: options.checkpoint_every,
+                },
+                model.initial_state(),
+                Vec::new(),
+                None,
+                None,
+            )
+        }
     };
+    let last_checkpoint =
+        last_checkpoint.or_else(|| driver.as_ref().map(|_| (state.step, state.time)));
+    let mut settings = scene.settings.clone();
+    settings.checkpoint_every = record.checkpoint_every;
     let mut recorder = Recorder {
         results,
-        scene: scene.file.clone(),
-        overrides: options.overrides,
+        record,
+        last_checkpoint,
         write_frames: scene.spec.output.vtu,
         rows,
         max_shear_deg: 0.0,
@@ -220,32 +429,51 @@ pub fn run_scene_with(
         callback: progress,
     };
     let started = std::time::Instant::now();
-    let mut settings = scene.settings.clone();
-    settings.checkpoint_every = options.checkpoint_every;
+    let mut warnings = Vec::new();
     let outcome = Explicit::new(model, settings).and_then(|mut explicit| {
         if let Some(d) = driver {
             explicit.resume_from(d);
         }
-        explicit.run(&mut state, &mut recorder)
+        let outcome = explicit.run(&mut state, &mut recorder);
+        if let Ok(s) = &outcome {
+            if s.stopped {
+                recorder.stop_frame(model, &state, &s.energy, explicit.contact());
+            }
+        }
+        warnings = explicit.warnings().to_vec();
+        outcome
     });
     let wall_s = started.elapsed().as_secs_f64();
     if let Some(e) = recorder.error.take() {
         return Err(e);
     }
-    let (status, reason, steps, energy) = match &outcome {
-        Ok(s) if s.stopped => (
-            "stopped",
-            Some("stopped on request".to_owned()),
-            s.steps,
-            s.energy,
-        ),
-        Ok(s) => ("completed", None, s.steps, s.energy),
-        Err(e) => (
-            "failed",
-            Some(e.to_string()),
-            state.step,
-            recorder.last_energy,
-        ),
+    let (status, reason, energy) = match &outcome {
+        Ok(s) if s.stopped => {
+            let mut reason = format!(
+                "stopped on request at t = {:.6e} s of {:.6e} s (step {})",
+                state.time, scene.settings.end_time, state.step
+            );
+            match recorder.last_checkpoint {
+                Some((step, time)) => reason.push_str(&format!(
+                    "; it can be resumed from the checkpoint at step {step} (t = {time:.6e} s)"
+                )),
+                None => reason.push_str("; no checkpoint was written, so it cannot be resumed"),
+            }
+            ("stopped", Some(reason), s.energy)
+        }
+        Ok(s) => ("completed", None, s.energy),
+        Err(e) => {
+            let mut reason = e.to_string();
+            // The driver puts back the last output frame: say which one the
+            // results are.
+            if e.step_and_time().is_some() {
+                reason.push_str(&format!(
+                    "; the results are those of t = {:.6e} s (step {}), the last output frame",
+                    state.time, state.step
+                ));
+            }
+            ("failed", Some(reason), recorder.last_energy)
+        }
     };
     let locking = scene.spec.output.locking_angle_deg;
     let measures = model.measures(&state, locking).unwrap_or_default();
@@ -259,7 +487,7 @@ pub fn run_scene_with(
     let summary = Summary {
         status: status.to_owned(),
         reason,
-        scene: scene.file.display().to_string(),
+        scene: recorder.record.scene_file.display().to_string(),
         time: state.time,
         max_shear_deg: measures.max_shear_deg,
         max_shear_at: measures.max_shear_at,
@@ -271,15 +499,20 @@ pub fn run_scene_with(
         max_fibre_tension_n: measures.max_fibre_tension_n,
         area_above_locking_mm2: measures.area_above_locking,
         energy: EnergySummary {
-            balance_error: energy.relative_error(),
+            balance_error: drape_time::guard::relative_balance_error(
+                &energy,
+                drape_time::guard::energy_floor(model),
+            ),
             kinetic_to_internal: energy.kinetic_to_internal(),
         },
         run: RunInfo {
             wall_s,
-            steps,
+            // Every step from the start, a resumed run's included.
+            steps: state.step,
             threads: rayon::current_num_threads(),
             solver: "explicit".to_owned(),
         },
+        warnings,
     };
     let results = &recorder.results;
     results.write_energy(&recorder.rows)?;
@@ -290,9 +523,38 @@ pub fn run_scene_with(
         }
     }
     results.write_summary(&summary)?;
+    if status == "completed" {
+        remove_checkpoint(results.path())?;
+    }
     Ok(RunReport {
         summary,
         measures,
         state,
     })
+}
+
+impl Recorder<'_> {
+    /// A last frame where a run stopped between frames, after the last one
+    /// written, with its energy row.
+    fn stop_frame(
+        &mut self,
+        model: &drape_model::Model,
+        state: &State,
+        energy: &Energies,
+        contact: Option<&drape_contact::ExplicitContact>,
+    ) {
+        let frames = self.results.frames();
+        if frames.last().is_some_and(|&(_, t)| t == state.time) {
+            return;
+        }
+        let index = frames.last().map_or(0, |&(i, _)| i + 1);
+        self.frame(&Frame {
+            index,
+            model,
+            state,
+            energy,
+            reactions: &[],
+            contact,
+        });
+    }
 }

@@ -1,23 +1,34 @@
-//! The `drape` command: run, new, sweep, inspect.
+//! The `drape` command: run, new, sweep, inspect, kinematic, compare.
 //!
 //! Exit codes: 0 done, 1 the run failed (diverged or could not write its
-//! results; what it reached is kept), 2 bad input (nothing is written).
+//! results; what it reached is kept), 2 bad input (a bad scene, an output
+//! folder that cannot be written or that another run is writing into;
+//! nothing is written), 130 stopped by Ctrl-C (the last frame, the energy
+//! history and a summary with status "stopped" are written).
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow};
 use clap::{Parser, Subcommand};
-use drape::{Checkpoint, RunControl, RunOptions, RunProgress, run_scene, run_scene_with};
-use drape_io::results::Summary;
+use drape::{Checkpoint, RunControl, RunOptions, RunProgress, open_output, run_in, run_scene};
+use drape_io::results::{OutputLock, ResultsError, Summary};
 use drape_io::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 #[derive(Parser)]
-#[command(name = "drape", version, about = "Composite fabric forming simulation", long_about = None)]
+#[command(
+    name = "drape",
+    version,
+    about = "Composite fabric forming simulation",
+    long_about = None,
+    after_help = "Exit codes: 0 done, 1 the run failed (what it reached is kept), 2 bad input \
+                  (nothing written), 130 stopped by Ctrl-C (last frame and summary written)."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -36,14 +47,18 @@ enum Command {
         /// Override a scene value: --set tools.0.friction=0.2 (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
-        /// Worker threads (default: all cores).
+        /// Worker threads (default: all cores; more than the machine runs
+        /// at once is brought down to that).
         #[arg(long)]
         threads: Option<usize>,
-        /// Write a restart file (checkpoint.json) every N steps.
+        /// Write a restart file (checkpoint.json) every N steps; a run that
+        /// completes removes it.
         #[arg(long, value_name = "N")]
         checkpoint_every: Option<u64>,
         /// Continue the stopped run in DIR from its checkpoint, with the
-        /// scene and overrides it was started with.
+        /// scene it started with (every value, overrides included, is kept
+        /// in the checkpoint: the scene file is not read again, and an
+        /// edited one is reported and ignored). Works from any directory.
         #[arg(long, value_name = "DIR", conflicts_with_all = ["scene", "set", "out"])]
         resume: Option<PathBuf>,
     },
@@ -64,7 +79,8 @@ enum Command {
         /// Output directory (default: results/<scene name>-sweep).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Worker threads (default: all cores).
+        /// Worker threads (default: all cores; more than the machine runs
+        /// at once is brought down to that).
         #[arg(long)]
         threads: Option<usize>,
     },
@@ -72,6 +88,33 @@ enum Command {
     Inspect {
         /// The output directory.
         dir: PathBuf,
+    },
+    /// Drape the scene's blank on its mould as a pin-jointed net (kinematic
+    /// draping, in milliseconds) and write the results a run writes.
+    Kinematic {
+        /// The scene file (TOML); its [kinematic] table or the defaults.
+        scene: PathBuf,
+        /// Output directory (default: results/<scene name>-kinematic).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scene value: --set kinematic.spacing=5 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Run the scene both ways, kinematic net and forming run, and write
+    /// them side by side with their difference.
+    Compare {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Output directory (default: results/<scene name>-compare).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scene value: --set tools.0.friction=0 (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Worker threads of the forming run (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
 }
 
@@ -109,8 +152,53 @@ fn bad(message: impl Into<String>) -> anyhow::Error {
     anyhow!(BadInput(message.into()))
 }
 
+/// Set by the first Ctrl-C: runs stop after their current step and write
+/// what they reached.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// The exit code of a run stopped by Ctrl-C (128 + SIGINT, as shells do).
+const INTERRUPTED_EXIT: u8 = 130;
+
+/// The first Ctrl-C asks the runs to stop cleanly; a second one quits at
+/// once (every file is still whole: each is written to a temporary and
+/// renamed, and the next run into the folder clears the temporaries).
+fn handle_ctrl_c() {
+    let installed = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            eprintln!("\nquitting now: the results are those of the last frame written");
+            std::process::exit(i32::from(INTERRUPTED_EXIT));
+        }
+        eprintln!(
+            "\nstopping after this step: writing the last frame, the energy history and the \
+             summary (Ctrl-C again to quit at once)"
+        );
+    });
+    if let Err(e) = installed {
+        eprintln!("note: Ctrl-C will not stop runs cleanly: {e}");
+    }
+}
+
+fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
+
+/// The error and its causes on one line, each cause once (a cause that an
+/// outer message already quotes is not repeated).
+fn describe(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    handle_ctrl_c();
     let result = match cli.command {
         Command::Run {
             scene,
@@ -132,11 +220,18 @@ fn main() -> ExitCode {
             threads,
         } => with_threads(threads, || sweep(&scene, out, &set)),
         Command::Inspect { dir } => inspect(&dir),
+        Command::Kinematic { scene, out, set } => kinematic(&scene, out, &set),
+        Command::Compare {
+            scene,
+            out,
+            set,
+            threads,
+        } => with_threads(threads, || compare(&scene, out, &set)),
     };
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", describe(&e));
             if e.downcast_ref::<BadInput>().is_some() {
                 ExitCode::from(2)
             } else {
@@ -150,15 +245,63 @@ fn with_threads(
     threads: Option<usize>,
     f: impl FnOnce() -> Result<ExitCode> + Send,
 ) -> Result<ExitCode> {
+    let available = std::thread::available_parallelism().map_or(1, usize::from);
     match threads {
         Some(0) => Err(bad("--threads must be at least 1")),
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .context("cannot start the thread pool")?
-            .install(f),
+        Some(n) => {
+            // More threads than the machine runs at once only adds
+            // switching (and results do not depend on the count).
+            let n = if n > available {
+                eprintln!(
+                    "note: --threads {n} is more than this machine runs at once; using {available}"
+                );
+                available
+            } else {
+                n
+            };
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .context("cannot start the thread pool")?
+                .install(f)
+        }
         None => f(),
     }
+}
+
+/// An output folder that cannot be used, as bad input: the folder, what
+/// is wrong with it, and what to do.
+fn unusable_output(out: &Path, e: &ResultsError) -> anyhow::Error {
+    use std::io::ErrorKind;
+    let kind = e.source.kind();
+    if kind == ErrorKind::ResourceBusy {
+        return bad(format!(
+            "{}: {}: wait for it to finish, or give another output folder with --out",
+            out.display(),
+            e.source
+        ));
+    }
+    if let Some(file) = out.ancestors().find(|a| a.is_file()) {
+        let inside = if file == out {
+            String::new()
+        } else {
+            format!(" (inside {})", out.display())
+        };
+        return bad(format!(
+            "{} is a file, not a folder{inside}: give --out a folder (it is created if needed)",
+            file.display()
+        ));
+    }
+    let why = match kind {
+        ErrorKind::PermissionDenied => "permission denied".to_owned(),
+        ErrorKind::ReadOnlyFilesystem => "the file system is read-only".to_owned(),
+        _ if e.path == out => e.source.to_string(),
+        _ => format!("{}: {}", e.path.display(), e.source),
+    };
+    bad(format!(
+        "cannot write results into {}: {why}; give another output folder with --out",
+        out.display()
+    ))
 }
 
 fn parse_sets(set: &[String]) -> Result<Vec<(String, String)>> {
@@ -219,6 +362,9 @@ impl Reporter {
             "step {} t = {:.4e} s, max shear {:.1}°",
             p.progress.step, p.progress.time, p.max_shear_deg
         );
+        if interrupted() {
+            return RunControl::Stop;
+        }
         match &self.bar {
             Some(bar) => {
                 bar.set_position((fraction * 1000.0) as u64);
@@ -276,6 +422,9 @@ fn print_summary(s: &Summary, out: &Path) {
         "run               {:.1} s wall, {} threads, {}",
         s.run.wall_s, s.run.threads, s.run.solver
     );
+    for w in &s.warnings {
+        println!("warning           {w}");
+    }
     println!("results           {}", out.display());
 }
 
@@ -287,6 +436,12 @@ fn run(
 ) -> Result<ExitCode> {
     let overrides = parse_sets(set)?;
     let scene = load(scene_path, &overrides)?;
+    // What cannot run is bad input: refused before anything is written.
+    let warnings = drape::check_scene(&scene)
+        .map_err(|reason| bad(format!("{}: {reason}", scene_path.display())))?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     let out = out.unwrap_or_else(|| default_out(scene_path, ""));
     let options = RunOptions {
         checkpoint_every: checked_interval(checkpoint_every)?,
@@ -303,40 +458,98 @@ fn checked_interval(every: Option<u64>) -> Result<Option<u64>> {
     }
 }
 
+/// The summary a run left in `dir`, if it left a readable one.
+fn read_summary(dir: &Path) -> Option<Summary> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
 fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
-    let checkpoint = Checkpoint::read(dir).map_err(bad)?;
-    let scene = load(&checkpoint.scene, &checkpoint.overrides)?;
-    if checkpoint.state.x.len() != scene.model.node_count() {
+    if !dir.is_dir() {
         return Err(bad(format!(
-            "{}: the checkpoint does not belong to {} as it is now",
-            Checkpoint::path(dir).display(),
-            checkpoint.scene.display()
+            "{}: {}: --resume takes the output folder of a stopped run",
+            dir.display(),
+            if dir.exists() {
+                "not a folder"
+            } else {
+                "no such folder"
+            }
         )));
     }
-    eprintln!(
-        "resuming {} at step {}, t = {:.6} s",
-        checkpoint.scene.display(),
-        checkpoint.state.step,
-        checkpoint.state.time
-    );
+    let checkpoint_every = checked_interval(checkpoint_every)?;
+    match read_summary(dir) {
+        Some(s) if s.status == "completed" => {
+            println!(
+                "{}: the run is finished (completed at t = {:.6} s in {} steps): nothing to resume",
+                dir.display(),
+                s.time,
+                s.run.steps
+            );
+            return Ok(ExitCode::SUCCESS);
+        }
+        Some(s) if s.status == "failed" => {
+            return Err(bad(format!(
+                "{}: the run failed ({}): resuming it would repeat the failure with the same \
+                 scene; change the scene and start a new run",
+                dir.display(),
+                s.reason.as_deref().unwrap_or("no reason recorded")
+            )));
+        }
+        _ => {}
+    }
+    let checkpoint = Checkpoint::read(dir).map_err(bad)?;
+    let scene = checkpoint.scene().map_err(|e| {
+        bad(format!(
+            "{}: cannot resume: {e}",
+            Checkpoint::path(dir).display()
+        ))
+    })?;
+    let file = checkpoint.scene_file.display();
+    match checkpoint.scene_file_matches() {
+        Some(true) => {}
+        Some(false) => eprintln!(
+            "note: {file} has changed since the run started; the run continues with the scene \
+             it started with (kept in the checkpoint). Start a new run to use the edited scene."
+        ),
+        None => eprintln!(
+            "note: {file} cannot be read as it was (moved, deleted or broken); the run continues \
+             with the scene it started with (kept in the checkpoint)."
+        ),
+    }
     let options = RunOptions {
-        checkpoint_every: checked_interval(checkpoint_every)?,
-        overrides: checkpoint.overrides.clone(),
+        checkpoint_every,
+        overrides: Vec::new(),
         resume: Some(checkpoint),
     };
     finish_run(&scene, dir, options)
 }
 
 fn finish_run(scene: &Scene, out: &Path, options: RunOptions) -> Result<ExitCode> {
+    // The folder first: a run that cannot write its results must not start.
+    let results =
+        open_output(out, options.resume.as_ref()).map_err(|e| unusable_output(out, &e))?;
+    if let Some(c) = &options.resume {
+        eprintln!(
+            "resuming {} at step {}, t = {:.6} s",
+            c.scene_file.display(),
+            c.state.step,
+            c.state.time
+        );
+    }
     let mut reporter = Reporter::new();
-    let report = run_scene_with(scene, out, options, &mut |p| reporter.update(p))
+    let report = run_in(scene, results, options, &mut |p| reporter.update(p))
         .with_context(|| format!("writing results to {}", out.display()))?;
     reporter.finish();
     print_summary(&report.summary, out);
-    Ok(if report.summary.status == "failed" {
-        ExitCode::from(1)
-    } else {
-        ExitCode::SUCCESS
+    Ok(match report.summary.status.as_str() {
+        "failed" => ExitCode::from(1),
+        "stopped" if interrupted() => {
+            if Checkpoint::path(out).is_file() {
+                eprintln!("continue it with: drape run --resume {}", out.display());
+            }
+            ExitCode::from(INTERRUPTED_EXIT)
+        }
+        _ => ExitCode::SUCCESS,
     })
 }
 
@@ -389,15 +602,23 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
         .map(|c| load(scene_path, c))
         .collect::<Result<_>>()?;
     let out = out.unwrap_or_else(|| default_out(scene_path, "-sweep"));
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    // One sweep per folder, as one run per folder; each run's own folder
+    // is locked by the run.
+    let _lock = OutputLock::acquire(&out).map_err(|e| unusable_output(&out, &e))?;
     eprintln!("sweep: {} runs into {}", scenes.len(), out.display());
     let reports: Vec<Result<Summary>> = scenes
         .par_iter()
         .enumerate()
         .map(|(i, scene)| {
             let dir = out.join(format!("run_{i:03}"));
-            let report = run_scene(scene, &dir, &mut |_| RunControl::Continue)
-                .with_context(|| format!("writing {}", dir.display()))?;
+            let report = run_scene(scene, &dir, &mut |_| {
+                if interrupted() {
+                    RunControl::Stop
+                } else {
+                    RunControl::Continue
+                }
+            })
+            .with_context(|| format!("writing {}", dir.display()))?;
             eprintln!(
                 "  run_{i:03} {} max shear {:.2}°",
                 report.summary.status, report.summary.max_shear_deg
@@ -438,7 +659,7 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
                 failed = true;
                 table.push_str(&format!(
                     ",error: {},,,,,,,,\n",
-                    e.to_string().replace(',', ";")
+                    describe(e).replace(',', ";")
                 ));
             }
         }
@@ -449,15 +670,37 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
     print!("{table}");
     Ok(if failed {
         ExitCode::from(1)
+    } else if interrupted() {
+        ExitCode::from(INTERRUPTED_EXIT)
     } else {
         ExitCode::SUCCESS
     })
 }
 
 fn inspect(dir: &Path) -> Result<ExitCode> {
+    if !dir.is_dir() {
+        return Err(bad(format!(
+            "{}: {}: inspect takes a run's output folder",
+            dir.display(),
+            if dir.exists() {
+                "not a folder"
+            } else {
+                "no such folder"
+            }
+        )));
+    }
     let path = dir.join("summary.json");
-    let text =
-        std::fs::read_to_string(&path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            bad(format!(
+                "{}: no summary.json: no run has finished writing here (one may still be \
+                 running, or was killed)",
+                dir.display()
+            ))
+        } else {
+            bad(format!("{}: {e}", path.display()))
+        }
+    })?;
     let summary: Summary = serde_json::from_str(&text)
         .map_err(|e| bad(format!("{}: not a drape summary: {e}", path.display())))?;
     print_summary(&summary, dir);
@@ -466,4 +709,82 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
         .unwrap_or(0);
     println!("frames            {frames}");
     Ok(ExitCode::SUCCESS)
+}
+
+fn kinematic_error(e: drape::KinematicError) -> anyhow::Error {
+    match e {
+        drape::KinematicError::Input(message) => bad(message),
+        drape::KinematicError::Results(e) => anyhow!(e).context("writing results"),
+    }
+}
+
+fn print_net(stats: &drape_fishnet::NetStats) {
+    println!(
+        "net               {} of {} cells draped, {} crossings placed, {} surface queries",
+        stats.draped_cells, stats.outline_cells, stats.placed, stats.queries
+    );
+}
+
+fn kinematic(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
+    let scene = load(scene_path, &parse_sets(set)?)?;
+    let out = out.unwrap_or_else(|| default_out(scene_path, "-kinematic"));
+    let report = drape::kinematic_scene(&scene, &out).map_err(kinematic_error)?;
+    print_summary(&report.summary, &out);
+    print_net(&report.stats);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
+    let scene = load(scene_path, &parse_sets(set)?)?;
+    if let Err(e) = &scene.kinematic {
+        return Err(bad(e.to_string()));
+    }
+    let out = out.unwrap_or_else(|| default_out(scene_path, "-compare"));
+    let mut reporter = Reporter::new();
+    let report =
+        drape::compare_scene(&scene, &out, &mut |p| reporter.update(p)).map_err(kinematic_error)?;
+    reporter.finish();
+    let s = &report.comparison.summary;
+    println!("kinematic net     {}", out.join("kinematic").display());
+    print_net(&report.kinematic.stats);
+    println!(
+        "forming run       {} ({}), {}",
+        report.mechanical.summary.status,
+        out.join("mechanical").display(),
+        report
+            .mechanical
+            .summary
+            .reason
+            .as_deref()
+            .unwrap_or("no problem reported")
+    );
+    println!(
+        "max shear         run {:.2}°, net {:.2}°",
+        s.mechanical_max_shear_deg, s.kinematic_max_shear_deg
+    );
+    println!(
+        "compared          {} of {} elements, {} on the mould",
+        s.compared, s.elements, s.on_mould
+    );
+    for (name, d) in [
+        ("all elements", &s.all),
+        ("diagonal", &s.diagonal),
+        ("median", &s.median),
+    ] {
+        println!(
+            "{name:<17} |Δγ| max {:.2}°, rms {:.2}° ({} elements); on the mould max {:.2}°, rms {:.2}° ({})",
+            d.max_abs_deg,
+            d.rms_deg,
+            d.points,
+            d.max_abs_on_mould_deg,
+            d.rms_on_mould_deg,
+            d.points_on_mould
+        );
+    }
+    println!("comparison        {}", out.display());
+    Ok(if report.mechanical.summary.status == "failed" {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
 }

@@ -201,18 +201,36 @@ fn bad_input_exits_2_names_the_place_and_writes_nothing() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// 10⁹ N on the edge midpoints of a clamped blank: it is torn apart, and
+/// the run fails.
+const TORN: &str = r#"[simulation]
+end_time = 0.001
+frames = 10
+
+[fabric]
+material = "glass-serge-4x3"
+fibres = "trusses"
+blank = { width = 100, height = 100, cells = [4, 4] }
+
+[[boundary]]
+nodes = "left"
+motion = { kind = "fixed" }
+
+[[loads]]
+nodes = "edge_midpoints"
+force = [0, 0, 1e9]
+amplitude = { kind = "ramp", duration = 0.001 }
+"#;
+
 #[test]
 fn a_diverging_run_exits_1_and_keeps_what_it_reached() {
     let dir = temp("diverge");
     let out = dir.join("out");
-    // A fixed step 30× the stable one: the blank explodes within a few frames.
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, TORN).unwrap();
     let o = drape(&[
         "run",
-        "scenes/bias-extension.toml",
-        "--set",
-        "simulation.time_step=3e-5",
-        "--set",
-        "simulation.max_energy_error=0.05",
+        scene.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -222,8 +240,62 @@ fn a_diverging_run_exits_1_and_keeps_what_it_reached() {
     assert_eq!(summary["status"], "failed");
     let reason = summary["reason"].as_str().unwrap();
     assert!(reason.contains("step"), "{reason}");
+    // What the summary reports is the last frame written, which passed
+    // every check, not the torn state of the failing step.
+    assert!(reason.contains("the last output frame"), "{reason}");
+    let failed_at: f64 = reason["step ".len()..]
+        .split("t = ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let time = summary["time"].as_f64().unwrap();
+    assert!(time < failed_at, "{time} vs {failed_at}");
+    let frames = std::fs::read_dir(out.join("frames")).unwrap().count();
+    let frame_dt = 0.001 / 10.0;
+    assert!(
+        ((frames - 1) as f64 * frame_dt - time).abs() < 0.1 * frame_dt,
+        "{frames} frames, t = {time}"
+    );
     assert!(out.join("frames/frame_00000.vtu").is_file());
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_scene_that_cannot_run_stably_is_bad_input() {
+    // A time step 50 times the stable one.
+    bad_input(
+        "forced-step",
+        &format!("{GOOD}\n").replace("end_time = 0.001", "end_time = 0.001\ntime_step = 3e-4"),
+        &[
+            "scene.toml",
+            "the time step 3.0000e-4 s is",
+            "the stable time step",
+        ],
+    );
+    // The blank in the floor.
+    bad_input(
+        "inside",
+        &GOOD.replace("point = [0, 0, -1]", "point = [0, 0, 2]"),
+        &["starts inside tool `floor`", "25 nodes"],
+    );
+    // A holder whose force flings it through the blank in one step.
+    bad_input(
+        "holder",
+        &format!(
+            "{GOOD}\n{}",
+            r#"[[tools]]
+name = "holder"
+geometry = { kind = "ring", center = [0, 0, 0.3], inner_radius = 10, outer_radius = 40 }
+motion = { kind = "force", direction = [0, 0, -1], force = 1e15, mass = 1e-3 }
+"#
+        ),
+        &[
+            "force-driven tool `holder` would travel",
+            "pass through the blank",
+        ],
+    );
 }
 
 const DRAPED: &str = r#"gravity = [0, 0, -9810]
@@ -295,20 +367,372 @@ fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
     assert_eq!(csv("resumed"), csv("straight"));
     assert!(out.join("frames/frame_00004.vtu").is_file());
 
-    // The same through the command line.
+    // The same resumed through the command line, from another directory,
+    // with the scene file gone: the checkpoint carries the scene.
     let cli = dir.join("cli");
+    let options = RunOptions {
+        checkpoint_every: Some(70),
+        ..RunOptions::default()
+    };
+    run_scene_with(&interrupted, &cli, options, &mut |_| RunControl::Continue).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_drape"))
+        .args(["run", "--resume", cli.to_str().unwrap()])
+        .current_dir(std::env::temp_dir())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("resuming"), "{}", text(&o));
+    assert!(
+        text(&o).contains("cannot be read as it was"),
+        "{}",
+        text(&o)
+    );
+    assert_eq!(csv("cli"), csv("straight"));
+    assert!(
+        !cli.join("checkpoint.json").exists(),
+        "a completed run keeps none"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A draping run far longer than any test waits for (10 s of forming at
+/// a 2e-6 s step: millions of steps), stopped by SIGINT.
+fn long_draped() -> String {
+    DRAPED
+        .replace("end_time = 0.004", "end_time = 10")
+        .replace("duration = 0.004", "duration = 10")
+}
+
+/// Starts `drape` with `args` in `cwd`, its output captured.
+fn spawn(cwd: &Path, args: &[&str]) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_drape"))
+        .args(args)
+        .current_dir(cwd)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the drape binary starts")
+}
+
+/// Waits (up to a minute) until `ready` holds.
+fn wait_for(what: &str, mut ready: impl FnMut() -> bool) {
+    let start = std::time::Instant::now();
+    while !ready() {
+        assert!(start.elapsed().as_secs() < 60, "gave up waiting for {what}");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+/// The step of the checkpoint in `out`, if one is there.
+fn checkpoint_step(out: &Path) -> Option<u64> {
+    let text = std::fs::read_to_string(out.join("checkpoint.json")).ok()?;
+    let c: serde_json::Value = serde_json::from_str(&text).ok()?;
+    c["state"]["step"].as_u64()
+}
+
+/// Sends Ctrl-C's signal to `child` and waits for it.
+#[cfg(unix)]
+fn interrupt(child: std::process::Child) -> Output {
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    child.wait_with_output().unwrap()
+}
+
+fn summary_of(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
+/// One long run, seen through everything that happens to a folder: a
+/// second run into it is refused, Ctrl-C stops it with a last frame and a
+/// "stopped" summary, it resumes from another directory with its own scene
+/// although the file was edited, counts all its steps, and a new run into
+/// the folder removes the stale checkpoint.
+#[cfg(unix)]
+#[test]
+fn lock_ctrl_c_resume_elsewhere_and_stale_checkpoint() {
+    let dir = temp("lifecycle");
+    std::fs::write(dir.join("scene.toml"), long_draped()).unwrap();
+    // A temporary that a killed run left: cleared by the next run.
+    std::fs::create_dir_all(dir.join("out/frames")).unwrap();
+    std::fs::write(dir.join("out/frames/.frame_00009.vtu.tmp77"), b"half").unwrap();
+    let out = dir.join("out");
+    // Started from the scene's directory with relative paths, as a user
+    // would.
+    let child = spawn(
+        &dir,
+        &[
+            "run",
+            "scene.toml",
+            "--out",
+            "out",
+            "--checkpoint-every",
+            "100",
+        ],
+    );
+    let pid = child.id();
+    wait_for("a checkpoint", || checkpoint_step(&out).is_some());
+    assert!(!out.join("frames/.frame_00009.vtu.tmp77").exists());
+
+    // A second run into the same folder: refused, nothing touched.
     let o = drape(&[
         "run",
-        path.to_str().unwrap(),
+        "scenes/picture-frame.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains(&format!(
+            "another drape run (process {pid}) is writing into"
+        )),
+        "{}",
+        text(&o)
+    );
+    assert!(out.join("frames/frame_00000.vtu").is_file());
+    let o = drape(&["run", "--resume", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+
+    // Ctrl-C: a clean stop.
+    let o = interrupt(child);
+    assert_eq!(o.status.code(), Some(130), "{}", text(&o));
+    assert!(text(&o).contains("drape run --resume out"), "{}", text(&o));
+    let summary = summary_of(&out);
+    assert_eq!(summary["status"], "stopped");
+    let reason = summary["reason"].as_str().unwrap();
+    assert!(reason.contains("stopped on request"), "{reason}");
+    assert!(
+        reason.contains("resumed from the checkpoint at step"),
+        "{reason}"
+    );
+    let stopped_at = summary["time"].as_f64().unwrap();
+    let first_steps = summary["run"]["steps"].as_u64().unwrap();
+    // The last frame is where it stopped, and so is the energy history.
+    let pvd = std::fs::read_to_string(out.join("series.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet ").count(), 2, "{pvd}");
+    assert!(pvd.contains("frames/frame_00001.vtu"), "{pvd}");
+    assert!(out.join("frames/frame_00001.vtu").is_file());
+    let energy = std::fs::read_to_string(out.join("energy.csv")).unwrap();
+    let last_time: f64 = energy
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(last_time, stopped_at);
+    let o = drape(&["inspect", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("stopped"), "{}", text(&o));
+
+    // The scene file is edited (a different friction) and the run resumed
+    // from another directory: it goes on with the scene it started with.
+    let edited = long_draped().replace("friction = 0.2", "friction = 0.7");
+    std::fs::write(dir.join("scene.toml"), edited).unwrap();
+    let elsewhere = temp("lifecycle-elsewhere");
+    let resumed_from = checkpoint_step(&out).unwrap();
+    let child = spawn(&elsewhere, &["run", "--resume", out.to_str().unwrap()]);
+    wait_for("a later checkpoint", || {
+        checkpoint_step(&out).is_some_and(|s| s > first_steps)
+    });
+    let o = interrupt(child);
+    assert_eq!(o.status.code(), Some(130), "{}", text(&o));
+    let shown = text(&o);
+    assert!(
+        shown.contains(&format!("at step {resumed_from}")),
+        "{shown}"
+    );
+    assert!(
+        shown.contains("has changed since the run started"),
+        "{shown}"
+    );
+    let checkpoint: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("checkpoint.json")).unwrap())
+            .unwrap();
+    assert_eq!(checkpoint["scene"]["tools"][0]["friction"], 0.2);
+    assert_eq!(checkpoint["checkpoint_every"], 100, "the interval is kept");
+    let summary = summary_of(&out);
+    assert_eq!(summary["status"], "stopped");
+    // Every step since the start, not only the resumed ones.
+    assert!(summary["run"]["steps"].as_u64().unwrap() > first_steps);
+
+    // A new run into the folder (one that fails at once) leaves no stale
+    // checkpoint behind to resume.
+    let torn = dir.join("torn.toml");
+    std::fs::write(&torn, TORN).unwrap();
+    let o = drape(&[
+        "run",
+        torn.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(!out.join("checkpoint.json").exists());
+    let o = drape(&["run", "--resume", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("the run failed"), "{}", text(&o));
+    std::fs::remove_dir_all(dir).unwrap();
+    std::fs::remove_dir_all(elsewhere).unwrap();
+}
+
+#[test]
+fn a_finished_run_has_nothing_to_resume() {
+    let dir = temp("finished");
+    std::fs::write(dir.join("scene.toml"), DRAPED).unwrap();
+    let out = dir.join("out");
+    let o = drape(&[
+        "run",
+        dir.join("scene.toml").to_str().unwrap(),
         "--checkpoint-every",
         "100",
         "--out",
-        cli.to_str().unwrap(),
+        out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o));
-    assert!(cli.join("checkpoint.json").is_file());
-    let o = drape(&["run", "--resume", cli.to_str().unwrap()]);
+    assert!(
+        !out.join("checkpoint.json").exists(),
+        "a finished run keeps no checkpoint"
+    );
+    let before = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    let o = drape(&["run", "--resume", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
-    assert!(text(&o).contains("resuming"), "{}", text(&o));
+    assert!(text(&o).contains("the run is finished"), "{}", text(&o));
+    assert!(text(&o).contains("nothing to resume"), "{}", text(&o));
+    assert_eq!(
+        std::fs::read_to_string(out.join("summary.json")).unwrap(),
+        before
+    );
+    // A folder with no run in it.
+    let o = drape(&["run", "--resume", dir.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o).contains("no checkpoint to resume from"),
+        "{}",
+        text(&o)
+    );
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn an_unwritable_output_folder_is_bad_input() {
+    let dir = temp("unwritable");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, GOOD).unwrap();
+    let file = dir.join("a-file");
+    std::fs::write(&file, b"x").unwrap();
+    for out in [file.clone(), file.join("run")] {
+        let o = drape(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+        let shown = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(shown.lines().count(), 1, "one message: {shown}");
+        assert!(shown.contains("a-file is a file, not a folder"), "{shown}");
+        assert!(!shown.contains("os error"), "{shown}");
+    }
+    // A read-only folder (meaningless for root, who may write anyway).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let locked = dir.join("read-only");
+        std::fs::create_dir(&locked).unwrap();
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+        if std::fs::write(locked.join("probe"), b"").is_err() {
+            let out = locked.join("run");
+            let o = drape(&[
+                "run",
+                scene.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ]);
+            assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+            let shown = String::from_utf8_lossy(&o.stderr).into_owned();
+            assert_eq!(shown.lines().count(), 1, "one message: {shown}");
+            assert!(shown.contains("permission denied"), "{shown}");
+        }
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn threads_and_frames_have_bounds() {
+    let dir = temp("bounds");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, GOOD).unwrap();
+    let out = dir.join("out");
+    let o = drape(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--threads",
+        "99999999999",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    assert!(
+        text(&o).contains(&format!(
+            "--threads 99999999999 is more than this machine runs at once; using {cores}"
+        )),
+        "{}",
+        text(&o)
+    );
+    assert_eq!(summary_of(&out)["run"]["threads"], cores);
+    for frames in ["9223372036854775807", "18446744073709551615"] {
+        let o = drape(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--set",
+            &format!("simulation.frames={frames}"),
+            "--out",
+            dir.join("o").to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+        assert!(text(&o).contains("simulation.frames"), "{}", text(&o));
+        assert!(!dir.join("o").exists());
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn set_errors_name_the_key_and_the_set() {
+    let o = drape(&[
+        "run",
+        "scenes/hemisphere-0-90.toml",
+        "--set",
+        "tools.0.friction=-1",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let shown = text(&o);
+    assert!(
+        shown.contains("hemisphere-0-90.toml: tools[0].friction: -1 is not allowed"),
+        "{shown}"
+    );
+    assert!(
+        shown.contains("(the value comes from --set tools.0.friction=-1)"),
+        "{shown}"
+    );
+    let o = drape(&[
+        "run",
+        "scenes/picture-frame.toml",
+        "--set",
+        "simulation.end_time=abc",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let shown = text(&o);
+    assert!(
+        shown.contains("simulation.end_time: the text \"abc\" is not allowed: expected a number"),
+        "{shown}"
+    );
+    assert!(shown.contains("--set simulation.end_time=abc"), "{shown}");
+    assert!(!shown.contains("f64"), "{shown}");
 }

@@ -53,7 +53,7 @@ mod tool;
 
 pub use explicit::{
     ContactFault, ContactSettings, ContactStatus, ContactStep, ExplicitContact, FaultKind,
-    StepTimes,
+    StepTimes, TOUCHING,
 };
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};

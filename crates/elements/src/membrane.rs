@@ -86,6 +86,9 @@ pub struct MembraneOutput {
     pub resin_stress: [f64; 3],
     /// Current fabric thickness h₀·λ₃ (mm).
     pub thickness: f64,
+    /// Current unit directions of [warp, weft]: the area-weighted mean of
+    /// the integration points' directions, normalised.
+    pub fibre_direction: [Vector3<f64>; 2],
 }
 
 /// A batch of membrane elements of one shape and one fabric section.
@@ -760,6 +763,7 @@ impl MembraneBatch {
             );
             for (k, fib) in [warp, weft].iter().enumerate() {
                 out.fibre_stretch[k] += w * fib.stretch;
+                out.fibre_direction[k] += fib.direction * w;
                 if self.section.embedded_fibres {
                     out.fibre_stress[k] += w * m.fibre.stress(fib.log_strain);
                 }
@@ -769,6 +773,11 @@ impl MembraneBatch {
                 *o += w * v;
             }
             out.thickness += w * m.thickness * m.resin.thickness_stretch(polar.area_stretch());
+        }
+        for d in &mut out.fibre_direction {
+            // A mean of unit vectors within one element: never near zero
+            // unless the element is folded, where any unit vector will do.
+            *d = d.try_normalize(0.0).unwrap_or_else(Vector3::x);
         }
         Ok(out)
     }

@@ -585,6 +585,10 @@ pub fn parse_gmsh(bytes: &[u8], path: &Path) -> Result<ImportedMesh, ImportError
     let syntax =
         |line: Option<usize>, message: String| error(path, line, ImportErrorKind::Syntax, message);
     let binary = check_gmsh_header(bytes, path)?;
+    check_gmsh_sections(bytes, path, binary)?;
+    if !binary {
+        check_ascii_element_types(bytes, path)?;
+    }
     // mshio 0.4 still has a few `unwrap`s on malformed input; a panic there
     // is this file's fault and becomes its error.
     let parsed = std::panic::catch_unwind(|| {
@@ -706,15 +710,7 @@ pub fn parse_gmsh(bytes: &[u8], path: &Path) -> Result<ImportedMesh, ImportError
                 2 | 3 => true,
                 1 | 15 => false,
                 _ => {
-                    let hint = match type_code {
-                        8 | 9 | 10 | 16 | 20..=28 => {
-                            " (a higher-order element: mesh with Mesh.ElementOrder = 1)"
-                        }
-                        4..=7 | 11..=14 | 17..=19 => {
-                            " (a volume element: a blank is a surface mesh)"
-                        }
-                        _ => "",
-                    };
+                    let hint = element_type_hint(type_code.into());
                     return Err(error(
                         path,
                         lines.as_ref().and_then(|l| l.block_header(b)),
@@ -853,6 +849,161 @@ fn check_gmsh_header(bytes: &[u8], path: &Path) -> Result<bool, ImportError> {
             line,
             &format!("file type `{file_type}`: expected 0 (ASCII) or 1 (binary)"),
         )),
+    }
+}
+
+/// The sections Gmsh 4.1 writes: each `$Name` is closed by `$EndName`.
+const GMSH_SECTIONS: [&str; 13] = [
+    "MeshFormat",
+    "PhysicalNames",
+    "Entities",
+    "PartitionedEntities",
+    "Nodes",
+    "Elements",
+    "Periodic",
+    "GhostElements",
+    "Parametrizations",
+    "NodeData",
+    "ElementData",
+    "ElementNodeData",
+    "InterpolationScheme",
+];
+
+/// Checks that every section is closed (mshio only says "not a valid
+/// file" when an `$End…` line is missing). In an ASCII file the next
+/// `$` line after a section's start must be its end; in a binary one
+/// (whose data may hold any byte) the end must follow somewhere.
+fn check_gmsh_sections(bytes: &[u8], path: &Path, binary: bool) -> Result<(), ImportError> {
+    let mut from = 0;
+    while let Some(i) = bytes[from..].iter().position(|&b| b == b'$') {
+        let at = from + i;
+        from = at + 1;
+        if at > 0 && bytes[at - 1] != b'\n' {
+            continue;
+        }
+        let name_end = bytes[at + 1..]
+            .iter()
+            .position(|b| !b.is_ascii_alphanumeric())
+            .map_or(bytes.len(), |n| at + 1 + n);
+        let name = String::from_utf8_lossy(&bytes[at + 1..name_end]).into_owned();
+        if !GMSH_SECTIONS.contains(&name.as_str()) {
+            continue;
+        }
+        let end_tag = format!("$End{name}");
+        let line = line_at(bytes, at);
+        let unclosed = |found: String| {
+            error(
+                path,
+                Some(line),
+                ImportErrorKind::Syntax,
+                format!("the `${name}` section is not closed: expected `{end_tag}` {found}"),
+            )
+        };
+        // At the end of the file: it is cut short, and its last line is
+        // where the reader stopped.
+        let cut_short = || {
+            let last = line_at(bytes, bytes.len().saturating_sub(1));
+            error(
+                path,
+                Some(last),
+                ImportErrorKind::Syntax,
+                format!(
+                    "the file ends inside the `${name}` section of line {line}, without \
+                     `{end_tag}` (cut short?)"
+                ),
+            )
+        };
+        if binary {
+            match find_section(&bytes[name_end..], end_tag.as_bytes()) {
+                Some(n) => from = name_end + n + end_tag.len(),
+                None => return Err(cut_short()),
+            }
+            continue;
+        }
+        // The next line that starts with `$`.
+        let mut next = name_end;
+        let found = loop {
+            match bytes[next..].iter().position(|&b| b == b'\n') {
+                Some(n) if bytes.get(next + n + 1) == Some(&b'$') => break Some(next + n + 1),
+                Some(n) => next += n + 1,
+                None => break None,
+            }
+        };
+        match found {
+            Some(n) if bytes[n..].starts_with(end_tag.as_bytes()) => from = n + end_tag.len(),
+            Some(n) => {
+                let other: String = String::from_utf8_lossy(&bytes[n..])
+                    .split_whitespace()
+                    .next()
+                    .unwrap_or("")
+                    .to_owned();
+                return Err(unclosed(format!(
+                    "before `{other}` on line {}",
+                    line_at(bytes, n)
+                )));
+            }
+            None => return Err(cut_short()),
+        }
+    }
+    Ok(())
+}
+
+/// Checks the element type of each block of an ASCII `$Elements` section
+/// before mshio reads it: mshio refuses a type it does not know with "an
+/// invalid element definition" and no type, and drape reads only a few
+/// anyway. The error names the type and its block's line.
+fn check_ascii_element_types(bytes: &[u8], path: &Path) -> Result<(), ImportError> {
+    let Some(lines) = ElementLines::new(bytes) else {
+        return Ok(());
+    };
+    for &line in &lines.headers {
+        let Some(text) = lines.text(line) else {
+            continue;
+        };
+        let fields: Vec<&str> = text.split_whitespace().collect();
+        let Some(code) = fields.get(2).and_then(|t| t.parse::<i64>().ok()) else {
+            continue;
+        };
+        if matches!(code, 1 | 2 | 3 | 15) {
+            continue;
+        }
+        // Gmsh numbers its element types from 1 to 140 or so.
+        let name = match code {
+            4 => "Tet4",
+            5 => "Hex8",
+            6 => "Pri6",
+            7 => "Pyr5",
+            8 => "Lin3",
+            9 => "Tri6",
+            10 => "Qua9",
+            11 => "Tet10",
+            16 => "Qua8",
+            1..=140 => "a Gmsh type",
+            _ => "not a Gmsh element type",
+        };
+        return Err(error(
+            path,
+            Some(line),
+            ImportErrorKind::UnsupportedElement,
+            format!(
+                "element type {code} ({name}) of entity ({}, {}) is not supported{}: drape \
+                 reads 3-node triangles (2) and 4-node quads (3) and takes lines (1) and \
+                 points (15) for node sets only",
+                fields.first().unwrap_or(&"?"),
+                fields.get(1).unwrap_or(&"?"),
+                element_type_hint(code)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Why a Gmsh element type is refused, when a common case.
+fn element_type_hint(code: i64) -> &'static str {
+    match code {
+        8 | 9 | 10 | 16 | 20..=28 => " (a higher-order element: mesh with Mesh.ElementOrder = 1)",
+        4..=7 | 11..=14 | 17..=19 => " (a volume element: a blank is a surface mesh)",
+        _ => "",
     }
 }
 
@@ -1357,15 +1508,15 @@ impl InpReader {
                         "*NODE, INPUT=… is not supported: use *INCLUDE".into(),
                     );
                 }
-                if let Some(system) = k.get("SYSTEM") {
-                    if !system.eq_ignore_ascii_case("R") {
-                        return unsupported(
-                            self,
-                            format!(
-                                "*NODE, SYSTEM={system} is not supported: give Cartesian coordinates"
-                            ),
-                        );
-                    }
+                if let Some(system) = k.get("SYSTEM")
+                    && !system.eq_ignore_ascii_case("R")
+                {
+                    return unsupported(
+                        self,
+                        format!(
+                            "*NODE, SYSTEM={system} is not supported: give Cartesian coordinates"
+                        ),
+                    );
                 }
                 if let Some(part) = &self.part {
                     if !self.parts_with_nodes.contains(part) {
@@ -1428,10 +1579,8 @@ impl InpReader {
                 let elements = k.name == "ELSET";
                 let name = required(self, if elements { "ELSET" } else { "NSET" })?;
                 let key = self.set_entry(elements, &name, at);
-                if !elements {
-                    if let Some(elset) = k.get("ELSET") {
-                        self.add_member(false, &key, Member::ElementSet(elset.to_owned()), at);
-                    }
+                if !elements && let Some(elset) = k.get("ELSET") {
+                    self.add_member(false, &key, Member::ElementSet(elset.to_owned()), at);
                 }
                 let generate = k.has("GENERATE");
                 self.block = if elements {
@@ -1599,15 +1748,9 @@ impl InpReader {
     fn node_line(&mut self, line: &str, at: At, nset: Option<&str>) -> Result<(), ImportError> {
         let f = fields(line);
         let label = self.int(&f[0], at, "node label")?;
-        if f.len() < 2 {
-            return Err(self.err(
-                at,
-                ImportErrorKind::Syntax,
-                format!("node {label} has no coordinates"),
-            ));
-        }
-        // A fifth field and beyond (a normal's direction cosines) is not
-        // the position's.
+        // Coordinates left out are 0, as in Abaqus (`5` or `5, 1.0` is a
+        // node on an axis). A fifth field and beyond (a normal's direction
+        // cosines) is not the position's.
         let mut x = Vector3::zeros();
         for (c, field) in f[1..].iter().take(3).enumerate() {
             x[c] = self.float(field, at, &format!("coordinate of node {label}"))?;

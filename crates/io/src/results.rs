@@ -15,13 +15,20 @@
 //! `series.pvd` is rewritten after each frame, so a run that fails part way
 //! leaves a valid series of the frames written so far.
 //!
+//! A [`ResultsDir`] holds the folder's [`OutputLock`] while it lives: a
+//! second run into the same folder is refused rather than mixed with the
+//! first. Having the lock, it clears the hidden temporaries a killed run
+//! left (`.<name>.tmp<pid>`, see [`crate::atomic`]).
+//!
 //! # VTU contents
 //! Points are the current positions; cells are the membrane elements in
 //! batch order (VTK triangles and quads), so cell `i` is entry `i` of
 //! [`ElementFields`]. Point data: `displacement` (x − x₀, mm), `velocity`
-//! (mm/s), `contact_force` (N), `contact_status` (0 open, 1 stick, 2 slip;
+//! (mm/s), `contact_force` (N), `contact_status` (0 open, 1 stick, 2 slip:
+//! 1 and 2 are in contact, a node resting on a tool at zero gap included;
 //! zeros without tools). Cell data: `shear_angle_deg`,
-//! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_tension_warp`,
+//! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_direction_warp`,
+//! `fibre_direction_weft` (unit vectors), `fibre_tension_warp`,
 //! `fibre_tension_weft` (N/mm), `resin_stress` (3 components: 11, 22, 12 in
 //! fibre axes, MPa), `thickness` (mm). The encoding (inline base64 binary
 //! with a `UInt64` header) and why are in the `vtk` submodule's docs.
@@ -40,8 +47,12 @@
 //! # Ok(()) }
 //! ```
 
+mod lock;
 mod pictures;
 mod vtk;
+
+pub use lock::{LOCK_FILE, OutputLock};
+pub use pictures::maps::MapPanel;
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -155,6 +166,9 @@ pub struct Summary {
     pub energy: EnergySummary,
     /// Run statistics.
     pub run: RunInfo,
+    /// What the run found doubtful but not wrong enough to stop it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// An output directory being filled by a run.
@@ -162,6 +176,8 @@ pub struct ResultsDir {
     dir: PathBuf,
     /// Frames written so far: index → (time, file relative to `dir`).
     frames: BTreeMap<usize, (f64, String)>,
+    /// The folder's lock, held while the run writes.
+    _lock: OutputLock,
 }
 
 /// The files a [`ResultsDir`] writes at its top level.
@@ -213,9 +229,12 @@ impl ResultsDir {
     /// CSV, JSON and PNG files above) are removed first, so a run that
     /// fails early cannot leave a previous run's summary or frames looking
     /// like its own. Other files are left alone.
+    ///
+    /// The folder is locked first ([`OutputLock`]): another run writing
+    /// into it is an error of kind `ResourceBusy`, and nothing is touched.
     pub fn create(dir: &Path) -> Result<Self, ResultsError> {
+        let lock = claim(dir)?;
         let frames = dir.join("frames");
-        std::fs::create_dir_all(&frames).map_err(at(&frames))?;
         for name in OUTPUT_FILES {
             remove_if_present(&dir.join(name))?;
         }
@@ -228,15 +247,17 @@ impl ResultsDir {
         Ok(Self {
             dir: dir.to_owned(),
             frames: BTreeMap::new(),
+            _lock: lock,
         })
     }
 
     /// Reopens the directory of a stopped run to continue it: the frames
     /// listed in `frames` (index, time: those its checkpoint had written)
     /// are kept and stay in the series, any later frame is removed.
+    /// The folder is locked as by [`Self::create`].
     pub fn reopen(dir: &Path, frames: &[(usize, f64)]) -> Result<Self, ResultsError> {
+        let lock = claim(dir)?;
         let folder = dir.join("frames");
-        std::fs::create_dir_all(&folder).map_err(at(&folder))?;
         let kept: BTreeMap<usize, (f64, String)> = frames
             .iter()
             .map(|&(i, t)| (i, (t, format!("frames/frame_{i:05}.vtu"))))
@@ -254,6 +275,7 @@ impl ResultsDir {
         let reopened = Self {
             dir: dir.to_owned(),
             frames: kept,
+            _lock: lock,
         };
         let pvd = dir.join("series.pvd");
         crate::atomic::write(&pvd, vtk::series_pvd(&reopened.frames).as_bytes())
@@ -400,6 +422,33 @@ impl ResultsDir {
         let path = self.dir.join(name);
         crate::atomic::write(&path, bytes).map_err(at(&path))
     }
+}
+
+/// Writes the PNG `path`: `panels` side by side, each a map of one value
+/// per membrane element of `model` drawn on the flat blank (the reference
+/// positions) with its colour bar: the picture of a comparison.
+pub fn write_flat_maps(
+    path: &Path,
+    model: &Model,
+    panels: &[MapPanel<'_>],
+) -> Result<(), ResultsError> {
+    let png = pictures::maps::flat_maps(model, panels).map_err(|e| ResultsError {
+        path: path.to_owned(),
+        source: std::io::Error::other(e),
+    })?;
+    crate::atomic::write(path, &png).map_err(at(path))
+}
+
+/// Locks `dir` (created if needed), makes its `frames/` folder and clears
+/// the temporaries a killed run left in both.
+fn claim(dir: &Path) -> Result<OutputLock, ResultsError> {
+    let lock = OutputLock::acquire(dir)?;
+    let frames = dir.join("frames");
+    std::fs::create_dir_all(&frames).map_err(at(&frames))?;
+    for folder in [dir, frames.as_path()] {
+        crate::atomic::remove_temporaries(folder).map_err(at(folder))?;
+    }
+    Ok(lock)
 }
 
 /// Removes `path` unless it does not exist.

@@ -27,14 +27,21 @@
 
 use std::path::{Path, PathBuf};
 
+mod kinematic;
+pub use kinematic::{KinematicSetup, KinematicSpec};
+
 use drape_constitutive::Material;
 use drape_contact::{Amplitude, ProfileSegment, Surface, Tool, ToolMotion};
 use drape_elements::{ForceTable, SpringBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{BoundaryCondition, Model, ModelError, Motion, NodalLoad};
-use drape_time::ExplicitSettings;
+use drape_time::{ExplicitSettings, GuardSettings};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
+
+mod locate;
+
+use locate::{Locator, Override, field_at, line_at, plain};
 
 /// A scene that cannot be used: where and why.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -59,6 +66,10 @@ pub enum Solver {
     Explicit,
 }
 
+/// The most output frames a run may ask for: each is a file of the whole
+/// blank, and a frame is written at most once per step anyway.
+pub const MAX_FRAMES: usize = 100_000;
+
 fn default_frames() -> usize {
     20
 }
@@ -67,6 +78,9 @@ fn default_safety() -> f64 {
 }
 fn default_margin() -> f64 {
     5.0
+}
+fn default_true() -> bool {
+    true
 }
 
 /// `[simulation]`.
@@ -93,22 +107,61 @@ pub struct SimulationSpec {
     /// Mass-proportional damping α (1/s).
     #[serde(default)]
     pub damping: f64,
-    /// Stop when the energy balance error exceeds this fraction.
+    /// Stop when the energy balance error exceeds this fraction (default
+    /// [`drape_time::GuardSettings`]' 1 %).
     #[serde(default)]
     pub max_energy_error: Option<f64>,
+    /// The scene is quasi-static: stop when the kinetic energy exceeds the
+    /// internal work.
+    #[serde(default)]
+    pub quasi_static: bool,
+    /// The instability guard (speed, reach, energy balance); off leaves
+    /// only a `max_energy_error` given explicitly.
+    #[serde(default = "default_true")]
+    pub instability_guard: bool,
     /// Broad-phase margin of the contact search (mm).
     #[serde(default = "default_margin")]
     pub contact_margin: f64,
 }
 
 /// A material: a preset's name or a full table.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum MaterialSpec {
     /// A preset (`carbon-prepreg-2x2`, `glass-serge-4x3`).
     Preset(String),
     /// Every value given.
     Inline(Material),
+}
+
+/// Read by the form of the value rather than by trying each variant (as
+/// `untagged` would), so that a table's own error (a missing or unknown
+/// key) reaches the user instead of "did not match any variant".
+impl<'de> Deserialize<'de> for MaterialSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Form;
+        impl<'de> serde::de::Visitor<'de> for Form {
+            type Value = MaterialSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(
+                    f,
+                    "a preset name ({}) or a table of material values",
+                    drape_constitutive::PRESET_NAMES.join(", ")
+                )
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<MaterialSpec, E> {
+                Ok(MaterialSpec::Preset(v.to_owned()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> Result<MaterialSpec, A::Error> {
+                Material::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(MaterialSpec::Inline)
+            }
+        }
+        d.deserialize_any(Form)
+    }
 }
 
 /// `[fabric.blank]`: a rectangle meshed by drape (`width`, `height`,
@@ -303,7 +356,7 @@ pub struct ToolSpec {
 }
 
 /// Nodes by set name or by index.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum NodeSelection {
     /// A named set (`left`, `corners`, `edge_midpoints`, `all`, …).
@@ -312,6 +365,78 @@ pub enum NodeSelection {
     List(Vec<u32>),
     /// The union of named sets.
     Sets(Vec<String>),
+}
+
+/// One entry of a node list: a node number or a set name.
+enum NodeItem {
+    Node(u32),
+    Name(String),
+}
+
+impl<'de> Deserialize<'de> for NodeItem {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Form;
+        impl serde::de::Visitor<'_> for Form {
+            type Value = NodeItem;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a node number (a whole number ≥ 0) or a set name in quotes")
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<NodeItem, E> {
+                u32::try_from(v)
+                    .map(NodeItem::Node)
+                    .map_err(|_| E::invalid_value(serde::de::Unexpected::Signed(v), &self))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<NodeItem, E> {
+                u32::try_from(v)
+                    .map(NodeItem::Node)
+                    .map_err(|_| E::invalid_value(serde::de::Unexpected::Unsigned(v), &self))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<NodeItem, E> {
+                Ok(NodeItem::Name(v.to_owned()))
+            }
+        }
+        d.deserialize_any(Form)
+    }
+}
+
+/// Read by the form of the value (see [`MaterialSpec`]'s), so that a bad
+/// entry is named rather than "did not match any variant".
+impl<'de> Deserialize<'de> for NodeSelection {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Form;
+        impl<'de> serde::de::Visitor<'de> for Form {
+            type Value = NodeSelection;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(
+                    "a node set name (\"left\"), a list of node numbers ([0, 5]) or a list of \
+                     set names ([\"corners\", \"left\"])",
+                )
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<NodeSelection, E> {
+                Ok(NodeSelection::Set(v.to_owned()))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<NodeSelection, A::Error> {
+                let (mut numbers, mut names) = (Vec::new(), Vec::new());
+                while let Some(item) = seq.next_element::<NodeItem>()? {
+                    match item {
+                        NodeItem::Node(n) => numbers.push(n),
+                        NodeItem::Name(s) => names.push(s),
+                    }
+                }
+                match (numbers.is_empty(), names.is_empty()) {
+                    (_, true) => Ok(NodeSelection::List(numbers)),
+                    (true, false) => Ok(NodeSelection::Sets(names)),
+                    (false, false) => Err(serde::de::Error::custom(
+                        "the list mixes node numbers and set names: give one or the other",
+                    )),
+                }
+            }
+        }
+        d.deserialize_any(Form)
+    }
 }
 
 /// `[[springs]]`: holding springs from nodes to anchors.
@@ -460,6 +585,9 @@ pub struct SceneFile {
     /// `[output]`.
     #[serde(default)]
     pub output: OutputSpec,
+    /// `[kinematic]`: the pin-jointed net of `drape kinematic`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kinematic: Option<KinematicSpec>,
 }
 
 /// A scene ready to run.
@@ -473,76 +601,10 @@ pub struct Scene {
     pub model: Model,
     /// The driver's settings.
     pub settings: ExplicitSettings,
-}
-
-/// Where the error is: a dotted field path, checked against the source to
-/// find its line.
-struct Locator<'a> {
-    file: &'a Path,
-    text: &'a str,
-    overridden: &'a [String],
-}
-
-impl Locator<'_> {
-    fn error(&self, field: &str, message: impl Into<String>) -> SceneError {
-        let message = message.into();
-        if self
-            .overridden
-            .iter()
-            .any(|k| field.starts_with(k.as_str()))
-        {
-            return SceneError {
-                file: self.file.to_owned(),
-                line: None,
-                field: field.to_owned(),
-                message: format!("{message} (value set with --set)"),
-            };
-        }
-        SceneError {
-            file: self.file.to_owned(),
-            line: line_of(self.text, field),
-            field: field.to_owned(),
-            message,
-        }
-    }
-}
-
-/// The 1-based line of the dotted `field` (with `[i]` indices) in `text`,
-/// or of its deepest existing parent.
-fn line_of(text: &str, field: &str) -> Option<usize> {
-    use toml::de::{DeTable, DeValue};
-    let doc = DeTable::parse(text).ok()?;
-    let mut span = doc.span();
-    let mut table: Option<&DeTable<'_>> = Some(doc.get_ref());
-    for part in field.split('.') {
-        let (key, index) = match part.find('[') {
-            Some(i) => (
-                &part[..i],
-                part[i + 1..part.len() - 1].parse::<usize>().ok(),
-            ),
-            None => (part, None),
-        };
-        let Some((_, v)) = table.and_then(|t| t.iter().find(|(k, _)| k.get_ref().as_ref() == key))
-        else {
-            break;
-        };
-        span = v.span();
-        let mut value = v.get_ref();
-        if let (Some(i), DeValue::Array(a)) = (index, value) {
-            match a.get(i) {
-                Some(item) => {
-                    span = item.span();
-                    value = item.get_ref();
-                }
-                None => break,
-            }
-        }
-        table = match value {
-            DeValue::Table(t) => Some(t),
-            _ => None,
-        };
-    }
-    Some(text[..span.start.min(text.len())].matches('\n').count() + 1)
+    /// The kinematic drape (`drape kinematic`), or why the scene has none:
+    /// without a `[kinematic]` table a default that cannot be found is not
+    /// an error for the other commands.
+    pub kinematic: Result<KinematicSetup, SceneError>,
 }
 
 fn vector(v: [f64; 3]) -> Vector3<f64> {
@@ -563,89 +625,221 @@ impl Scene {
 
     /// Reads a scene from its text; `path` names it in errors and anchors
     /// relative file names.
+    ///
+    /// An error names the field and its line, or, when the value came from
+    /// an override, the `--set key=value` that gave it.
     pub fn parse(
         text: &str,
         path: &Path,
         overrides: &[(String, String)],
     ) -> Result<Self, SceneError> {
-        let syntax = |e: toml::de::Error| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-            SceneError {
-                file: path.to_owned(),
-                line,
-                field: "scene".into(),
-                message: e.message().trim().to_owned(),
-            }
+        let given: Vec<Override> = overrides.iter().map(|(k, v)| Override::new(k, v)).collect();
+        let at = Locator {
+            file: path,
+            text: Some(text),
+            overrides: &given,
         };
-        let mut spec: SceneFile = toml::from_str(text).map_err(syntax)?;
-        let overridden: Vec<String> = overrides.iter().map(|(k, _)| k.clone()).collect();
-        if !overrides.is_empty() {
+        let syntax = |e: toml::de::Error| SceneError {
+            file: path.to_owned(),
+            line: e.span().map(|s| line_at(text, s.start)),
+            field: e
+                .span()
+                .and_then(|s| field_at(text, s.start))
+                .unwrap_or_else(|| "scene".into()),
+            message: plain(e.message()),
+        };
+        // The document that is read: the file's text, or with overrides the
+        // file's table with them applied, written out again so that the
+        // reader's error spans still lead to a field.
+        let document = if overrides.is_empty() {
+            text.to_owned()
+        } else {
             let mut table: toml::Table = toml::from_str(text).map_err(syntax)?;
-            for (key, value) in overrides {
+            for ((key, value), o) in overrides.iter().zip(&given) {
                 set_path(&mut table, key, value).map_err(|message| SceneError {
                     file: path.to_owned(),
                     line: None,
-                    field: key.clone(),
-                    message,
+                    field: o.field.clone(),
+                    message: format!("--set {}: {message}", o.given),
                 })?;
             }
-            spec = toml::Value::Table(table)
-                .try_into()
-                .map_err(|e: toml::de::Error| SceneError {
-                    file: path.to_owned(),
-                    line: None,
-                    field: "--set".into(),
-                    message: e.message().trim().to_owned(),
-                })?;
-        }
-        let at = Locator {
-            file: path,
-            text,
-            overridden: &overridden,
+            toml::to_string(&table).map_err(|e| SceneError {
+                file: path.to_owned(),
+                line: None,
+                field: "--set".into(),
+                message: format!("the overrides do not make a valid scene: {e}"),
+            })?
         };
-        let (model, settings) = build(&spec, &at)?;
+        let spec: SceneFile = toml::from_str(&document).map_err(|e| {
+            let start = e.span().map(|s| s.start);
+            let message = plain(e.message());
+            match start.and_then(|s| field_at(&document, s)) {
+                Some(field) if overrides.is_empty() => {
+                    at.error_with_line(&field, start.map(|s| line_at(text, s)), message)
+                }
+                Some(field) => at.error(&field, message),
+                None if overrides.is_empty() => syntax(e),
+                None => at.error("scene", message),
+            }
+        })?;
+        Self::assemble(spec, path, &at)
+    }
+
+    /// Builds a scene from its values alone (a checkpoint's copy of
+    /// [`Self::resolved_spec`]); `file` names it in errors and anchors any
+    /// relative file name. Errors have no line: there is no text.
+    pub fn from_spec(spec: SceneFile, file: &Path) -> Result<Self, SceneError> {
+        let at = Locator {
+            file,
+            text: None,
+            overrides: &[],
+        };
+        Self::assemble(spec, file, &at)
+    }
+
+    /// The model, the run settings and the kinematic set-up of `spec`; a
+    /// `[kinematic]` table the scene gives must be valid, an absent one is
+    /// only needed by `drape kinematic`.
+    fn assemble(spec: SceneFile, file: &Path, at: &Locator<'_>) -> Result<Self, SceneError> {
+        let (model, settings) = build(&spec, at)?;
+        let kinematic = kinematic::setup(&spec, &model, at);
+        if spec.kinematic.is_some() {
+            kinematic.clone()?;
+        }
         Ok(Self {
-            file: path.to_owned(),
+            file: file.to_owned(),
             spec,
             model,
             settings,
+            kinematic,
         })
+    }
+
+    /// The scene as it runs, self-contained: every value after the
+    /// overrides, and the files it reads (the blank's mesh, tools' meshes)
+    /// as absolute paths, so that [`Self::from_spec`] builds the same scene
+    /// from any directory.
+    pub fn resolved_spec(&self) -> SceneFile {
+        let base = self.file.parent().unwrap_or(Path::new("."));
+        let absolute = |file: &str| -> String {
+            let joined = base.join(file);
+            std::path::absolute(&joined)
+                .unwrap_or(joined)
+                .to_string_lossy()
+                .into_owned()
+        };
+        let mut spec = self.spec.clone();
+        if let Some(mesh) = &mut spec.fabric.blank.mesh {
+            *mesh = absolute(mesh);
+        }
+        for tool in &mut spec.tools {
+            if let GeometrySpec::Mesh { file, .. } = &mut tool.geometry {
+                *file = absolute(file);
+            }
+        }
+        spec
+    }
+
+    /// The files the scene reads beside itself (the blank's mesh, tools'
+    /// meshes), as absolute paths.
+    pub fn input_files(&self) -> Vec<PathBuf> {
+        let spec = self.resolved_spec();
+        spec.fabric
+            .blank
+            .mesh
+            .iter()
+            .chain(spec.tools.iter().filter_map(|t| match &t.geometry {
+                GeometrySpec::Mesh { file, .. } => Some(file),
+                _ => None,
+            }))
+            .map(PathBuf::from)
+            .collect()
     }
 }
 
-/// Sets `key` (dotted, numeric parts index arrays) to the TOML `value` (a
-/// bare word that is not TOML is taken as a string).
+/// Sets `key` (dotted, numeric parts index lists; `tools[0].friction` is
+/// read as `tools.0.friction`) to the TOML `value` (a bare word that is not
+/// TOML is taken as text). A missing table on the way is created, a
+/// missing list entry is an error.
 pub fn set_path(table: &mut toml::Table, key: &str, value: &str) -> Result<(), String> {
-    let parsed: toml::Value = toml::from_str::<toml::Table>(&format!("v = {value}"))
+    let parsed: toml::Value = match toml::from_str::<toml::Table>(&format!("v = {value}"))
         .ok()
         .and_then(|mut t| t.remove("v"))
-        .unwrap_or_else(|| toml::Value::String(value.to_owned()));
-    let parts: Vec<&str> = key.split('.').collect();
-    // A missing table on the way is created: `--set output.vtu=false`
-    // works in a scene without an [output] table.
-    let mut current: &mut toml::Value = table
-        .entry(parts[0])
-        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-    for (i, part) in parts.iter().enumerate().skip(1) {
-        let here = parts[..i].join(".");
-        current = match current {
-            toml::Value::Table(t) => t
-                .entry(*part)
-                .or_insert_with(|| toml::Value::Table(toml::Table::new())),
-            toml::Value::Array(a) => {
-                let index: usize = part.parse().map_err(|_| {
-                    format!("`{here}` is a list: index it with a number, not `{part}`")
-                })?;
-                let len = a.len();
-                a.get_mut(index)
-                    .ok_or_else(|| format!("`{here}` has {len} entries, there is no {index}"))?
+    {
+        Some(v) => v,
+        None => {
+            let v = value.trim();
+            let digits = v.trim_start_matches(['+', '-']);
+            if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
+                return Err(format!(
+                    "{v} is too large: whole numbers go up to {}",
+                    i64::MAX
+                ));
             }
-            _ => return Err(format!("`{here}` is a value, not a table")),
-        };
+            toml::Value::String(value.to_owned())
+        }
+    };
+    let parts = locate::key_parts(key);
+    if parts.iter().any(String::is_empty) {
+        return Err("expected a key such as simulation.end_time or tools.0.friction".into());
     }
-    *current = parsed;
+    let index_of = |here: &str, part: &str, len: usize| -> Result<usize, String> {
+        let index: usize = part
+            .parse()
+            .map_err(|_| format!("`{here}` is a list: index it with a number, not `{part}`"))?;
+        if index < len {
+            Ok(index)
+        } else if len == 0 {
+            Err(format!(
+                "`{here}` is an empty list: there is no entry {index}"
+            ))
+        } else {
+            Err(format!(
+                "`{here}` has {len} entries (0 to {}): there is no entry {index}",
+                len - 1
+            ))
+        }
+    };
+    let mut current: Option<&mut toml::Value> = None;
+    for (i, part) in parts.iter().enumerate() {
+        let here = parts[..i].join(".");
+        let next_is_index = parts
+            .get(i + 1)
+            .is_some_and(|p| p.bytes().all(|b| b.is_ascii_digit()));
+        let missing = |t: &toml::Table| !t.contains_key(part.as_str());
+        let slot = match current {
+            None => {
+                if next_is_index && missing(table) {
+                    return Err(format!(
+                        "the scene has no `{part}` list, so there is no entry {}",
+                        parts[i + 1]
+                    ));
+                }
+                table
+                    .entry(part.as_str())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            }
+            Some(toml::Value::Table(t)) => {
+                if next_is_index && missing(t) {
+                    return Err(format!(
+                        "`{here}` has no `{part}` list, so there is no entry {}",
+                        parts[i + 1]
+                    ));
+                }
+                t.entry(part.as_str())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            }
+            Some(toml::Value::Array(a)) => {
+                let index = index_of(&here, part, a.len())?;
+                &mut a[index]
+            }
+            Some(_) => return Err(format!("`{here}` is a value, not a table")),
+        };
+        current = Some(slot);
+    }
+    if let Some(slot) = current {
+        *slot = parsed;
+    }
     Ok(())
 }
 
@@ -690,16 +884,39 @@ fn nodes(
     sel: &NodeSelection,
 ) -> Result<Vec<u32>, SceneError> {
     match sel {
-        NodeSelection::Set(name) => model.node_set(name).map(<[u32]>::to_vec).map_err(|_| {
+        NodeSelection::Set(name) => {
+            if let Ok(set) = model.node_set(name) {
+                return Ok(set.to_vec());
+            }
+            // Set names are matched regardless of case when that is not
+            // ambiguous: Abaqus's are case-insensitive (`*NSET, NSET=Clamp`
+            // is `clamp`), and a rectangle's `LEFT` can only mean `left`.
+            let same: Vec<&String> = model
+                .node_sets
+                .keys()
+                .filter(|k| k.eq_ignore_ascii_case(name))
+                .collect();
+            if let [only] = same[..] {
+                return Ok(model.node_sets[only].clone());
+            }
             let known: Vec<&str> = model.node_sets.keys().map(String::as_str).collect();
-            at.error(
+            Err(at.error(
                 field,
-                format!(
-                    "unknown node set `{name}`; known sets: {}",
-                    known.join(", ")
-                ),
-            )
-        }),
+                if same.is_empty() {
+                    format!(
+                        "unknown node set `{name}`; known sets: {}",
+                        known.join(", ")
+                    )
+                } else {
+                    let names: Vec<&str> = same.iter().map(|s| s.as_str()).collect();
+                    format!(
+                        "`{name}` matches the sets {} when case is ignored: write the name \
+                         exactly as one of them",
+                        names.join(", ")
+                    )
+                },
+            ))
+        }
         NodeSelection::Sets(names) => {
             let mut all = Vec::new();
             for name in names {
@@ -857,10 +1074,14 @@ fn mesh_blank(
 fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings), SceneError> {
     let sim = &spec.simulation;
     positive(at, "simulation.end_time", sim.end_time)?;
-    if sim.frames == 0 {
+    if sim.frames == 0 || sim.frames > MAX_FRAMES {
         return Err(at.error(
             "simulation.frames",
-            "0 is not allowed: expected at least 1 frame",
+            format!(
+                "{} is not allowed: expected from 1 to {MAX_FRAMES} frames (each frame is a \
+                 VTU file of the whole blank)",
+                sim.frames
+            ),
         ));
     }
     if !(sim.safety_factor > 0.0 && sim.safety_factor <= 1.0) {
@@ -1050,8 +1271,11 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
                 let (vertices, triangles) =
                     read.map_err(|e| at.error(&format!("{g}.file"), e.to_string()))?;
                 let vertices = vertices.into_iter().map(|v| v + offset).collect();
-                Surface::triangle_mesh(vertices, triangles)
-                    .map_err(|e| at.error(&format!("{g}.file"), e.to_string()))?
+                // The file's geometry (a degenerate triangle, a winding
+                // that flips) is the file's fault: name it.
+                Surface::triangle_mesh(vertices, triangles).map_err(|e| {
+                    at.error(&format!("{g}.file"), format!("{}: {e}", path.display()))
+                })?
             }
         };
         let m = format!("{here}.motion");
@@ -1119,6 +1343,19 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
             return Err(at.error(&format!("{here}.rest_length"), "expected a length ≥ 0"));
         }
         let offset = finite3(at, &format!("{here}.anchor_offset"), s.anchor_offset)?;
+        // Anchored at its node, a spring starts at zero length: a force
+        // there pulls in no direction, and near the anchor its transverse
+        // stiffness F/l has no bound (no time step is stable).
+        let (start, _) = table.force_and_stiffness(offset.norm() - s.rest_length);
+        if offset == Vector3::zeros() && start != 0.0 {
+            return Err(at.error(
+                &here,
+                format!(
+                    "a spring anchored at its own node starts at zero length, where its force of {start} N \
+                     has no direction: give an anchor_offset, or no force at the start (preload, rest_length)"
+                ),
+            ));
+        }
         model.springs.push(SpringBatch {
             table,
             anchors: held
@@ -1215,7 +1452,16 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
         mass_scaling: sim.mass_scaling_dt,
         damping: sim.damping,
         frames: sim.frames,
-        max_energy_error: sim.max_energy_error,
+        guard: GuardSettings {
+            enabled: sim.instability_guard,
+            max_energy_error: sim.max_energy_error.or(GuardSettings::default()
+                .max_energy_error
+                .filter(|_| sim.instability_guard)),
+            max_kinetic_ratio: sim
+                .quasi_static
+                .then_some(drape_time::guard::QUASI_STATIC_KINETIC_RATIO),
+            ..GuardSettings::default()
+        },
         contact_margin: sim.contact_margin,
         ..ExplicitSettings::default()
     };

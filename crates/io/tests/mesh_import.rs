@@ -735,3 +735,78 @@ fn readers_never_panic_on_damaged_files() {
         }
     }
 }
+
+#[test]
+fn unclosed_gmsh_sections_name_the_section_and_line() {
+    let text = good_gmsh();
+    let cut = text.replace("$EndNodes\n", "");
+    let e = parse_gmsh(cut.as_bytes(), Path::new("cut.msh")).unwrap_err();
+    assert_eq!(e.kind, ImportErrorKind::Syntax, "{e}");
+    assert_eq!(e.line, Some(line_of(&cut, "$Nodes")), "{e}");
+    assert!(
+        e.message.contains(&format!(
+            "`$EndNodes` before `$Elements` on line {}",
+            line_of(&cut, "$Elements")
+        )),
+        "{e}"
+    );
+    let cut = text.replace("$EndElements\n", "");
+    let e = parse_gmsh(cut.as_bytes(), Path::new("cut.msh")).unwrap_err();
+    assert_eq!(e.line, Some(cut.lines().count()), "{e}");
+    assert!(
+        e.message.contains(&format!(
+            "ends inside the `$Elements` section of line {}",
+            line_of(&cut, "$Elements")
+        )),
+        "{e}"
+    );
+    assert!(e.to_string().starts_with("cut.msh:"), "{e}");
+}
+
+#[test]
+fn unknown_gmsh_element_types_are_named_with_their_line() {
+    for code in [99u32, 4, 1000] {
+        let text = gmsh_strip(1, "6 3 5 6", code);
+        let e = parse_gmsh(text.as_bytes(), Path::new("odd.msh")).unwrap_err();
+        assert_eq!(e.kind, ImportErrorKind::UnsupportedElement, "{e}");
+        assert_eq!(
+            e.line,
+            Some(line_of(&text, &format!("2 1 {code} 2"))),
+            "{e}"
+        );
+        assert!(e.message.contains(&format!("element type {code} (")), "{e}");
+    }
+}
+
+#[test]
+fn abaqus_nodes_without_coordinates_are_at_zero() {
+    let text = "*NODE\n1\n2, 1.0\n3, 1, 1\n4, , 1\n*ELEMENT, TYPE=M3D4\n1, 1, 2, 3, 4\n";
+    let mesh = parse_abaqus(text, Path::new("axis.inp")).unwrap();
+    assert_eq!(
+        mesh.x0,
+        vec![
+            Vector3::zeros(),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(1.0, 1.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0)
+        ]
+    );
+}
+
+#[test]
+fn abaqus_set_names_are_case_insensitive_in_scenes_too() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "strip.inp", ABAQUS_STRIP);
+    // The file writes `corners`, `Corners` and `elset=Quads`.
+    for (sprung, clamped) in [("CORNERS", "ELSET:QUADS"), ("Corners", "elset:quads")] {
+        let text = STRIP_SCENE
+            .replace("MESH", "strip.inp")
+            .replace("SPRUNG", sprung)
+            .replace("CLAMPED", clamped);
+        let scene = Scene::from_file(&write(dir.path(), "scene.toml", &text), &[])
+            .unwrap_or_else(|e| panic!("{sprung}: {e}"));
+        let model = &scene.model;
+        assert_eq!(model.springs[0].nodes, model.node_sets["corners"]);
+        assert_eq!(model.boundary[0].nodes, model.node_sets["elset:Quads"]);
+    }
+}

@@ -22,10 +22,12 @@ const POINT_ARRAYS: [&str; 4] = [
     "contact_force",
     "contact_status",
 ];
-const CELL_ARRAYS: [&str; 7] = [
+const CELL_ARRAYS: [&str; 9] = [
     "shear_angle_deg",
     "fibre_stretch_warp",
     "fibre_stretch_weft",
+    "fibre_direction_warp",
+    "fibre_direction_weft",
     "fibre_tension_warp",
     "fibre_tension_weft",
     "resin_stress",
@@ -162,6 +164,18 @@ fn check_vtu(path: &Path, model: &Model, state: &State, time: f64, cell_type: u8
         .flat_map(|(x, x0)| [x.x - x0.x, x.y - x0.y, x.z - x0.z])
         .collect();
     assert_eq!(displacement, u);
+    for name in ["fibre_direction_warp", "fibre_direction_weft"] {
+        let a = named(child(piece, "CellData"), name);
+        assert_eq!(a.attribute("NumberOfComponents"), Some("3"));
+        let v = f64s(&payload(a));
+        assert_eq!(v.len(), 3 * n_cells);
+        for d in v.chunks_exact(3) {
+            assert!(
+                (d[0].hypot(d[1]).hypot(d[2]) - 1.0).abs() < 1e-12,
+                "{name}: {d:?}"
+            );
+        }
+    }
     let resin = named(child(piece, "CellData"), "resin_stress");
     assert_eq!(resin.attribute("NumberOfComponents"), Some("3"));
     assert_eq!(f64s(&payload(resin)).len(), 3 * n_cells);
@@ -416,11 +430,13 @@ fn writes_a_complete_results_directory() {
             threads: 2,
             solver: "explicit".into(),
         },
+        warnings: Vec::new(),
     };
     out.write_summary(&summary).unwrap();
     let json = read(&dir.join("summary.json"));
     assert!(json.starts_with("{\n  \"status\": \"completed\""), "{json}");
     assert!(!json.contains("reason"));
+    assert!(!json.contains("warnings"), "no warnings, no field: {json}");
     let back: Summary = serde_json::from_str(&json).unwrap();
     assert_eq!(back, summary);
 
@@ -462,7 +478,9 @@ fn writes_a_complete_results_directory() {
         2,
     );
 
-    // Reusing the directory starts a new run: no frame of the old one stays.
+    // Reusing the directory (once the first run has let it go) starts a
+    // new run: no frame of the old one stays.
+    drop(out);
     let mut again = ResultsDir::create(&dir).unwrap();
     assert!(!dir.join("series.pvd").exists());
     assert!(!dir.join("frames/frame_00001.vtu").exists());
@@ -535,4 +553,47 @@ fn errors_name_the_path_instead_of_panicking() {
         .write_profiles(&drape_model::Measures::default())
         .unwrap_err();
     assert!(error.path.ends_with("profiles.csv"), "{error}");
+}
+
+#[test]
+fn one_run_per_folder_and_a_killed_runs_temporaries_are_cleared() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    // What a run killed between writing and renaming leaves.
+    std::fs::create_dir_all(dir.join("frames")).unwrap();
+    for left in [".summary.json.tmp4242", "frames/.frame_00003.vtu.tmp4242"] {
+        std::fs::write(dir.join(left), b"half").unwrap();
+    }
+    std::fs::write(dir.join("notes.txt"), b"mine").unwrap();
+    let first = ResultsDir::create(&dir).unwrap();
+    assert!(!dir.join(".summary.json.tmp4242").exists());
+    assert!(!dir.join("frames/.frame_00003.vtu.tmp4242").exists());
+    assert!(
+        dir.join("notes.txt").exists(),
+        "a user's file is left alone"
+    );
+
+    // A second claim while the first holds the folder: refused, naming the
+    // holder, and nothing removed.
+    first.write_energy(&[]).unwrap();
+    let busy = ResultsDir::create(&dir).err().unwrap();
+    assert_eq!(
+        busy.source.kind(),
+        std::io::ErrorKind::ResourceBusy,
+        "{busy}"
+    );
+    assert!(
+        busy.to_string().contains(&format!(
+            "another drape run (process {})",
+            std::process::id()
+        )),
+        "{busy}"
+    );
+    assert!(ResultsDir::reopen(&dir, &[]).is_err());
+    assert!(dir.join("energy.csv").exists());
+    drop(first);
+    // Released with its holder.
+    let again = ResultsDir::create(&dir).unwrap();
+    assert!(!dir.join("energy.csv").exists());
+    drop(again);
 }

@@ -149,3 +149,301 @@ fn a_holder_ring_is_a_closed_tool_and_bad_radii_name_their_field() {
         assert_eq!(e.line, Some(17), "{e}");
     }
 }
+
+fn with_sets(text: &str, sets: &[(&str, &str)]) -> Result<Scene, drape_io::scene::SceneError> {
+    let sets: Vec<(String, String)> = sets
+        .iter()
+        .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
+        .collect();
+    Scene::parse(text, Path::new("good.toml"), &sets)
+}
+
+/// Words that would leak Rust's types into a user's message.
+const RUST_WORDS: [&str; 12] = [
+    "f64",
+    "usize",
+    "u32",
+    "u64",
+    "i64",
+    "struct",
+    "enum",
+    "Spec",
+    "sequence",
+    "map,",
+    "variant of",
+    "Material ",
+];
+
+fn assert_plain(message: &str) {
+    for w in RUST_WORDS {
+        assert!(!message.contains(w), "`{w}` in: {message}");
+    }
+}
+
+#[test]
+fn set_errors_name_the_key_and_say_it_came_from_set() {
+    // A type error in an override: the key, the value, and no file line.
+    let e = with_sets(GOOD, &[("simulation.end_time", "abc")]).unwrap_err();
+    assert_eq!(e.field, "simulation.end_time", "{e}");
+    assert_eq!(e.line, None, "{e}");
+    assert!(e.message.contains("\"abc\""), "{e}");
+    assert!(e.message.contains("expected a number"), "{e}");
+    assert!(e.message.contains("--set simulation.end_time=abc"), "{e}");
+    assert_plain(&e.to_string());
+
+    // A list entry's value check: the override, not the file's line 12.
+    let e = with_sets(GOOD, &[("tools.0.friction", "-1")]).unwrap_err();
+    assert_eq!(e.field, "tools[0].friction", "{e}");
+    assert_eq!(e.line, None, "{e}");
+    assert!(e.message.contains("--set tools.0.friction=-1"), "{e}");
+    assert!(e.message.contains("≥ 0"), "{e}");
+    // Written the way errors show it, the key works too.
+    let scene = with_sets(GOOD, &[("tools[0].friction", "0.25")]).unwrap();
+    assert_eq!(scene.model.tools[0].friction, 0.25);
+
+    // A value from the file is still located in the file, even when other
+    // values were overridden.
+    let bad_file = GOOD.replace("friction = 0.1", "friction = -0.1");
+    let e = with_sets(&bad_file, &[("simulation.end_time", "0.02")]).unwrap_err();
+    assert_eq!(
+        (e.field.as_str(), e.line),
+        ("tools[0].friction", Some(12)),
+        "{e}"
+    );
+    assert!(!e.message.contains("--set"), "{e}");
+
+    // Entries that do not exist.
+    let e = with_sets(GOOD, &[("tools.3.friction", "0.1")]).unwrap_err();
+    assert!(e.message.contains("there is no entry 3"), "{e}");
+    assert!(e.message.contains("--set tools.3.friction=0.1"), "{e}");
+    let e = with_sets(GOOD, &[("springs.0.stiffness", "1")]).unwrap_err();
+    assert!(e.message.contains("no `springs` list"), "{e}");
+    let e = with_sets(GOOD, &[("simulation.frames", "18446744073709551615")]).unwrap_err();
+    assert!(e.message.contains("too large"), "{e}");
+
+    // A wrong type deeper down, and a table replaced by a number.
+    let e = with_sets(GOOD, &[("fabric.blank.cells", "[1.5, 2]")]).unwrap_err();
+    assert_eq!(e.field, "fabric.blank.cells[0]", "{e}");
+    assert!(e.message.contains("whole number"), "{e}");
+    assert_plain(&e.to_string());
+    let e = with_sets(GOOD, &[("fabric", "5")]).unwrap_err();
+    assert_eq!(e.field, "fabric", "{e}");
+    assert!(
+        e.message.contains("`material`, `fibres` and `blank`"),
+        "{e}"
+    );
+    assert_plain(&e.to_string());
+}
+
+#[test]
+fn type_errors_say_what_the_field_accepts() {
+    // (replace, by, field, line, words the message must hold)
+    let cases: [(&str, &str, &str, usize, &str); 9] = [
+        (
+            "end_time = 0.01",
+            "end_time = \"soon\"",
+            "simulation.end_time",
+            3,
+            "a number",
+        ),
+        (
+            "material = \"glass-serge-4x3\"",
+            "material = 5",
+            "fabric.material",
+            6,
+            "preset name",
+        ),
+        (
+            "material = \"glass-serge-4x3\"",
+            "material = { name = \"m\", thickness = 0.5 }",
+            "fabric.material",
+            6,
+            "`fibre` is missing",
+        ),
+        (
+            "cells = [4, 4]",
+            "cells = [4, -4]",
+            "fabric.blank.cells[1]",
+            8,
+            "whole number ≥ 0",
+        ),
+        (
+            "cells = [4, 4]",
+            "cells = [4]",
+            "fabric.blank.cells",
+            8,
+            "a list of 2 values",
+        ),
+        (
+            "fibres = \"trusses\"",
+            "fibres = \"truss\"",
+            "fabric.fibres",
+            7,
+            "`trusses`",
+        ),
+        (
+            "name = \"floor\"",
+            "name = 3",
+            "tools[0].name",
+            11,
+            "text in quotes",
+        ),
+        // Inside a table chosen by its `kind`, serde reads the values
+        // without their places: the table is named.
+        (
+            "point = [0, 0, -1]",
+            "point = [0, 0]",
+            "tools[0].geometry",
+            13,
+            "3 values",
+        ),
+        (
+            "geometry = { kind",
+            "motion = { kind = \"displacement\", direction = [0, 0, 1], distance = 1, amplitude = 3 }\ngeometry = { kind",
+            "tools[0].motion",
+            13,
+            "smooth_step",
+        ),
+    ];
+    for (from, to, field, line, words) in cases {
+        let text = GOOD.replace(from, to);
+        assert_ne!(text, GOOD, "{from}");
+        let e = error_of(&text);
+        let shown = e.to_string();
+        assert_eq!(e.field, field, "{shown}");
+        assert_eq!(e.line, Some(line), "{shown}");
+        assert!(shown.contains(words), "`{words}` not in: {shown}");
+        assert_plain(&shown);
+    }
+    for (nodes, words) in [
+        ("-1", "node set name"),
+        ("[1, \"left\"]", "mixes node numbers and set names"),
+        ("[-3]", "-3 is not allowed"),
+    ] {
+        let text = format!("{GOOD}\n[[springs]]\nnodes = {nodes}\nstiffness = 1\n");
+        let e = error_of(&text);
+        let shown = e.to_string();
+        assert!(e.field.starts_with("springs[0].nodes"), "{shown}");
+        assert_eq!(e.line, Some(16), "{shown}");
+        assert!(shown.contains(words), "`{words}` not in: {shown}");
+        assert_plain(&shown);
+    }
+}
+
+#[test]
+fn a_preloaded_spring_anchored_at_its_node_is_refused() {
+    let spring =
+        |keys: &str| format!("{GOOD}\n[[springs]]\nnodes = \"corners\"\nstiffness = 2\n{keys}\n");
+    let e = error_of(&spring("preload = 3"));
+    let text = e.to_string();
+    assert!(
+        text.contains("springs[0]")
+            && text.contains("force of 3 N")
+            && text.contains("no direction"),
+        "{text}"
+    );
+    // A rest length at the node: F(−L₀) = −2·1.5 N at the start.
+    assert!(
+        error_of(&spring("rest_length = 1.5"))
+            .to_string()
+            .contains("force of -3 N")
+    );
+    // An anchor offset gives the force a direction; no preload, no force.
+    for keys in ["preload = 3\nanchor_offset = [0, 0, -5]", ""] {
+        Scene::parse(&spring(keys), Path::new("good.toml"), &[]).unwrap();
+    }
+}
+
+#[test]
+fn absurd_frame_counts_are_refused() {
+    let e = error_of(&GOOD.replace(
+        "end_time = 0.01",
+        "end_time = 0.01\nframes = 9223372036854775807",
+    ));
+    assert_eq!(
+        (e.field.as_str(), e.line),
+        ("simulation.frames", Some(4)),
+        "{e}"
+    );
+    assert!(e.message.contains("100000"), "{e}");
+    let e = with_sets(GOOD, &[("simulation.frames", "100001")]).unwrap_err();
+    assert!(e.message.contains("--set simulation.frames=100001"), "{e}");
+    with_sets(GOOD, &[("simulation.frames", "100000")]).unwrap();
+}
+
+#[test]
+fn node_set_names_match_regardless_of_case() {
+    let text = format!("{GOOD}\n[[boundary]]\nnodes = \"LEFT\"\nmotion = {{ kind = \"fixed\" }}\n");
+    let scene = Scene::parse(&text, Path::new("good.toml"), &[]).unwrap();
+    assert_eq!(scene.model.boundary[0].nodes, scene.model.node_sets["left"]);
+}
+
+#[test]
+fn the_resolved_scene_builds_the_same_model_from_its_values_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let meshes = dir.path().join("meshes");
+    std::fs::create_dir(&meshes).unwrap();
+    std::fs::copy(
+        scenes_dir().join("meshes/plate.msh"),
+        meshes.join("plate.msh"),
+    )
+    .unwrap();
+    let text = GOOD
+        .replace("fibres = \"trusses\"", "fibres = \"embedded\"")
+        .replace(
+            "blank = { width = 100, height = 100, cells = [4, 4] }",
+            "blank = { mesh = \"meshes/plate.msh\" }",
+        );
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let sets = [("tools.0.friction".to_owned(), "0.3".to_owned())];
+    let scene = Scene::from_file(&path, &sets).unwrap();
+    let spec = scene.resolved_spec();
+    let mesh = spec.fabric.blank.mesh.clone().unwrap();
+    assert!(Path::new(&mesh).is_absolute(), "{mesh}");
+    assert_eq!(scene.input_files(), vec![std::path::PathBuf::from(&mesh)]);
+    assert_eq!(spec.tools[0].friction, 0.3);
+    // Through JSON (as in a checkpoint) and back, named by a path that is
+    // not where the scene was.
+    let json = serde_json::to_string(&spec).unwrap();
+    let again = Scene::from_spec(
+        serde_json::from_str(&json).unwrap(),
+        Path::new("elsewhere.toml"),
+    )
+    .unwrap();
+    assert_eq!(again.spec, spec);
+    assert_eq!(again.model.x0, scene.model.x0);
+    assert_eq!(again.model.tools[0].friction, 0.3);
+    assert_eq!(again.settings, scene.settings);
+}
+
+#[test]
+fn guard_keys_reach_the_settings() {
+    let scene = Scene::parse(GOOD, Path::new("good.toml"), &[]).unwrap();
+    let guard = &scene.settings.guard;
+    assert!(
+        guard.enabled && guard.max_energy_error == Some(0.05) && guard.max_kinetic_ratio.is_none()
+    );
+    let set = |k: &str, v: &str| [(k.to_owned(), v.to_owned())];
+    let scene = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &set("simulation.quasi_static", "true"),
+    )
+    .unwrap();
+    assert_eq!(scene.settings.guard.max_kinetic_ratio, Some(1.0));
+    let scene = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &set("simulation.instability_guard", "false"),
+    )
+    .unwrap();
+    assert!(!scene.settings.guard.enabled && scene.settings.guard.max_energy_error.is_none());
+    let scene = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &set("simulation.max_energy_error", "0.2"),
+    )
+    .unwrap();
+    assert_eq!(scene.settings.guard.max_energy_error, Some(0.2));
+}

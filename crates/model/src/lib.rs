@@ -296,6 +296,8 @@ pub struct ElementFields {
     pub shear: Vec<f64>,
     /// Warp and weft stretch.
     pub fibre_stretch: Vec<[f64; 2]>,
+    /// Current unit directions of [warp, weft].
+    pub fibre_direction: Vec<[Vector3<f64>; 2]>,
     /// Fibre stress τ of the embedded families (MPa); zero when trusses
     /// carry the fibres (their tension is a truss output).
     pub fibre_stress: Vec<[f64; 2]>,
@@ -581,6 +583,7 @@ impl Model {
                 let o = b.element_output(e, &state.x, &h[e * eh..(e + 1) * eh])?;
                 out.shear.push(o.shear_angle);
                 out.fibre_stretch.push(o.fibre_stretch);
+                out.fibre_direction.push(o.fibre_direction);
                 out.fibre_stress.push(o.fibre_stress);
                 let m = &b.section.material;
                 out.fibre_tension.push(

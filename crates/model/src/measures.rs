@@ -66,14 +66,39 @@ pub struct DrawIn {
     pub dd: f64,
 }
 
-/// The shear profile along `line`: every element whose reference centroid
-/// lies within `band` of the line, sorted by signed distance from the centre.
+/// The elements along `line`: every element whose reference centroid lies
+/// within `band` of the line, as (element index, signed distance from the
+/// centre), sorted by distance.
 ///
 /// `band` is a perpendicular distance, inclusive up to a rounding tolerance
 /// of 1e-9 of the blank's size: on a grid with an even number of rows the
 /// centroids next to a median sit exactly half a cell away, and a band of
 /// half a cell must take both rows, not whichever rounding favours. Equal
 /// distances keep element order, so the result is deterministic.
+pub fn profile_elements(
+    frame: &BlankFrame,
+    centroids0: &[Vector3<f64>],
+    line: ProfileLine,
+    band: f64,
+) -> Vec<(usize, f64)> {
+    let [ux, uy] = line.direction(frame);
+    let reach = band + 1e-9 * frame.width.max(frame.height);
+    let mut points: Vec<(usize, f64)> = centroids0
+        .iter()
+        .enumerate()
+        .filter_map(|(e, c)| {
+            let (rx, ry) = (c.x - frame.center.x, c.y - frame.center.y);
+            let across = (rx * uy - ry * ux).abs();
+            (across <= reach).then_some((e, rx * ux + ry * uy))
+        })
+        .collect();
+    // Stable sort: elements at the same distance stay in element order.
+    points.sort_by(|a, b| a.1.total_cmp(&b.1));
+    points
+}
+
+/// The shear profile along `line`: the shear of the elements of
+/// [`profile_elements`], sorted by signed distance from the centre.
 pub fn shear_profile(
     frame: &BlankFrame,
     centroids0: &[Vector3<f64>],
@@ -82,23 +107,13 @@ pub fn shear_profile(
     band: f64,
 ) -> Vec<ProfilePoint> {
     debug_assert_eq!(centroids0.len(), shear_rad.len());
-    let [ux, uy] = line.direction(frame);
-    let reach = band + 1e-9 * frame.width.max(frame.height);
-    let mut points: Vec<ProfilePoint> = centroids0
-        .iter()
-        .zip(shear_rad)
-        .filter_map(|(c, &gamma)| {
-            let (rx, ry) = (c.x - frame.center.x, c.y - frame.center.y);
-            let across = (rx * uy - ry * ux).abs();
-            (across <= reach).then_some(ProfilePoint {
-                distance: rx * ux + ry * uy,
-                shear_deg: gamma.to_degrees(),
-            })
+    profile_elements(frame, centroids0, line, band)
+        .into_iter()
+        .map(|(e, distance)| ProfilePoint {
+            distance,
+            shear_deg: shear_rad[e].to_degrees(),
         })
-        .collect();
-    // Stable sort: elements at the same distance stay in element order.
-    points.sort_by(|a, b| a.distance.total_cmp(&b.distance));
-    points
+        .collect()
 }
 
 /// Draw-in from reference `x0` and current `x` positions, given the edge

@@ -23,6 +23,7 @@ use std::process::ExitCode;
 mod constitutive;
 mod contact;
 mod explicit;
+mod fishnet;
 mod kinematics;
 mod scenes;
 
@@ -33,6 +34,7 @@ pub fn registry() -> Vec<Case> {
         constitutive::CASES,
         explicit::CASES,
         contact::CASES,
+        fishnet::CASES,
         scenes::CASES,
     ]
     .concat()

@@ -510,3 +510,32 @@ fn a_quad_turned_inside_out_about_a_corner_is_inverted() {
     };
     assert_eq!(batch.diagnose(other, &x), other);
 }
+
+#[test]
+fn output_fibre_directions_are_the_deformed_yarns() {
+    // Under a uniform deformation x = A·X every element of the distorted
+    // patch carries its yarns to A·N/|A·N|, and their angle closes by the
+    // shear angle it reports.
+    let a = nalgebra::Matrix3::new(1.05, 0.32, 0.0, 0.04, 0.97, 0.0, 0.1, -0.2, 1.0);
+    let (warp, weft) = (Vector3::new(0.6, 0.8, 0.0), Vector3::new(-0.8, 0.6, 0.0));
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        let (b, x0, _) = patch(shape, true);
+        let x: Vec<_> = x0.iter().map(|p| a * p).collect();
+        let h = b.initial_history();
+        let eh = b.element_history_len();
+        for e in 0..b.len() {
+            let o = b.element_output(e, &x, &h[e * eh..(e + 1) * eh]).unwrap();
+            let [w, f] = o.fibre_direction;
+            assert!(
+                (w - (a * warp).normalize()).norm() < 1e-13,
+                "{shape:?} {e}: {w}"
+            );
+            assert!(
+                (f - (a * weft).normalize()).norm() < 1e-13,
+                "{shape:?} {e}: {f}"
+            );
+            let angle = w.cross(&f).norm().atan2(w.dot(&f));
+            assert!((std::f64::consts::FRAC_PI_2 - angle - o.shear_angle).abs() < 1e-13);
+        }
+    }
+}

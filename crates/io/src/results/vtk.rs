@@ -76,6 +76,7 @@ fn check_sizes(frame: &FrameData<'_>) -> Result<(), SizeMismatch> {
         ),
         ("fields.shear", f.shear.len(), cells),
         ("fields.fibre_stretch", f.fibre_stretch.len(), cells),
+        ("fields.fibre_direction", f.fibre_direction.len(), cells),
         ("fields.fibre_tension", f.fibre_tension.len(), cells),
         ("fields.resin_stress", f.resin_stress.len(), cells),
         ("fields.thickness", f.thickness.len(), cells),
@@ -180,6 +181,12 @@ pub(super) fn frame_vtu(time: f64, frame: &FrameData<'_>) -> Result<String, Size
         "fibre_stretch_weft",
         &family(&fields.fibre_stretch, 1),
     );
+    for (k, name) in ["fibre_direction_warp", "fibre_direction_weft"]
+        .iter()
+        .enumerate()
+    {
+        vectors(&mut xml, name, fields.fibre_direction.iter().map(|d| d[k]));
+    }
     scalars(
         &mut xml,
         "fibre_tension_warp",

@@ -1,0 +1,438 @@
+//! Kinematic draping through the facade: [`kinematic_scene`] drapes a
+//! scene's blank as a pin-jointed net (drape-fishnet) and writes the same
+//! results folder as a forming run; [`compare_scene`] runs both on the same
+//! scene and writes them side by side with their difference.
+//!
+//! The net is built in the mould's own coordinates and moved with the
+//! mould's displacement at the scene's end time, so that it lies where the
+//! formed part of a run lies.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use drape_fishnet::{Net, NetResults, NetStats};
+use drape_io::results::{
+    DrawInMm, EnergySummary, FrameData, MapPanel, ResultsDir, ResultsError, RunInfo, Summary,
+    write_flat_maps,
+};
+use drape_io::scene::Scene;
+use drape_model::measures::{ProfileLine, profile_elements};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::{RunControl, RunProgress, RunReport, run_scene};
+
+/// What stops a kinematic drape or a comparison.
+#[derive(Debug, thiserror::Error)]
+pub enum KinematicError {
+    /// The scene cannot be draped as it is (bad input: nothing written).
+    #[error("{0}")]
+    Input(String),
+    /// Writing results failed.
+    #[error(transparent)]
+    Results(#[from] ResultsError),
+}
+
+/// What a kinematic drape leaves.
+#[derive(Debug, Clone)]
+pub struct KinematicReport {
+    /// The summary written to `summary.json` (`run.solver = "kinematic"`).
+    pub summary: Summary,
+    /// The draped net (in the mould's own coordinates).
+    pub net: Net,
+    /// The net as model, state, fields and measures (moved with the mould).
+    pub results: NetResults,
+    /// The net's counts.
+    pub stats: NetStats,
+    /// Index of the mould among the scene's tools.
+    pub mould: usize,
+}
+
+/// Drapes `scene`'s blank on its mould as a pin-jointed net (the scene's
+/// `[kinematic]` table, or its defaults) and writes into `out` what a
+/// forming run writes: a VTU frame with a `series.pvd`, `profiles.csv`,
+/// `summary.json`, `shear_map.png`, `profiles.png`, and an `energy.csv`
+/// holding only its header (a net has no energy history).
+///
+/// The summary says `completed`; when cells of the blank could not be
+/// draped (the net left the mould or folded) its `warnings` say how many.
+pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, KinematicError> {
+    let file = scene.file.display();
+    let setup = scene
+        .kinematic
+        .clone()
+        .map_err(|e| KinematicError::Input(e.to_string()))?;
+    let model = &scene.model;
+    let tool = &model.tools[setup.mould];
+    let material = model
+        .membranes
+        .first()
+        .map(|b| b.section.material.clone())
+        .ok_or_else(|| KinematicError::Input(format!("{file}: the blank has no elements")))?;
+    let started = std::time::Instant::now();
+    let net = Net::drape(&tool.surface, &setup.net)
+        .map_err(|e| KinematicError::Input(format!("{file}: kinematic: {e}")))?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let shift = tool.motion.direction() * setup.mould_displacement;
+    let locking = scene.spec.output.locking_angle_deg;
+    let results = net
+        .results(&material, shift, locking)
+        .map_err(|e| KinematicError::Input(format!("{file}: kinematic: {e}")))?;
+    let stats = net.stats();
+
+    let dir = ResultsDir::create(out)?;
+    let mut dir = dir;
+    if scene.spec.output.vtu {
+        dir.write_frame(
+            0,
+            0.0,
+            &FrameData {
+                model: &results.model,
+                state: &results.state,
+                fields: &results.fields,
+                contact_force: None,
+                contact_status: None,
+            },
+        )?;
+    }
+    dir.write_energy(&[])?;
+    dir.write_profiles(&results.measures)?;
+    if scene.spec.output.pictures {
+        dir.write_pictures(
+            &results.model,
+            &results.state,
+            &results.fields,
+            &results.measures,
+        )?;
+    }
+    let m = &results.measures;
+    let draw_in = m.draw_in.unwrap_or(drape_model::measures::DrawIn {
+        dx: f64::NAN,
+        dy: f64::NAN,
+        dd: f64::NAN,
+    });
+    let undraped = stats.outline_cells - stats.draped_cells;
+    let summary = Summary {
+        status: "completed".to_owned(),
+        reason: None,
+        scene: file.to_string(),
+        time: 0.0,
+        max_shear_deg: m.max_shear_deg,
+        max_shear_at: m.max_shear_at,
+        draw_in_mm: DrawInMm {
+            dx: draw_in.dx,
+            dy: draw_in.dy,
+            dd: draw_in.dd,
+        },
+        max_fibre_tension_n: 0.0,
+        area_above_locking_mm2: m.area_above_locking,
+        energy: EnergySummary::default(),
+        run: RunInfo {
+            wall_s,
+            steps: 0,
+            threads: 1,
+            solver: "kinematic".to_owned(),
+        },
+        // A net that stops short is a result, not a failure: the engineer
+        // reads where it could not go.
+        warnings: (undraped > 0)
+            .then(|| {
+                format!(
+                    "{undraped} of the blank's {} cells are not draped: the net left the mould's edge or folded (sheared to 90°) there",
+                    stats.outline_cells
+                )
+            })
+            .into_iter()
+            .collect(),
+    };
+    dir.write_summary(&summary)?;
+    Ok(KinematicReport {
+        summary,
+        net,
+        results,
+        stats,
+        mould: setup.mould,
+    })
+}
+
+/// The difference of two shear profiles along one line of the blank.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct ProfileDifference {
+    /// Elements on the line with a value from both.
+    pub points: usize,
+    /// Of those, elements lying on the mould in the forming run.
+    pub points_on_mould: usize,
+    /// Largest |γ_mechanical − γ_kinematic| (degrees).
+    pub max_abs_deg: f64,
+    /// Root mean square of the difference (degrees).
+    pub rms_deg: f64,
+    /// Largest |difference| over the elements on the mould (degrees).
+    pub max_abs_on_mould_deg: f64,
+    /// Root mean square over the elements on the mould (degrees).
+    pub rms_on_mould_deg: f64,
+}
+
+/// `comparison.json`: a forming run against the kinematic net.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ComparisonSummary {
+    /// The scene file.
+    pub scene: String,
+    /// The forming run's status.
+    pub mechanical_status: String,
+    /// Largest |γ| of the forming run (degrees).
+    pub mechanical_max_shear_deg: f64,
+    /// Largest |γ| of the net (degrees).
+    pub kinematic_max_shear_deg: f64,
+    /// Elements of the forming run.
+    pub elements: usize,
+    /// Of those, elements whose reference centroid lies on the draped net.
+    pub compared: usize,
+    /// Of those, elements lying on the mould at the end of the run (every
+    /// node within half a thickness of its contact position).
+    pub on_mould: usize,
+    /// Over every compared element.
+    pub all: ProfileDifference,
+    /// Along the blank's diagonal.
+    pub diagonal: ProfileDifference,
+    /// Along the median parallel to x.
+    pub median: ProfileDifference,
+}
+
+/// Per element of a forming run, the two shears at its material point.
+#[derive(Debug, Clone, Default)]
+pub struct Comparison {
+    /// The summary.
+    pub summary: ComparisonSummary,
+    /// γ of the forming run per element (degrees).
+    pub mechanical_deg: Vec<f64>,
+    /// γ of the net at the element's reference centroid (degrees; NaN off
+    /// the draped net).
+    pub kinematic_deg: Vec<f64>,
+    /// Whether the element lies on the mould at the end of the run.
+    pub on_mould: Vec<bool>,
+    /// Reference centroids.
+    pub centroid0: Vec<Vector3<f64>>,
+}
+
+fn differences(indices: impl Iterator<Item = usize>, c: &Comparison) -> ProfileDifference {
+    let mut d = ProfileDifference::default();
+    let (mut sum, mut sum_on) = (0.0, 0.0);
+    for e in indices {
+        let diff = c.mechanical_deg[e] - c.kinematic_deg[e];
+        if !diff.is_finite() {
+            continue;
+        }
+        d.points += 1;
+        sum += diff * diff;
+        d.max_abs_deg = d.max_abs_deg.max(diff.abs());
+        if c.on_mould[e] {
+            d.points_on_mould += 1;
+            sum_on += diff * diff;
+            d.max_abs_on_mould_deg = d.max_abs_on_mould_deg.max(diff.abs());
+        }
+    }
+    d.rms_deg = (sum / d.points.max(1) as f64).sqrt();
+    d.rms_on_mould_deg = (sum_on / d.points_on_mould.max(1) as f64).sqrt();
+    d
+}
+
+/// The forming run `mechanical` of `scene` against its kinematic net: the
+/// net's shear read at each element's reference centroid
+/// ([`Net::shear_at`]: bilinear between cell centres), element by element
+/// and along the diagonal and median. Empty when the run's element fields
+/// cannot be evaluated (a collapsed element) or `kinematic` was draped on a
+/// tool `scene` does not have.
+pub fn compare(scene: &Scene, kinematic: &KinematicReport, mechanical: &RunReport) -> Comparison {
+    let model = &scene.model;
+    let Ok(fields) = model.element_fields(&mechanical.state) else {
+        return Comparison::default();
+    };
+    let Some(tool) = model.tools.get(kinematic.mould) else {
+        return Comparison::default();
+    };
+    let displacement = tool
+        .prescribed_displacement(mechanical.state.time)
+        .unwrap_or(0.0);
+    let offset = model.contact_offset;
+    let touching: Vec<bool> = mechanical
+        .state
+        .x
+        .iter()
+        .map(|x| (tool.project(x, displacement).gap - offset).abs() <= offset)
+        .collect();
+    let mut c = Comparison {
+        centroid0: fields.centroid0.clone(),
+        mechanical_deg: fields.shear.iter().map(|g| g.to_degrees()).collect(),
+        ..Comparison::default()
+    };
+    for batch in &model.membranes {
+        for e in 0..batch.len() {
+            c.on_mould
+                .push(batch.element_nodes(e).iter().all(|&n| touching[n as usize]));
+        }
+    }
+    c.kinematic_deg = fields
+        .centroid0
+        .iter()
+        .map(|p| kinematic.net.shear_at(p).map_or(f64::NAN, f64::to_degrees))
+        .collect();
+    let s = &mut c.summary;
+    s.scene = scene.file.display().to_string();
+    s.mechanical_status = mechanical.summary.status.clone();
+    s.mechanical_max_shear_deg = mechanical.measures.max_shear_deg;
+    s.kinematic_max_shear_deg = kinematic.results.measures.max_shear_deg;
+    s.elements = c.mechanical_deg.len();
+    s.compared = c.kinematic_deg.iter().filter(|v| v.is_finite()).count();
+    s.on_mould = (0..s.elements)
+        .filter(|&e| c.kinematic_deg[e].is_finite() && c.on_mould[e])
+        .count();
+    let all = differences(0..c.mechanical_deg.len(), &c);
+    let (diagonal, median) = match &model.blank {
+        Some(info) => {
+            let line = |l| {
+                differences(
+                    profile_elements(&info.frame, &c.centroid0, l, 0.5 * info.cell_size)
+                        .into_iter()
+                        .map(|(e, _)| e),
+                    &c,
+                )
+            };
+            (line(ProfileLine::Diagonal), line(ProfileLine::MedianX))
+        }
+        None => Default::default(),
+    };
+    c.summary.all = all;
+    c.summary.diagonal = diagonal;
+    c.summary.median = median;
+    c
+}
+
+/// What a comparison leaves.
+#[derive(Debug, Clone)]
+pub struct ComparisonReport {
+    /// The kinematic drape (written to `out/kinematic`).
+    pub kinematic: KinematicReport,
+    /// The forming run (written to `out/mechanical`).
+    pub mechanical: RunReport,
+    /// The comparison (written to `out`).
+    pub comparison: Comparison,
+}
+
+/// Runs `scene` both ways: the kinematic net into `out/kinematic`, the
+/// forming run into `out/mechanical` (each a full results folder), and
+/// writes their comparison into `out`:
+///
+/// - `comparison.json` ([`ComparisonSummary`]);
+/// - `comparison.csv`: per element of the run, its reference centroid,
+///   both shears, their difference and whether it lies on the mould;
+/// - `profiles.csv`: the same along the diagonal and the median;
+/// - `comparison.png`: on the flat blank, the run's |γ|, the net's |γ| at
+///   the same material points (one colour scale) and |γ|mech − |γ|kin.
+pub fn compare_scene(
+    scene: &Scene,
+    out: &Path,
+    progress: &mut dyn FnMut(&RunProgress) -> RunControl,
+) -> Result<ComparisonReport, KinematicError> {
+    let kinematic = kinematic_scene(scene, &out.join("kinematic"))?;
+    let mechanical = run_scene(scene, &out.join("mechanical"), progress)?;
+    let c = compare(scene, &kinematic, &mechanical);
+    let at = |name: &str| {
+        let path = out.join(name);
+        move |source| ResultsError { path, source }
+    };
+    let number = |v: f64| {
+        if v.is_finite() {
+            format!("{v}")
+        } else {
+            String::new()
+        }
+    };
+
+    let mut csv =
+        String::from("element,x0_mm,y0_mm,mechanical_deg,kinematic_deg,difference_deg,on_mould\n");
+    for e in 0..c.mechanical_deg.len() {
+        let _ = writeln!(
+            csv,
+            "{e},{},{},{},{},{},{}",
+            c.centroid0[e].x,
+            c.centroid0[e].y,
+            number(c.mechanical_deg[e]),
+            number(c.kinematic_deg[e]),
+            number(c.mechanical_deg[e] - c.kinematic_deg[e]),
+            u8::from(c.on_mould[e])
+        );
+    }
+    drape_io::atomic::write(&out.join("comparison.csv"), csv.as_bytes())
+        .map_err(at("comparison.csv"))?;
+
+    let mut profiles =
+        String::from("line,distance_mm,mechanical_deg,kinematic_deg,difference_deg,on_mould\n");
+    if let Some(info) = &scene.model.blank {
+        for (name, line) in [
+            ("diagonal", ProfileLine::Diagonal),
+            ("median", ProfileLine::MedianX),
+        ] {
+            for (e, distance) in
+                profile_elements(&info.frame, &c.centroid0, line, 0.5 * info.cell_size)
+            {
+                let _ = writeln!(
+                    profiles,
+                    "{name},{distance},{},{},{},{}",
+                    number(c.mechanical_deg[e]),
+                    number(c.kinematic_deg[e]),
+                    number(c.mechanical_deg[e] - c.kinematic_deg[e]),
+                    u8::from(c.on_mould[e])
+                );
+            }
+        }
+    }
+    drape_io::atomic::write(&out.join("profiles.csv"), profiles.as_bytes())
+        .map_err(at("profiles.csv"))?;
+
+    let magnitude = |v: &[f64]| -> Vec<f64> { v.iter().map(|g| g.abs()).collect() };
+    let (mech, kin) = (magnitude(&c.mechanical_deg), magnitude(&c.kinematic_deg));
+    let difference: Vec<f64> = mech.iter().zip(&kin).map(|(m, k)| m - k).collect();
+    let shared = mech
+        .iter()
+        .chain(&kin)
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |a, &b| a.max(b));
+    write_flat_maps(
+        &out.join("comparison.png"),
+        &scene.model,
+        &[
+            MapPanel {
+                title: format!("Forming run ({}): |γ|", mechanical.summary.status),
+                values: &mech,
+                label: "|γ| (deg)".into(),
+                signed: false,
+                scale: Some(shared),
+            },
+            MapPanel {
+                title: "Kinematic net: |γ|".into(),
+                values: &kin,
+                label: "|γ| (deg)".into(),
+                signed: false,
+                scale: Some(shared),
+            },
+            MapPanel {
+                title: "Difference: |γ| run − |γ| net".into(),
+                values: &difference,
+                label: "difference (deg)".into(),
+                signed: true,
+                scale: None,
+            },
+        ],
+    )?;
+    let mut json = serde_json::to_vec_pretty(&c.summary).map_err(|e| ResultsError {
+        path: out.join("comparison.json"),
+        source: e.into(),
+    })?;
+    json.push(b'\n');
+    drape_io::atomic::write(&out.join("comparison.json"), &json).map_err(at("comparison.json"))?;
+    Ok(ComparisonReport {
+        kinematic,
+        mechanical,
+        comparison: c,
+    })
+}

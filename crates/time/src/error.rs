@@ -1,5 +1,6 @@
 //! How a run ends: its summary, or why it stopped early.
 
+use drape_contact::ContactFault;
 use drape_elements::ElementError;
 
 use crate::Energies;
@@ -57,6 +58,17 @@ pub enum RunError {
         /// What went wrong in the last attempt.
         reason: String,
     },
+    /// The contact guard refused a step: a node inside a tool by more than
+    /// the step can explain (see [`ContactFault`]).
+    #[error("step {step}, t = {time:.6e} s: contact fault: {fault}")]
+    ContactFault {
+        /// The step that failed.
+        step: u64,
+        /// Its time.
+        time: f64,
+        /// The node, the tool, the gap and why.
+        fault: ContactFault,
+    },
     /// The settings or the model cannot run.
     #[error("cannot run: {0}")]
     Setup(String),
@@ -70,7 +82,8 @@ impl RunError {
             Self::Element { step, time, .. }
             | Self::NonFinite { step, time, .. }
             | Self::Unstable { step, time, .. }
-            | Self::NoConvergence { step, time, .. } => Some((*step, *time)),
+            | Self::NoConvergence { step, time, .. }
+            | Self::ContactFault { step, time, .. } => Some((*step, *time)),
             Self::Setup(_) => None,
         }
     }

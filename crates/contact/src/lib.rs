@@ -46,11 +46,13 @@
 mod explicit;
 mod mesh;
 mod mesh_file;
+mod mesh_repair;
 mod surface;
 mod tool;
 
 pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes};
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
+pub use mesh_repair::{RepairError, RepairOptions, RepairReport, repair};
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};
 pub use tool::{Amplitude, Tool, ToolMotion, ToolState};

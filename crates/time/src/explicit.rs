@@ -421,6 +421,11 @@ impl<'m> Explicit<'m> {
         self.contact.as_ref()
     }
 
+    /// Mass added by mass scaling (t), 0 without it: known before the run.
+    pub fn added_mass(&self) -> f64 {
+        self.added_mass
+    }
+
     /// Runs from `state` to the end time. On error `state` holds the last
     /// good step.
     pub fn run(

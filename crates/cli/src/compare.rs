@@ -9,7 +9,9 @@
 //! - otherwise B's shear is carried onto A's elements by closest point on
 //!   B's reference surface ([`drape_io::results::mapping::SurfaceField`]):
 //!   at each of A's reference centroids, B's shear interpolated between
-//!   its nodal means. An element of A farther from B's blank than half B's
+//!   its nodal means, or B's element value where A's centroid is the
+//!   centroid of one of B's elements (the same cells numbered otherwise,
+//!   such as a kinematic net drawn on the run's own grid). An element of A farther from B's blank than half B's
 //!   typical element size has no value (B's blank does not reach there).
 //!
 //! Any two folders compare: two forming runs of one scene with different

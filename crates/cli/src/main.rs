@@ -744,11 +744,18 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
     let path = out.join("sweep.csv");
     drape_io::atomic::write(&path, table.as_bytes())
         .with_context(|| format!("writing {}", path.display()))?;
-    let sweep_axes: Vec<SweepAxis> = axes
+    // A key given one value is a setting, not a swept parameter: the
+    // picture has a column per key with more than one value (the first key
+    // when none has).
+    let mut drawn: Vec<usize> = (0..axes.len()).filter(|&k| axes[k].1.len() > 1).collect();
+    if drawn.is_empty() {
+        drawn.push(0);
+    }
+    let sweep_axes: Vec<SweepAxis> = drawn
         .iter()
-        .map(|(key, values)| SweepAxis {
-            key: key.clone(),
-            values: values.clone(),
+        .map(|&k| SweepAxis {
+            key: axes[k].0.clone(),
+            values: axes[k].1.clone(),
         })
         .collect();
     let runs: Vec<SweepRun> = combos
@@ -758,7 +765,7 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
             let s = report.as_ref().ok();
             let value = |f: fn(&Summary) -> f64| s.map_or(f64::NAN, f);
             SweepRun {
-                values: combo.iter().map(|(_, v)| v.clone()).collect(),
+                values: drawn.iter().map(|&k| combo[k].1.clone()).collect(),
                 max_shear_deg: value(|s| s.max_shear_deg),
                 draw_in_dx_mm: value(|s| s.draw_in_mm.dx),
                 draw_in_dd_mm: value(|s| s.draw_in_mm.dd),

@@ -9,7 +9,11 @@
 //! field is continuous; a query point then takes the closest point of the
 //! surface (parry3d's BVH over the mesh's triangles, quads split along
 //! their 0–2 diagonal) and the values there, interpolated linearly between
-//! the triangle's nodes. For a smooth field this is second-order accurate
+//! the triangle's nodes. A query point at the centroid of the element found
+//! (to 1e-6 of the element's size: the same mesh, or a mesh sharing that
+//! element) takes the element's value as it is, at distance zero (a
+//! warped quad's centroid is off its two triangles), so that a mesh compared
+//! with itself or mapped onto itself loses nothing. For a smooth field this is second-order accurate
 //! in the element size away from the mesh's boundary (first order within
 //! an element of it, where a node's mean is one-sided); the tests measure
 //! it.
@@ -32,6 +36,12 @@ pub struct SurfaceField {
     mesh: TriMesh,
     /// Per channel, per node.
     nodal: Vec<Vec<f64>>,
+    /// The element each triangle of `mesh` comes from.
+    element_of: Vec<u32>,
+    /// Per element: centroid and size (square root of its area).
+    centroid: Vec<(Vector3<f64>, f64)>,
+    /// Per channel, per element, as given.
+    elemental: Vec<Vec<f64>>,
 }
 
 /// A sample of a [`SurfaceField`].
@@ -61,6 +71,8 @@ impl SurfaceField {
             ));
         }
         let mut triangles = Vec::with_capacity(2 * elements.len());
+        let mut element_of = Vec::with_capacity(2 * elements.len());
+        let mut centroid = Vec::with_capacity(elements.len());
         let mut weight = vec![0.0; nodes.len()];
         let mut nodal = vec![vec![0.0; nodes.len()]; channels.len()];
         let mut weights = vec![vec![0.0; nodes.len()]; channels.len()];
@@ -72,15 +84,23 @@ impl SurfaceField {
             let area = match element.len() {
                 3 => {
                     triangles.push([element[0], element[1], element[2]]);
+                    element_of.push(e as u32);
                     0.5 * (p(1) - p(0)).cross(&(p(2) - p(0))).norm()
                 }
                 4 => {
                     triangles.push([element[0], element[1], element[2]]);
                     triangles.push([element[0], element[2], element[3]]);
+                    element_of.extend([e as u32, e as u32]);
                     0.5 * (p(2) - p(0)).cross(&(p(3) - p(1))).norm()
                 }
                 n => return Err(format!("element {e} has {n} nodes, expected 3 or 4")),
             };
+            let mid = element
+                .iter()
+                .map(|&n| nodes[n as usize])
+                .sum::<Vector3<f64>>()
+                / element.len() as f64;
+            centroid.push((mid, area.sqrt()));
             for &n in element {
                 weight[n as usize] += area;
                 for (c, values) in channels.iter().enumerate() {
@@ -99,7 +119,13 @@ impl SurfaceField {
         let vertices = nodes.iter().map(|p| DVec3::new(p.x, p.y, p.z)).collect();
         let mesh = TriMesh::new(vertices, triangles)
             .map_err(|e| format!("the surface cannot be searched: {e:?}"))?;
-        Ok(Self { mesh, nodal })
+        Ok(Self {
+            mesh,
+            nodal,
+            element_of,
+            centroid,
+            elemental: channels.to_vec(),
+        })
     }
 
     /// The values at the surface's closest point to `x`.
@@ -110,6 +136,17 @@ impl SurfaceField {
         let corners = self.mesh.indices()[triangle as usize];
         let p = projection.point;
         let point = Vector3::new(p.x, p.y, p.z);
+        let element = self.element_of[triangle as usize] as usize;
+        let (mid, size) = self.centroid[element];
+        // The centroid of a warped quad is off its two triangles: the query
+        // is compared with the centroid, not with its projection.
+        if (x - mid).norm() <= 1e-6 * size {
+            return Sample {
+                values: self.elemental.iter().map(|v| v[element]).collect(),
+                point: mid,
+                distance: (x - mid).norm(),
+            };
+        }
         let weights = location
             .barycentric_coordinates()
             .filter(|w| w.iter().all(|v| v.is_finite()))
@@ -256,5 +293,34 @@ mod tests {
         );
         assert!((s.distance - 0.7).abs() < 1e-12);
         assert!((s.point - Vector3::new(2.3, 3.6, 0.0)).norm() < 1e-12);
+    }
+
+    /// At an element's own centroid the element's value, not the smoothed
+    /// nodal interpolation (a field that is not linear: nodal means would
+    /// change it).
+    #[test]
+    fn an_element_centroid_takes_the_element_value() {
+        let nodes = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(2.0, 0.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+            Vector3::new(1.0, 1.0, 0.0),
+            Vector3::new(2.0, 1.0, 0.0),
+        ];
+        let elements = vec![vec![0, 1, 4, 3], vec![1, 2, 5], vec![1, 5, 4]];
+        let values = vec![1.0, 5.0, -2.0];
+        let field = SurfaceField::new(&nodes, &elements, std::slice::from_ref(&values)).unwrap();
+        for (e, element) in elements.iter().enumerate() {
+            let c = element
+                .iter()
+                .map(|&n| nodes[n as usize])
+                .sum::<Vector3<f64>>()
+                / element.len() as f64;
+            assert_eq!(field.sample(&c).values[0], values[e], "element {e}");
+        }
+        // Off the centroid, interpolated between nodal means.
+        let s = field.sample(&Vector3::new(0.3, 0.5, 0.0));
+        assert!(s.values[0] != values[0], "{s:?}");
     }
 }

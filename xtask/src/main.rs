@@ -3,6 +3,9 @@
 //!
 //! - `validate [--quick] [--filter SUBSTR]`: the validation suite, analytic
 //!   references against the crates' computed values (see [`validate`]);
+//! - `stress [--quick] [--filter SUBSTR] [--seed N]`: extremes and hostile
+//!   input through the facade, one table of case, expectation and outcome
+//!   (see [`stress`]);
 //! - `bench [ARGS…]`: the criterion benches, `cargo bench -p drape-benches ARGS…`;
 //! - `ci`: what CI runs, the script `.ci/run`.
 //!
@@ -12,6 +15,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
+mod stress;
 mod validate;
 
 const USAGE: &str = "\
@@ -22,11 +26,21 @@ tasks:
       run the validation cases (analytic references vs computed values);
       --quick runs only the cases cheap enough for CI, --filter only the
       cases whose name contains SUBSTR. Writes target/validation/report.md.
+  stress [--quick] [--filter SUBSTR] [--seed N]
+      run drape at its extremes and on hostile input (stiff and soft
+      materials, uncrimped yarns, high friction, fast tools, coarse and
+      fine meshes, time steps near the critical one, degenerate tools,
+      random scenes and damaged mesh files) and print one table: case,
+      expectation, what happened. Every row must complete with a sane
+      energy balance or stop with a diagnosis; none may panic, hang or
+      write NaN. --quick is the subset CI runs, --seed changes the
+      generators' seed. Writes target/stress/report.md.
   bench [ARGS...]
       run the criterion benches: cargo bench -p drape-benches ARGS...
       (e.g. cargo xtask bench -- --warm-up-time 1 --measurement-time 2)
   ci
-      run what CI runs (.ci/run): the test suite, then the quick validation";
+      run what CI runs (.ci/run): the test suite, the quick validation,
+      then the quick stress suite";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -37,6 +51,10 @@ fn main() -> ExitCode {
     match task.as_str() {
         "validate" => match validate::Options::parse(rest) {
             Ok(options) => validate::main(&options, &workspace_root()),
+            Err(message) => usage_error(&message),
+        },
+        "stress" => match stress::Options::parse(rest) {
+            Ok(options) => stress::main(&options, &workspace_root(), &target_dir()),
             Err(message) => usage_error(&message),
         },
         "bench" => run(Command::new(cargo())
@@ -69,6 +87,15 @@ fn workspace_root() -> PathBuf {
         .parent()
         .expect("xtask lives inside the workspace")
         .to_path_buf()
+}
+
+/// Cargo's target directory: `CARGO_TARGET_DIR` when set, else
+/// `<workspace>/target`.
+fn target_dir() -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(dir) if !dir.is_empty() => PathBuf::from(dir),
+        _ => workspace_root().join("target"),
+    }
 }
 
 /// The cargo that runs us (cargo sets `CARGO` for `cargo run`), so a

@@ -55,7 +55,7 @@ pub struct KinematicReport {
 /// holding only its header (a net has no energy history).
 ///
 /// The summary says `completed`; when cells of the blank could not be
-/// draped (the net left the mould or folded) its `reason` says how many.
+/// draped (the net left the mould or folded) its `warnings` say how many.
 pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, KinematicError> {
     let file = scene.file.display();
     let setup = scene
@@ -146,12 +146,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
     let undraped = stats.outline_cells - stats.draped_cells;
     let summary = Summary {
         status: "completed".to_owned(),
-        reason: (undraped > 0).then(|| {
-            format!(
-                "{undraped} of the blank's {} cells are not draped: the net left the mould's edge or folded (sheared to 90°) there",
-                stats.outline_cells
-            )
-        }),
+        reason: None,
         scene: file.to_string(),
         time: 0.0,
         max_shear_deg: m.max_shear_deg,
@@ -178,6 +173,17 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             threads: 1,
             solver: "kinematic".to_owned(),
         },
+        // A net that stops short is a result, not a failure: the engineer
+        // reads where it could not go.
+        warnings: (undraped > 0)
+            .then(|| {
+                format!(
+                    "{undraped} of the blank's {} cells are not draped: the net left the mould's edge or folded (sheared to 90°) there",
+                    stats.outline_cells
+                )
+            })
+            .into_iter()
+            .collect(),
     };
     dir.write_summary(&summary)?;
     Ok(KinematicReport {

@@ -238,6 +238,9 @@ struct Recorder<'a> {
     peaks: Peaks,
     /// The tools, tessellated once for the `tools.pvd` series.
     tools: ToolMeshes,
+    /// The tools' displacements at the last frame (where a failed run's
+    /// results are: the driver falls back to that frame).
+    frame_tools: Vec<f64>,
 }
 
 /// Each tool's displacement along its axis where `contact` left it
@@ -283,6 +286,7 @@ impl Observer for Recorder<'_> {
                 self.error = Some(e);
             }
         }
+        self.frame_tools = tool_displacements(frame.contact);
     }
 
     fn checkpoint(&mut self, state: &State, driver: &DriverState) {
@@ -320,6 +324,19 @@ impl Observer for Recorder<'_> {
             progress: *progress,
             max_shear_deg: self.max_shear_deg,
         })
+    }
+}
+
+/// Checks that `scene` can run, before anything is written: the settings,
+/// a forced time step against the stable one, a blank that starts inside a
+/// tool, a force-driven tool that would pass through the blank in one step
+/// (see [`drape_time::guard::check_tools_at_start`]). The error is the
+/// reason; the warnings are what the run will also report.
+pub fn check_scene(scene: &Scene) -> Result<Vec<String>, String> {
+    match Explicit::new(&scene.model, scene.settings.clone()) {
+        Ok(explicit) => Ok(explicit.warnings().to_vec()),
+        Err(drape_time::RunError::Setup(reason)) => Err(reason),
+        Err(e) => Err(e.to_string()),
     }
 }
 
@@ -447,21 +464,31 @@ pub fn run_in(
         callback: progress,
         peaks,
         tools: ToolMeshes::new(&model.tools, &model.x0),
+        frame_tools: Vec::new(),
     };
     let started = std::time::Instant::now();
     // Where the tools are at the end, for the oblique picture.
     let mut end_tools = Vec::new();
+    let mut warnings = Vec::new();
     let outcome = Explicit::new(model, settings).and_then(|mut explicit| {
         if let Some(d) = driver {
             explicit.resume_from(d);
         }
         let outcome = explicit.run(&mut state, &mut recorder);
-        end_tools = tool_displacements(explicit.contact());
+        // A failed run's state is its last frame's; the tools are there too.
+        end_tools = if outcome.is_err() {
+            recorder.frame_tools.clone()
+        } else {
+            tool_displacements(explicit.contact())
+        };
         if let Ok(s) = &outcome {
             if s.stopped {
                 recorder.stop_frame(model, &state, &s.energy, explicit.contact());
             }
         }
+        // The scene's own (an imported file's units, repairs) first.
+        warnings = scene.warnings.clone();
+        warnings.extend_from_slice(explicit.warnings());
         outcome
     });
     let wall_s = started.elapsed().as_secs_f64();
@@ -483,7 +510,18 @@ pub fn run_in(
             ("stopped", Some(reason), s.energy)
         }
         Ok(s) => ("completed", None, s.energy),
-        Err(e) => ("failed", Some(e.to_string()), recorder.last_energy),
+        Err(e) => {
+            let mut reason = e.to_string();
+            // The driver puts back the last output frame: say which one the
+            // results are.
+            if e.step_and_time().is_some() {
+                reason.push_str(&format!(
+                    "; the results are those of t = {:.6e} s (step {}), the last output frame",
+                    state.time, state.step
+                ));
+            }
+            ("failed", Some(reason), recorder.last_energy)
+        }
     };
     let locking = scene.spec.output.locking_angle_deg;
     let measures = model.measures(&state, locking).unwrap_or_default();
@@ -524,7 +562,10 @@ pub fn run_in(
         area_above_locking_mm2: measures.area_above_locking,
         peak: recorder.peaks,
         energy: EnergySummary {
-            balance_error: energy.relative_error(),
+            balance_error: drape_time::guard::relative_balance_error(
+                &energy,
+                drape_time::guard::energy_floor(model),
+            ),
             kinetic_to_internal: energy.kinetic_to_internal(),
         },
         setup: run_setup(scene),
@@ -535,6 +576,7 @@ pub fn run_in(
             threads: rayon::current_num_threads(),
             solver: "explicit".to_owned(),
         },
+        warnings,
     };
     let results = &recorder.results;
     results.write_energy(&recorder.rows)?;

@@ -476,6 +476,9 @@ fn print_summary(s: &Summary, out: &Path) {
         "run               {:.1} s wall, {} threads, {}",
         s.run.wall_s, s.run.threads, s.run.solver
     );
+    for w in &s.warnings {
+        println!("warning           {w}");
+    }
     println!("results           {}", out.display());
 }
 
@@ -513,6 +516,12 @@ fn run(
 ) -> Result<ExitCode> {
     let overrides = parse_sets(set)?;
     let scene = load(scene_path, &overrides)?;
+    // What cannot run is bad input: refused before anything is written.
+    let warnings = drape::check_scene(&scene)
+        .map_err(|reason| bad(format!("{}: {reason}", scene_path.display())))?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     let out = out.unwrap_or_else(|| default_out(scene_path, ""));
     let options = RunOptions {
         checkpoint_every: checked_interval(checkpoint_every)?,

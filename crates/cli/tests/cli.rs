@@ -201,18 +201,36 @@ fn bad_input_exits_2_names_the_place_and_writes_nothing() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// 10⁹ N on the edge midpoints of a clamped blank: it is torn apart, and
+/// the run fails.
+const TORN: &str = r#"[simulation]
+end_time = 0.001
+frames = 10
+
+[fabric]
+material = "glass-serge-4x3"
+fibres = "trusses"
+blank = { width = 100, height = 100, cells = [4, 4] }
+
+[[boundary]]
+nodes = "left"
+motion = { kind = "fixed" }
+
+[[loads]]
+nodes = "edge_midpoints"
+force = [0, 0, 1e9]
+amplitude = { kind = "ramp", duration = 0.001 }
+"#;
+
 #[test]
 fn a_diverging_run_exits_1_and_keeps_what_it_reached() {
     let dir = temp("diverge");
     let out = dir.join("out");
-    // A fixed step 30× the stable one: the blank explodes within a few frames.
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, TORN).unwrap();
     let o = drape(&[
         "run",
-        "scenes/bias-extension.toml",
-        "--set",
-        "simulation.time_step=3e-5",
-        "--set",
-        "simulation.max_energy_error=0.05",
+        scene.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -222,8 +240,72 @@ fn a_diverging_run_exits_1_and_keeps_what_it_reached() {
     assert_eq!(summary["status"], "failed");
     let reason = summary["reason"].as_str().unwrap();
     assert!(reason.contains("step"), "{reason}");
+    // What the summary reports is the last frame written, which passed
+    // every check, not the torn state of the failing step.
+    assert!(reason.contains("the last output frame"), "{reason}");
+    let failed_at: f64 = reason["step ".len()..]
+        .split("t = ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let time = summary["time"].as_f64().unwrap();
+    assert!(time < failed_at, "{time} vs {failed_at}");
+    // The blank's frames (trusses_ and tools_ files sit beside them).
+    let frames = std::fs::read_dir(out.join("frames"))
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .starts_with("frame_")
+        })
+        .count();
+    let frame_dt = 0.001 / 10.0;
+    assert!(
+        ((frames - 1) as f64 * frame_dt - time).abs() < 0.1 * frame_dt,
+        "{frames} frames, t = {time}"
+    );
     assert!(out.join("frames/frame_00000.vtu").is_file());
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_scene_that_cannot_run_stably_is_bad_input() {
+    // A time step 50 times the stable one.
+    bad_input(
+        "forced-step",
+        &format!("{GOOD}\n").replace("end_time = 0.001", "end_time = 0.001\ntime_step = 3e-4"),
+        &[
+            "scene.toml",
+            "the time step 3.0000e-4 s is",
+            "the stable time step",
+        ],
+    );
+    // The blank in the floor.
+    bad_input(
+        "inside",
+        &GOOD.replace("point = [0, 0, -1]", "point = [0, 0, 2]"),
+        &["starts inside tool `floor`", "25 nodes"],
+    );
+    // A holder whose force flings it through the blank in one step.
+    bad_input(
+        "holder",
+        &format!(
+            "{GOOD}\n{}",
+            r#"[[tools]]
+name = "holder"
+geometry = { kind = "ring", center = [0, 0, 0.3], inner_radius = 10, outer_radius = 40 }
+motion = { kind = "force", direction = [0, 0, -1], force = 1e15, mass = 1e-3 }
+"#
+        ),
+        &[
+            "force-driven tool `holder` would travel",
+            "pass through the blank",
+        ],
+    );
 }
 
 const DRAPED: &str = r#"gravity = [0, 0, -9810]
@@ -491,13 +573,11 @@ fn lock_ctrl_c_resume_elsewhere_and_stale_checkpoint() {
 
     // A new run into the folder (one that fails at once) leaves no stale
     // checkpoint behind to resume.
+    let torn = dir.join("torn.toml");
+    std::fs::write(&torn, TORN).unwrap();
     let o = drape(&[
         "run",
-        "scenes/bias-extension.toml",
-        "--set",
-        "simulation.time_step=3e-5",
-        "--set",
-        "simulation.max_energy_error=0.05",
+        torn.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
     ]);

@@ -264,7 +264,7 @@ fn a_draping_run_writes_what_the_engineer_carries_on() {
 fn compare_two_results_folders() {
     let dir = temp("compare");
     let (a, _) = run(&dir, "a", &[]);
-    let (b, _) = run(&dir, "b", &["tools.0.friction=0"]);
+    let (b, _) = run(&dir, "b", &["tools.0.friction=0.5"]);
     let (fine, _) = run(&dir, "fine", &["fabric.blank.cells=[20,20]"]);
 
     let out = dir.join("a-vs-b");
@@ -346,6 +346,14 @@ fn compare_two_results_folders() {
         "a=1",
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    // One folder alone: the scene form, which says how to compare folders.
+    let o = drape(&["compare", a.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("drape compare RUN_A RUN_B"),
+        "{}",
+        text(&o)
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -135,6 +135,25 @@ impl FibreLaw {
     pub fn wave_modulus(&self) -> f64 {
         self.modulus
     }
+
+    /// Whether the tangent jumps at ε = 0: an uncrimped yarn (ε_sh = 0)
+    /// that carries less in compression than in tension (c_c < 1) goes
+    /// from E_f to c_c·E_f, a crimped one with c_c > 0 from 0 to c_c·E_f.
+    /// (A crimped yarn without compression stiffness has E_t = 0 on both
+    /// sides: no jump.)
+    ///
+    /// Such a yarn switches between a taut and a slack stiffness as it
+    /// crosses ε = 0, and central differences are not stable for such a
+    /// switching system at every step below the linear limit 2/ω_max:
+    /// resonance bands make it grow (drape-time damps the yarn's ringing).
+    #[inline]
+    pub fn has_kink(&self) -> bool {
+        if self.crimp_strain == 0.0 {
+            self.compression_factor < 1.0
+        } else {
+            self.compression_factor > 0.0
+        }
+    }
 }
 
 #[cfg(test)]
@@ -194,6 +213,24 @@ mod tests {
         assert!((law.tangent(1e-9) / (law.modulus * x) - 1.0).abs() <= 0.5 * x * (1.0 + 1e-9));
         assert_eq!(law.tangent(0.0), 0.0);
         assert_eq!(law.stress(-0.01), 0.0);
+    }
+
+    #[test]
+    fn a_kink_is_a_jump_of_the_tangent_at_zero() {
+        let h = 1e-12;
+        for (sh, cc) in [(0.0, 0.0), (0.0, 0.5), (0.0, 1.0), (0.01, 0.0), (0.01, 0.3)] {
+            let law = FibreLaw {
+                modulus: 1000.0,
+                crimp_strain: sh,
+                compression_factor: cc,
+            };
+            let jump = (law.tangent(h) - law.tangent(-h)).abs();
+            assert_eq!(
+                law.has_kink(),
+                jump > 1.0,
+                "ε_sh {sh}, c_c {cc}: jump {jump}"
+            );
+        }
     }
 
     #[test]

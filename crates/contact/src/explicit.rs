@@ -17,14 +17,22 @@ use rayon::prelude::*;
 
 use crate::tool::{Tool, ToolMotion, ToolState};
 
+/// The gap, as a fraction of the contact offset (the fabric's half
+/// thickness), within which a node is touching a tool though nothing
+/// presses it in: a node resting on a tool at zero gap sits there to
+/// round-off (1e-12 mm), one lifting off or approaching is microns away.
+pub const TOUCHING: f64 = 1e-6;
+
 /// A node's contact status.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u8)]
 pub enum ContactStatus {
-    /// Not touching.
+    /// Not touching: further from every tool than [`TOUCHING`] of the
+    /// offset.
     #[default]
     Open = 0,
-    /// Touching and sticking.
+    /// Touching and sticking (or resting on the tool at zero gap, with no
+    /// force).
     Stick = 1,
     /// Touching and sliding.
     Slip = 2,
@@ -295,9 +303,11 @@ impl ExplicitContact {
         self.tool_force.iter_mut().for_each(|f| *f = 0.0);
         self.refresh_candidates(x);
 
-        // Narrow phase.
+        // Narrow phase. A node within `touch` of a tool rests on it: in
+        // contact with no force this step (nothing pushes it in).
         self.constraints.clear();
         let offset = self.settings.offset;
+        let touch = TOUCHING * offset;
         for (t, tool) in self.tools.iter().enumerate() {
             let u = self.tool_state[t].displacement;
             for &i in &self.candidates[t] {
@@ -314,6 +324,10 @@ impl ExplicitContact {
                         gap,
                         mu: 0.0,
                     });
+                } else if gap <= touch {
+                    self.status[i as usize] = ContactStatus::Stick;
+                    self.tool_of[i as usize] = t as u32;
+                    self.touched.push(i);
                 }
             }
         }

@@ -50,7 +50,9 @@ mod mesh_repair;
 mod surface;
 mod tool;
 
-pub use explicit::{ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes};
+pub use explicit::{
+    ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes, TOUCHING,
+};
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
 pub use mesh_repair::{RepairError, RepairOptions, RepairReport, repair};

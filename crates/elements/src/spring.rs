@@ -200,6 +200,22 @@ impl SpringBatch {
         self.table.energy(l - self.rest_length[e])
     }
 
+    /// The stable time step 2·√(m/k) of spring `e`'s node, of mass
+    /// `node_mass`, on this spring alone at positions `x`: k the larger of
+    /// the table's largest slope and the transverse stiffness |F|/l, which
+    /// a preloaded spring near its anchor makes the larger by far (zero at
+    /// zero length with a force: no step is stable there).
+    pub fn element_stable_time_step(&self, e: usize, x: &[Vector3<f64>], node_mass: f64) -> f64 {
+        let l = (x[self.nodes[e] as usize] - self.anchors[e]).norm();
+        let f = self.table.force_and_stiffness(l - self.rest_length[e]).0;
+        let k = self.table.max_stiffness().max(f.abs() / l);
+        if k > 0.0 {
+            2.0 * (node_mass / k).sqrt()
+        } else {
+            f64::INFINITY
+        }
+    }
+
     /// The stable time step 2·√(m/k) of a node of mass `node_mass` on this
     /// spring alone, with k the table's largest slope.
     pub fn stable_time_step(&self, node_mass: f64) -> f64 {
@@ -220,6 +236,37 @@ mod tests {
 
     fn table() -> ForceTable {
         ForceTable::new(&[[-1.0, 0.0], [0.0, 5.0], [2.0, 25.0], [4.0, 30.0]]).unwrap()
+    }
+
+    #[test]
+    fn a_preloaded_spring_near_its_anchor_has_a_short_step() {
+        // F = 5 N at zero extension, 10 N/mm: at 0.1 mm from its anchor the
+        // transverse stiffness F/l = 60 N/mm beats the slope.
+        let springs = SpringBatch {
+            table: ForceTable::linear(10.0, 5.0),
+            nodes: vec![0],
+            anchors: vec![Vector3::zeros()],
+            rest_length: vec![0.0],
+        };
+        let m = 1e-6;
+        let near = [Vector3::new(0.1, 0.0, 0.0)];
+        let far = [Vector3::new(10.0, 0.0, 0.0)];
+        let dt = |x: &[Vector3<f64>]| springs.element_stable_time_step(0, x, m);
+        assert!((dt(&near) - 2.0 * (m / 60.0f64).sqrt()).abs() < 1e-15);
+        // At 10 mm it is still F/l = 105/10 (k + F₀/l: a preload always adds).
+        assert!((dt(&far) - 2.0 * (m / 10.5f64).sqrt()).abs() < 1e-15);
+        // Without a preload, F/l = k on a zero rest length: the slope.
+        let plain = SpringBatch {
+            table: ForceTable::linear(10.0, 0.0),
+            ..springs.clone()
+        };
+        assert!(
+            (plain.element_stable_time_step(0, &far, m) - 2.0 * (m / 10.0f64).sqrt()).abs() < 1e-15
+        );
+        // The transverse stiffness is the tangent's: F/l across n.
+        let k = springs.element_tangent(0, &near);
+        assert!((k[(1, 1)] - 60.0).abs() < 1e-12);
+        assert_eq!(dt(&[Vector3::zeros()]), 0.0);
     }
 
     #[test]

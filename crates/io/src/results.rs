@@ -28,7 +28,8 @@
 //! Points are the current positions; cells are the membrane elements in
 //! batch order (VTK triangles and quads), so cell `i` is entry `i` of
 //! [`ElementFields`]. Point data: `displacement` (x − x₀, mm), `velocity`
-//! (mm/s), `contact_force` (N), `contact_status` (0 open, 1 stick, 2 slip;
+//! (mm/s), `contact_force` (N), `contact_status` (0 open, 1 stick, 2 slip:
+//! 1 and 2 are in contact, a node resting on a tool at zero gap included;
 //! zeros without tools). Cell data: `shear_angle_deg`,
 //! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_direction_warp`,
 //! `fibre_direction_weft` (unit vectors), `fibre_tension_warp`,
@@ -189,6 +190,9 @@ pub struct Summary {
     pub setup: Option<RunSetup>,
     /// Run statistics.
     pub run: RunInfo,
+    /// What the run found doubtful but not wrong enough to stop it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// An output directory being filled by a run.

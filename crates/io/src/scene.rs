@@ -35,7 +35,7 @@ use drape_contact::{Amplitude, ProfileSegment, Surface, Tool, ToolMotion};
 use drape_elements::{ForceTable, SpringBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{BoundaryCondition, Model, ModelError, Motion, NodalLoad};
-use drape_time::ExplicitSettings;
+use drape_time::{ExplicitSettings, GuardSettings};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -82,6 +82,9 @@ fn default_safety() -> f64 {
 fn default_margin() -> f64 {
     5.0
 }
+fn default_true() -> bool {
+    true
+}
 
 /// `[simulation]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -107,9 +110,18 @@ pub struct SimulationSpec {
     /// Mass-proportional damping α (1/s).
     #[serde(default)]
     pub damping: f64,
-    /// Stop when the energy balance error exceeds this fraction.
+    /// Stop when the energy balance error exceeds this fraction (default
+    /// [`drape_time::GuardSettings`]' 1 %).
     #[serde(default)]
     pub max_energy_error: Option<f64>,
+    /// The scene is quasi-static: stop when the kinetic energy exceeds the
+    /// internal work.
+    #[serde(default)]
+    pub quasi_static: bool,
+    /// The instability guard (speed, reach, energy balance); off leaves
+    /// only a `max_energy_error` given explicitly.
+    #[serde(default = "default_true")]
+    pub instability_guard: bool,
     /// Broad-phase margin of the contact search (mm).
     #[serde(default = "default_margin")]
     pub contact_margin: f64,
@@ -1399,6 +1411,19 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
             return Err(at.error(&format!("{here}.rest_length"), "expected a length ≥ 0"));
         }
         let offset = finite3(at, &format!("{here}.anchor_offset"), s.anchor_offset)?;
+        // Anchored at its node, a spring starts at zero length: a force
+        // there pulls in no direction, and near the anchor its transverse
+        // stiffness F/l has no bound (no time step is stable).
+        let (start, _) = table.force_and_stiffness(offset.norm() - s.rest_length);
+        if offset == Vector3::zeros() && start != 0.0 {
+            return Err(at.error(
+                &here,
+                format!(
+                    "a spring anchored at its own node starts at zero length, where its force of {start} N \
+                     has no direction: give an anchor_offset, or no force at the start (preload, rest_length)"
+                ),
+            ));
+        }
         model.springs.push(SpringBatch {
             table,
             anchors: held
@@ -1495,7 +1520,16 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
         mass_scaling: sim.mass_scaling_dt,
         damping: sim.damping,
         frames: sim.frames,
-        max_energy_error: sim.max_energy_error,
+        guard: GuardSettings {
+            enabled: sim.instability_guard,
+            max_energy_error: sim.max_energy_error.or(GuardSettings::default()
+                .max_energy_error
+                .filter(|_| sim.instability_guard)),
+            max_kinetic_ratio: sim
+                .quasi_static
+                .then_some(drape_time::guard::QUASI_STATIC_KINETIC_RATIO),
+            ..GuardSettings::default()
+        },
         contact_margin: sim.contact_margin,
         ..ExplicitSettings::default()
     };

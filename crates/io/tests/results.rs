@@ -442,11 +442,13 @@ fn writes_a_complete_results_directory() {
             threads: 2,
             solver: "explicit".into(),
         },
+        warnings: Vec::new(),
     };
     out.write_summary(&summary).unwrap();
     let json = read(&dir.join("summary.json"));
     assert!(json.starts_with("{\n  \"status\": \"completed\""), "{json}");
     assert!(!json.contains("reason"));
+    assert!(!json.contains("warnings"), "no warnings, no field: {json}");
     let back: Summary = serde_json::from_str(&json).unwrap();
     assert_eq!(back, summary);
 

@@ -302,6 +302,30 @@ fn type_errors_say_what_the_field_accepts() {
 }
 
 #[test]
+fn a_preloaded_spring_anchored_at_its_node_is_refused() {
+    let spring =
+        |keys: &str| format!("{GOOD}\n[[springs]]\nnodes = \"corners\"\nstiffness = 2\n{keys}\n");
+    let e = error_of(&spring("preload = 3"));
+    let text = e.to_string();
+    assert!(
+        text.contains("springs[0]")
+            && text.contains("force of 3 N")
+            && text.contains("no direction"),
+        "{text}"
+    );
+    // A rest length at the node: F(−L₀) = −2·1.5 N at the start.
+    assert!(
+        error_of(&spring("rest_length = 1.5"))
+            .to_string()
+            .contains("force of -3 N")
+    );
+    // An anchor offset gives the force a direction; no preload, no force.
+    for keys in ["preload = 3\nanchor_offset = [0, 0, -5]", ""] {
+        Scene::parse(&spring(keys), Path::new("good.toml"), &[]).unwrap();
+    }
+}
+
+#[test]
 fn absurd_frame_counts_are_refused() {
     let e = error_of(&GOOD.replace(
         "end_time = 0.01",
@@ -362,4 +386,35 @@ fn the_resolved_scene_builds_the_same_model_from_its_values_alone() {
     assert_eq!(again.model.x0, scene.model.x0);
     assert_eq!(again.model.tools[0].friction, 0.3);
     assert_eq!(again.settings, scene.settings);
+}
+
+#[test]
+fn guard_keys_reach_the_settings() {
+    let scene = Scene::parse(GOOD, Path::new("good.toml"), &[]).unwrap();
+    let guard = &scene.settings.guard;
+    assert!(
+        guard.enabled && guard.max_energy_error == Some(0.05) && guard.max_kinetic_ratio.is_none()
+    );
+    let set = |k: &str, v: &str| [(k.to_owned(), v.to_owned())];
+    let scene = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &set("simulation.quasi_static", "true"),
+    )
+    .unwrap();
+    assert_eq!(scene.settings.guard.max_kinetic_ratio, Some(1.0));
+    let scene = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &set("simulation.instability_guard", "false"),
+    )
+    .unwrap();
+    assert!(!scene.settings.guard.enabled && scene.settings.guard.max_energy_error.is_none());
+    let scene = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &set("simulation.max_energy_error", "0.2"),
+    )
+    .unwrap();
+    assert_eq!(scene.settings.guard.max_energy_error, Some(0.2));
 }

@@ -12,7 +12,8 @@ pub struct Energies {
     pub strain: f64,
     /// Work of the internal forces, ∫f_int·dx.
     pub internal_work: f64,
-    /// Internal work not stored: the resin's relaxation (and integration error).
+    /// Internal work not stored: the resin's relaxation, the dashpots of
+    /// kinked yarns (and integration error).
     pub viscous: f64,
     /// Work of the damping forces.
     pub damping: f64,

@@ -3,6 +3,7 @@
 use drape_elements::ElementError;
 
 use crate::Energies;
+use crate::guard::Instability;
 
 /// Why a run stopped early.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -31,23 +32,32 @@ pub enum RunError {
         /// What was not finite.
         what: &'static str,
     },
-    /// The energy balance drifted beyond the allowed bound.
-    #[error(
-        "step {step}, t = {time:.6e} s: energy balance error {relative:.3e} exceeds {bound:.3e} of the largest energy"
-    )]
-    EnergyBalance {
+    /// The instability guard found the run diverging ([`crate::guard`]).
+    #[error("step {step}, t = {time:.6e} s: stopped by the instability guard: {what}")]
+    Unstable {
         /// The step.
         step: u64,
         /// Its time.
         time: f64,
-        /// |error|/largest energy.
-        relative: f64,
-        /// The bound.
-        bound: f64,
+        /// What the guard found.
+        what: Instability,
     },
     /// The settings or the model cannot run.
     #[error("cannot run: {0}")]
     Setup(String),
+}
+
+impl RunError {
+    /// The step and time at which the run failed (none for a run that
+    /// could not start).
+    pub fn step_and_time(&self) -> Option<(u64, f64)> {
+        match self {
+            Self::Element { step, time, .. }
+            | Self::NonFinite { step, time, .. }
+            | Self::Unstable { step, time, .. } => Some((*step, *time)),
+            Self::Setup(_) => None,
+        }
+    }
 }
 
 /// What a finished run reports.
@@ -69,4 +79,8 @@ pub struct RunSummary {
     pub wall_seconds: f64,
     /// Threads in rayon's pool.
     pub threads: usize,
+    /// What the run found doubtful but not wrong enough to stop (a tool
+    /// that never touched the blank, a forced step above the deformed
+    /// mesh's estimate…); also [`crate::Explicit::warnings`].
+    pub warnings: Vec<String>,
 }

@@ -7,7 +7,8 @@ use drape_model::{Model, Motion, SlotLayout, State};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
-use crate::energy::{chunked_sum, chunked_sums, chunked_sums_into};
+use crate::energy::{chunked_sum, chunked_sums_into};
+use crate::guard::{self, Guard, GuardSettings};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
 /// Settings of an explicit run.
@@ -17,8 +18,10 @@ pub struct ExplicitSettings {
     pub end_time: f64,
     /// Fraction of the stable step used.
     pub safety_factor: f64,
-    /// A fixed Δt instead of the stable estimate (not checked: the user's
-    /// responsibility).
+    /// A fixed Δt instead of the stable estimate. [`Explicit::new`] refuses
+    /// one above the estimate (at safety factor 1) of the initial mesh; if
+    /// the deformed mesh's estimate falls below it later, the run warns
+    /// and the guard watches.
     pub time_step: Option<f64>,
     /// Target Δt for selective mass scaling: nodes of elements whose stable
     /// step is smaller get mass until it is reached.
@@ -29,15 +32,23 @@ pub struct ExplicitSettings {
     pub frames: usize,
     /// Steps between stable-Δt re-estimates.
     pub time_step_interval: u64,
-    /// Stop when |energy balance error| exceeds this fraction of the largest
-    /// energy, checked at frames.
-    pub max_energy_error: Option<f64>,
+    /// The instability guard ([`crate::guard`]): energy balance bound,
+    /// speed and reach checks, the quasi-static bound.
+    pub guard: GuardSettings,
     /// Stop after this many steps.
     pub max_steps: Option<u64>,
     /// Broad-phase margin of the contact pass (mm).
     pub contact_margin: f64,
     /// Hand the observer a checkpoint every this many steps.
     pub checkpoint_every: Option<u64>,
+    /// Fraction of critical damping of a dashpot along every truss whose
+    /// fibre law has a kink (`FibreLaw::has_kink` in drape-constitutive),
+    /// for that truss's own two-mass mode: an uncrimped yarn switches
+    /// between taut and slack, and without it central differences grow in
+    /// resonance bands below the linear stability limit. 0.06 is
+    /// Abaqus/Explicit's default linear bulk viscosity. Its work is part of
+    /// the internal work, reported as viscous.
+    pub fibre_damping: f64,
 }
 
 impl Default for ExplicitSettings {
@@ -50,10 +61,11 @@ impl Default for ExplicitSettings {
             damping: 0.0,
             frames: 10,
             time_step_interval: 20,
-            max_energy_error: None,
+            guard: GuardSettings::default(),
             max_steps: None,
             contact_margin: 5.0,
             checkpoint_every: None,
+            fibre_damping: 0.06,
         }
     }
 }
@@ -75,6 +87,9 @@ pub struct Explicit<'m> {
     /// Each truss's shares of its nodes' masses (a node's mass split evenly
     /// among the trusses of its batch there), for the stable step.
     truss_mass: Vec<Vec<[f64; 2]>>,
+    /// Dashpot coefficient of each truss of a batch with a kinked fibre
+    /// law (empty for the others), see [`ExplicitSettings::fibre_damping`].
+    truss_damping: Vec<Vec<f64>>,
     /// √(mass scale) per element of each membrane batch.
     membrane_scale: Vec<Vec<f64>>,
     constraints: Vec<Constraint>,
@@ -93,8 +108,14 @@ pub struct Explicit<'m> {
     prescribed: Vec<f64>,
     /// Where to pick up, for a resumed run.
     resume: Option<DriverState>,
-    /// Partial sums of the step's works.
+    /// Partial sums of the step's works, and of the energies at a check.
     work_partials: Vec<[f64; 5]>,
+    energy_partials: Vec<[f64; 6]>,
+    guard: Guard,
+    /// Start-up and run warnings.
+    warnings: Vec<String>,
+    /// Which tools have touched the blank.
+    tool_touched: Vec<bool>,
 }
 
 impl<'m> Explicit<'m> {
@@ -106,6 +127,12 @@ impl<'m> Explicit<'m> {
             return Err(RunError::Setup(format!(
                 "end time {} must be a non-negative number",
                 settings.end_time
+            )));
+        }
+        if !(settings.fibre_damping.is_finite() && settings.fibre_damping >= 0.0) {
+            return Err(RunError::Setup(format!(
+                "fibre damping {} must be a non-negative fraction of critical damping",
+                settings.fibre_damping
             )));
         }
         if !(settings.safety_factor > 0.0 && settings.safety_factor <= 1.0) {
@@ -157,6 +184,7 @@ impl<'m> Explicit<'m> {
             )
         });
         let movable = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
+        let guard = Guard::new(model, settings.guard.clone(), settings.end_time);
         let mut driver = Self {
             model,
             settings,
@@ -165,10 +193,15 @@ impl<'m> Explicit<'m> {
             prescribed: vec![0.0; constraints.len()],
             resume: None,
             work_partials: Vec::new(),
+            energy_partials: Vec::new(),
+            guard,
+            warnings: Vec::new(),
+            tool_touched: vec![false; model.tools.len()],
             slots: vec![Vector3::zeros(); layout.len],
             layout,
             mass: model.mass.clone(),
             truss_mass: Vec::new(),
+            truss_damping: Vec::new(),
             membrane_scale: model.membranes.iter().map(|b| vec![1.0; b.len()]).collect(),
             constraints,
             constrained,
@@ -205,9 +238,40 @@ impl<'m> Explicit<'m> {
                 driver.share_truss_mass();
             }
         }
+        let estimate = driver.estimated_time_step(&model.x0);
+        if let Some(forced) = driver.settings.time_step {
+            let stable = estimate / driver.settings.safety_factor;
+            if !(forced > 0.0 && forced.is_finite()) {
+                return Err(RunError::Setup(format!(
+                    "the time step {forced:e} s must be a positive number"
+                )));
+            }
+            if forced > stable {
+                return Err(RunError::Setup(format!(
+                    "the time step {forced:.4e} s is {:.3}× the stable time step {stable:.4e} s of this \
+                     model (the elements' estimate; drape would use {estimate:.4e} s at safety factor {}): \
+                     central differences would diverge. Remove time_step or lower it, or raise the \
+                     stable step with mass scaling",
+                    forced / stable,
+                    driver.settings.safety_factor
+                )));
+            }
+        }
+        let dt = driver.settings.time_step.unwrap_or(estimate);
+        driver.warnings =
+            guard::check_tools_at_start(model, &model.x0, dt).map_err(RunError::Setup)?;
         Ok(driver)
     }
 
+    /// What the run found doubtful: start-up warnings (a blank closer to a
+    /// tool than its half thickness, a force-driven tool with nothing in
+    /// its path) and, after [`Self::run`], the run's own.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
+
+    /// The trusses' mass shares, and the dashpots of kinked yarns that
+    /// depend on them.
     fn share_truss_mass(&mut self) {
         let n = self.model.node_count();
         self.truss_mass = self
@@ -220,6 +284,34 @@ impl<'m> Explicit<'m> {
                 b.nodes.iter().map(|&[i, j]| [share(i), share(j)]).collect()
             })
             .collect();
+        let ratio = self.settings.fibre_damping;
+        self.truss_damping = self
+            .model
+            .trusses
+            .iter()
+            .zip(&self.truss_mass)
+            .map(|(b, shares)| {
+                if ratio > 0.0 && b.law.has_kink() {
+                    (0..b.len())
+                        .map(|e| b.damping_coefficient(e, shares[e], ratio))
+                        .collect()
+                } else {
+                    Vec::new()
+                }
+            })
+            .collect();
+    }
+
+    /// The factor √(1 + ξ²) − ξ by which a dashpot at ratio ξ of its mode's
+    /// critical damping shortens that mode's stable step (explicit
+    /// central differences with the damping force at the mid-step velocity).
+    fn damped_step_factor(&self, b: usize) -> f64 {
+        if self.truss_damping[b].is_empty() {
+            1.0
+        } else {
+            let xi = self.settings.fibre_damping;
+            (1.0 + xi * xi).sqrt() - xi
+        }
     }
 
     /// Selective mass scaling at the reference shape: an element whose step
@@ -274,11 +366,18 @@ impl<'m> Explicit<'m> {
     /// Trusses, membranes and springs share the nodes' masses and add their
     /// stiffnesses, so ω_max² ≤ Σ over kinds of each kind's ω_max²: the
     /// kinds' steps combine as 1/Δt² = Σ 1/Δt_kind², each kind's step the
-    /// smallest of its elements' (SPEC §7: fibres at the full E_f).
+    /// smallest of its elements' (SPEC §7: fibres at the full E_f). A truss
+    /// batch with dashpots ([`ExplicitSettings::fibre_damping`]) has its
+    /// step shortened by the damping, by √(1 + ξ²) − ξ.
     pub fn stable_time_step(&self, x: &[Vector3<f64>]) -> f64 {
-        if let Some(dt) = self.settings.time_step {
-            return dt;
-        }
+        self.settings
+            .time_step
+            .unwrap_or_else(|| self.estimated_time_step(x))
+    }
+
+    /// The elements' estimate of the stable step times the safety factor,
+    /// whether or not a time step is forced.
+    fn estimated_time_step(&self, x: &[Vector3<f64>]) -> f64 {
         let model = self.model;
         let smallest = |len: usize, dt_e: &(dyn Fn(usize) -> f64 + Sync)| {
             (0..len)
@@ -297,7 +396,11 @@ impl<'m> Explicit<'m> {
             .trusses
             .iter()
             .zip(&self.truss_mass)
-            .map(|(b, m)| smallest(b.len(), &|e| b.element_stable_time_step(e, x, m[e])))
+            .enumerate()
+            .map(|(k, (b, m))| {
+                smallest(b.len(), &|e| b.element_stable_time_step(e, x, m[e]))
+                    * self.damped_step_factor(k)
+            })
             .fold(f64::INFINITY, f64::min));
         add(model
             .membranes
@@ -308,17 +411,19 @@ impl<'m> Explicit<'m> {
         add(model
             .springs
             .iter()
-            .flat_map(|b| b.nodes.iter().map(move |&n| (b, n)))
-            .map(|(b, n)| b.stable_time_step(self.mass[n as usize]))
+            .flat_map(|b| (0..b.len()).map(move |e| (b, e)))
+            .map(|(b, e)| b.element_stable_time_step(e, x, self.mass[b.nodes[e] as usize]))
             .fold(f64::INFINITY, f64::min));
         self.settings.safety_factor / inverse_square.sqrt()
     }
 
-    /// The internal forces at `x` into `self.f_int`, the new histories into
+    /// The internal forces at `x` (with the kinked yarns' dashpots at
+    /// velocities `v`) into `self.f_int`, the new histories into
     /// `self.history_new`.
     fn internal_forces(
         &mut self,
         x: &[Vector3<f64>],
+        v: &[Vector3<f64>],
         history: &[Vec<f64>],
         dt: f64,
         step: u64,
@@ -333,8 +438,12 @@ impl<'m> Explicit<'m> {
         };
         for (i, b) in model.trusses.iter().enumerate() {
             let start = self.layout.truss_offsets[i];
-            b.forces_into(x, &mut self.slots[start..start + 2 * b.len()])
+            let slots = &mut self.slots[start..start + 2 * b.len()];
+            b.forces_into(x, slots)
                 .map_err(|e| fail(format!("truss batch {i}"), e))?;
+            if !self.truss_damping[i].is_empty() {
+                b.add_damping_into(x, v, &self.truss_damping[i], slots);
+            }
         }
         for (i, b) in model.membranes.iter().enumerate() {
             let start = self.layout.membrane_offsets[i];
@@ -427,8 +536,23 @@ impl<'m> Explicit<'m> {
     }
 
     /// Runs from `state` to the end time. On error `state` holds the last
-    /// good step.
+    /// output frame (or the start), which passed every check: a failed run
+    /// reports no state on its way to the failure.
     pub fn run(
+        &mut self,
+        state: &mut State,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary, RunError> {
+        let result = self.advance(state, observer);
+        if let Err(e) = &result {
+            if !matches!(e, RunError::Setup(_)) {
+                self.guard.fall_back(state);
+            }
+        }
+        result
+    }
+
+    fn advance(
         &mut self,
         state: &mut State,
         observer: &mut dyn Observer,
@@ -446,7 +570,7 @@ impl<'m> Explicit<'m> {
         self.external_forces(state.time);
         // Forces at the start, with no time passing so no relaxation.
         let history = std::mem::take(&mut state.history);
-        let first = self.internal_forces(&state.x, &history, 0.0, state.step, state.time);
+        let first = self.internal_forces(&state.x, &state.v, &history, 0.0, state.step, state.time);
         state.history = history;
         first?;
         let resume = self.resume.take();
@@ -465,6 +589,12 @@ impl<'m> Explicit<'m> {
             f64::INFINITY
         };
         let mut next_frame = (state.time / frame_dt).floor() as usize + 1;
+        // The guard looks at the energy at every frame, and at least
+        // `guard::MIN_ENERGY_CHECKS` times a run whatever the frames.
+        let check_dt = end / self.settings.frames.max(guard::MIN_ENERGY_CHECKS) as f64;
+        let mut next_check = (state.time / check_dt).floor() + 1.0;
+        self.guard.begin(state);
+        let mut forced_warned = false;
         if state.step == 0 {
             energy.kinetic = kinetic0;
             energy.strain = self.strain_energy(state);
@@ -499,6 +629,17 @@ impl<'m> Explicit<'m> {
             // at the same steps as an uninterrupted one.
             if state.step > 0 && state.step % self.settings.time_step_interval.max(1) == 0 {
                 dt = self.stable_time_step(&state.x);
+                if self.settings.time_step.is_some() && !forced_warned {
+                    let stable = self.estimated_time_step(&state.x) / self.settings.safety_factor;
+                    if dt > stable {
+                        forced_warned = true;
+                        self.warnings.push(format!(
+                            "from step {} (t = {:.6e} s) the time step {dt:.4e} s is above the \
+                             deformed mesh's stable estimate {stable:.4e} s",
+                            state.step, state.time
+                        ));
+                    }
+                }
             }
             if !(dt > 0.0 && dt.is_finite()) {
                 return Err(RunError::Setup(format!(
@@ -562,6 +703,9 @@ impl<'m> Explicit<'m> {
                         damping,
                     },
                 );
+                for (touched, f) in self.tool_touched.iter_mut().zip(&contact.tool_force) {
+                    *touched |= *f != 0.0;
+                }
                 // A partly constrained node keeps its prescribed components;
                 // its constraint takes the contact force there.
                 for (j, c) in self.constraints.iter().enumerate() {
@@ -586,10 +730,16 @@ impl<'m> Explicit<'m> {
                     if constrained[i].iter().any(|&c| c) && dt_avg > 0.0 {
                         // The force the constraint applies: m·a − (f_ext − f_int − damping).
                         let contact = f_c.map_or(Vector3::zeros(), |f| f[i]);
-                        let r = (vn[i] - v[i]) * (m[i] / dt_avg) - (fe[i] - fi[i] - damp + contact);
+                        let inertia = (vn[i] - v[i]) * (m[i] / dt_avg);
+                        let r = inertia - (fe[i] - fi[i] - damp + contact);
+                        // At the first step the velocity changes over the
+                        // half step from t₀: its inertia works over the mean
+                        // velocity there, ½m(v½² − v₀²), not over the step's
+                        // first half displacement (twice that from rest).
+                        let dx_inertia = if dt_prev > 0.0 { dx } else { v_mid * dt_avg };
                         for k in 0..3 {
                             if constrained[i][k] {
-                                w_bc += r[k] * dx[k];
+                                w_bc += r[k] * dx[k] + inertia[k] * (dx_inertia[k] - dx[k]);
                             }
                         }
                     }
@@ -610,8 +760,10 @@ impl<'m> Explicit<'m> {
             // Forces at n+1 from the committed history.
             let history = std::mem::take(&mut state.history);
             let x_new = std::mem::take(&mut self.x_new);
-            let result = self.internal_forces(&x_new, &history, h, state.step + 1, t_new);
+            let v_new = std::mem::take(&mut self.v_new);
+            let result = self.internal_forces(&x_new, &v_new, &history, h, state.step + 1, t_new);
             self.x_new = x_new;
+            self.v_new = v_new;
             state.history = history;
             result?;
             if let Some(i) = (0..n).find(|&i| {
@@ -632,6 +784,18 @@ impl<'m> Explicit<'m> {
             state.time = t_new;
             state.step += 1;
             steps += 1;
+            let unstable = |what| RunError::Unstable {
+                step: state.step,
+                time: state.time,
+                what,
+            };
+            self.guard
+                .nodes(&state.x, &state.v, &self.movable)
+                .map_err(unstable)?;
+            if let Some(contact) = &self.contact {
+                let travel = contact.tool_state.iter().map(|t| t.displacement);
+                self.guard.tools(model, travel).map_err(unstable)?;
+            }
             dt_prev = h;
             dt_min = dt_min.min(h);
             dt_max = dt_max.max(h);
@@ -658,8 +822,22 @@ impl<'m> Explicit<'m> {
             }
             let at_end = end - state.time <= 1e-6 * dt;
             let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
-            if at_frame || at_end {
+            let at_check = state.time >= next_check * check_dt * (1.0 - 1e-12);
+            if at_frame || at_end || at_check {
                 let report = self.energies_at(state, &energy, kinetic0, h);
+                self.guard
+                    .energy(&report, state.time)
+                    .map_err(|what| RunError::Unstable {
+                        step: state.step,
+                        time: state.time,
+                        what,
+                    })?;
+                while next_check * check_dt <= state.time * (1.0 + 1e-12) {
+                    next_check += 1.0;
+                }
+                if at_frame || at_end {
+                    self.guard.accept(state);
+                }
                 if at_frame {
                     self.compute_reactions();
                     observer.frame(&Frame {
@@ -672,17 +850,6 @@ impl<'m> Explicit<'m> {
                     });
                     while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
                         next_frame += 1;
-                    }
-                }
-                if let Some(bound) = self.settings.max_energy_error {
-                    let relative = report.relative_error();
-                    if relative > bound {
-                        return Err(RunError::EnergyBalance {
-                            step: state.step,
-                            time: state.time,
-                            relative,
-                            bound,
-                        });
                     }
                 }
             }
@@ -701,6 +868,24 @@ impl<'m> Explicit<'m> {
             }
         }
         let energy = self.energies_at(state, &energy, kinetic0, dt_prev);
+        if stopped {
+            // A run stopped between checks still reports only what passes.
+            self.guard
+                .energy(&energy, state.time)
+                .map_err(|what| RunError::Unstable {
+                    step: state.step,
+                    time: state.time,
+                    what,
+                })?;
+        }
+        for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {
+            if tool.is_force_driven() && !touched && !stopped {
+                self.warnings.push(format!(
+                    "force-driven tool `{}` never touched the blank: its force acted on nothing",
+                    tool.name
+                ));
+            }
+        }
         Ok(RunSummary {
             steps,
             dt_range: (dt_min, dt_max),
@@ -710,6 +895,7 @@ impl<'m> Explicit<'m> {
             stopped,
             wall_seconds: started.elapsed().as_secs_f64(),
             threads: rayon::current_num_threads(),
+            warnings: self.warnings.clone(),
         })
     }
 
@@ -735,28 +921,32 @@ impl<'m> Explicit<'m> {
     /// half increment (x_{n+1} − x_n)/2 at the forces of n+1 (reactions
     /// taken quasi-static there), so that they match the full-step kinetic
     /// energy to O(Δt²).
-    fn energies_at(&self, state: &State, acc: &Energies, kinetic0: f64, h: f64) -> Energies {
+    fn energies_at(&mut self, state: &State, acc: &Energies, kinetic0: f64, h: f64) -> Energies {
         let n = self.model.node_count();
         let damping = self.settings.damping;
-        let f_c = self.contact.as_ref().map(|c| &c.force);
-        let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums(n, |i| {
+        let mut partials = std::mem::take(&mut self.energy_partials);
+        let this = &*self;
+        let f_c = this.contact.as_ref().map(|c| &c.force);
+        let terms = |i: usize| {
             let half = state.v[i] * (0.5 * h);
-            let (fi, fe) = (self.f_int[i], self.f_ext[i]);
+            let (fi, fe) = (this.f_int[i], this.f_ext[i]);
             let mut w_bc = 0.0;
             for k in 0..3 {
-                if self.constrained[i][k] {
+                if this.constrained[i][k] {
                     w_bc += (fi[k] - fe[k]) * half[k];
                 }
             }
             [
-                0.5 * self.mass[i] * self.full_step_velocity(state, i, h).norm_squared(),
+                0.5 * this.mass[i] * this.full_step_velocity(state, i, h).norm_squared(),
                 fi.dot(&half),
                 fe.dot(&half),
-                damping * self.mass[i] * state.v[i].dot(&half),
+                damping * this.mass[i] * state.v[i].dot(&half),
                 w_bc,
                 f_c.map_or(0.0, |f| f[i].dot(&half)),
             ]
-        });
+        };
+        let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums_into(n, terms, &mut partials);
+        self.energy_partials = partials;
         let mut e = *acc;
         e.kinetic = kinetic;
         e.internal_work += w_int;

@@ -13,8 +13,11 @@
 //! of threads.
 //!
 //! A diverging run stops with a [`RunError`] that says the step, the time,
-//! the element or node and what went wrong; the state passed in keeps the
-//! last good step.
+//! the element or node and what went wrong. Besides non-finite values and
+//! failing elements, the [`guard`] stops a run whose nodes fly off, whose
+//! energy balance breaks or that leaves the quasi-static range it declared;
+//! the state passed in then holds the last output frame, which passed every
+//! check.
 //!
 //! ```
 //! use drape_constitutive::Material;
@@ -49,9 +52,11 @@
 mod energy;
 mod error;
 mod explicit;
+pub mod guard;
 mod observer;
 
 pub use energy::Energies;
 pub use error::{RunError, RunSummary};
 pub use explicit::{Explicit, ExplicitSettings};
+pub use guard::{Guard, GuardSettings, Instability};
 pub use observer::{Control, DriverState, Frame, NoObserver, Observer, Progress};

@@ -3,7 +3,7 @@
 //! Quick versions of `cargo xtask validate --filter contact`.
 
 use drape_constitutive::Material;
-use drape_contact::{ProfileSegment, Surface, Tool, ToolMotion};
+use drape_contact::{ContactStatus, ProfileSegment, Surface, Tool, ToolMotion};
 use drape_elements::{FabricSection, MembraneBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion, NodalLoad};
@@ -403,4 +403,34 @@ fn a_strip_sliding_round_a_cylinder_follows_the_capstan_equation() {
         (mean / capstan - 1.0).abs() < 0.01,
         "T₂/T₁ {mean} vs {capstan}"
     );
+}
+
+/// A blank lying on a floor at zero gap with nothing pressing it reads "in
+/// contact" (it used to read open: no force, no constraint); one hovering
+/// a micron above reads open.
+#[test]
+fn a_blank_resting_at_zero_gap_reads_in_contact() {
+    for (lift, expected) in [(0.0, ContactStatus::Stick), (1e-3, ContactStatus::Open)] {
+        let mut model = blank_model([20.0, 20.0], [2, 2], 0.5 * glass().thickness + lift);
+        model.tools.push(fixed(
+            "floor",
+            Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
+            0.3,
+        ));
+        let mut statuses = Vec::new();
+        let mut observer = Frames(|f: &Frame<'_>| {
+            statuses = f.contact.unwrap().status.clone();
+        });
+        let mut state = model.initial_state();
+        let settings = ExplicitSettings {
+            end_time: 1e-4,
+            frames: 1,
+            ..ExplicitSettings::default()
+        };
+        Explicit::new(&model, settings)
+            .unwrap()
+            .run(&mut state, &mut observer)
+            .unwrap();
+        assert_eq!(statuses, vec![expected; 9], "lifted by {lift} mm");
+    }
 }

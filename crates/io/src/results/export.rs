@@ -47,7 +47,7 @@
 //! keyword reference; it has not been run through Abaqus here.
 //!
 //! Numbers are written as the shortest text that reads back as the same
-//! `f64` ([`fmt_f64`]), so re-reading reproduces every value.
+//! `f64` (the results module's `fmt_f64`), so re-reading reproduces every value.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

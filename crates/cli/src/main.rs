@@ -107,6 +107,20 @@ enum Command {
     /// Compare two runs' results folders (RUN_A RUN_B: their measures side
     /// by side and a map of their shear difference), or run one scene both
     /// ways (SCENE: the kinematic net against the forming run).
+    #[command(after_long_help = "\
+Which is which: the number of arguments decides.
+  drape compare RUN_A RUN_B   two results folders of any runs (`drape run`,
+                              `drape kinematic`, a sweep's run_NNN, `drape
+                              compare SCENE`'s mechanical/ and kinematic/).
+                              Nothing is run. A is the reference: differences
+                              are B - A, on A's mesh at A's flat (reference)
+                              positions; B is carried onto it by closest point
+                              when the meshes differ. Writes comparison.json,
+                              comparison.csv and comparison.png.
+  drape compare SCENE         one scene file, run both ways: the kinematic net
+                              into OUT/kinematic, the forming run into
+                              OUT/mechanical, and their comparison into OUT.
+                              --set and --threads apply to this form only.")]
     Compare {
         /// Two results folders, or one scene file (TOML).
         #[arg(required = true, num_args = 1..=2, value_name = "RUN_A RUN_B | SCENE")]
@@ -907,6 +921,13 @@ fn kinematic(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<
 }
 
 fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
+    if scene_path.is_dir() {
+        return Err(bad(format!(
+            "{}: a folder: `drape compare SCENE` takes one scene file; to compare two runs' \
+             results folders give both: `drape compare RUN_A RUN_B`",
+            scene_path.display()
+        )));
+    }
     let scene = load(scene_path, &parse_sets(set)?)?;
     if let Err(e) = &scene.kinematic {
         return Err(bad(e.to_string()));

@@ -190,7 +190,9 @@ pub struct Summary {
     pub setup: Option<RunSetup>,
     /// Run statistics.
     pub run: RunInfo,
-    /// What the run found doubtful but not wrong enough to stop it.
+    /// What the scene and the run found doubtful but not wrong enough to
+    /// stop it (an imported mesh's size or repairs, the driver's start-up
+    /// warnings).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
 }

@@ -19,14 +19,14 @@
 //! - Element `k` (1-based label) is drape's element `k − 1`: cell `k − 1`
 //!   of the VTU frames. Node `k` is the VTU's point `k − 1`.
 //! - The warp and weft directions are the element's current yarn
-//!   directions (for a quad, the area-weighted mean of its four
-//!   integration points', normalised: the VTU's `fibre_direction_*`).
-//! - γ is the element's shear angle (the VTU's `shear_angle_deg`), positive
-//!   when the angle between the yarns closes: the yarn angle is 90° − γ.
-//!   For a triangle 90° − γ is exactly the angle between the two
-//!   directions; a quad's γ is the mean of its points' and may differ from
-//!   the angle between its mean directions by a second-order amount in the
-//!   element size.
+//!   directions (the VTU's `fibre_direction_*`; for a quad, the
+//!   area-weighted mean of its four integration points', normalised and
+//!   turned symmetrically about their bisector to the element's yarn
+//!   angle).
+//! - γ is the element's shear angle (the VTU's `shear_angle_deg`; a quad's
+//!   is the mean of its points'), positive when the angle between the
+//!   yarns closes: the yarn angle is 90° − γ, and it is the angle between
+//!   the two directions written, for every element.
 //! - The thickness is the element's current thickness (the VTU's
 //!   `thickness`).
 //!

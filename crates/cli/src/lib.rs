@@ -16,14 +16,21 @@
 
 use std::path::{Path, PathBuf};
 
+mod compare;
 mod kinematic;
+mod orientations;
+mod setup;
+pub use compare::{CompareError, MeasureRow, RunComparison, RunComparisonSummary, compare_runs};
 pub use kinematic::{
     Comparison, ComparisonReport, ComparisonSummary, KinematicError, KinematicReport,
     ProfileDifference, compare, compare_scene, kinematic_scene,
 };
+pub use orientations::{MappedReport, map_orientations};
+pub use setup::run_setup;
 
 use drape_io::results::{
-    DrawInMm, EnergyRow, EnergySummary, FrameData, ResultsDir, ResultsError, RunInfo, Summary,
+    DrawInMm, EnergyRow, EnergySummary, FrameData, Peaks, ResultsDir, ResultsError, RunInfo,
+    Summary, ToolMeshes, max_yarn_tension,
 };
 use drape_io::scene::{Scene, SceneFile};
 use drape_model::{Measures, State};
@@ -86,6 +93,9 @@ pub struct Checkpoint {
     pub rows: Vec<EnergyRow>,
     /// The frames written so far: (index, time).
     pub frames: Vec<(usize, f64)>,
+    /// The peaks over the frames so far.
+    #[serde(default)]
+    pub peaks: Peaks,
 }
 
 /// A file a scene reads (a mesh), with its size and a fingerprint of its
@@ -224,6 +234,21 @@ struct Recorder<'a> {
     error: Option<ResultsError>,
     last_energy: Energies,
     callback: &'a mut dyn FnMut(&RunProgress) -> Control,
+    /// The largest values over the frames.
+    peaks: Peaks,
+    /// The tools, tessellated once for the `tools.pvd` series.
+    tools: ToolMeshes,
+    /// The tools' displacements at the last frame (where a failed run's
+    /// results are: the driver falls back to that frame).
+    frame_tools: Vec<f64>,
+}
+
+/// Each tool's displacement along its axis where `contact` left it
+/// (zeros without tools).
+fn tool_displacements(contact: Option<&drape_contact::ExplicitContact>) -> Vec<f64> {
+    contact.map_or_else(Vec::new, |c| {
+        c.tool_state.iter().map(|s| s.displacement).collect()
+    })
 }
 
 impl Observer for Recorder<'_> {
@@ -242,6 +267,7 @@ impl Observer for Recorder<'_> {
             .iter()
             .fold(0.0f64, |m, g| m.max(g.abs()))
             .to_degrees();
+        self.peaks.observe(frame.model, frame.state, &fields);
         if self.write_frames && self.error.is_none() {
             let data = FrameData {
                 model: frame.model,
@@ -250,13 +276,17 @@ impl Observer for Recorder<'_> {
                 contact_force: frame.contact.map(|c| c.force.as_slice()),
                 contact_status: frame.contact.map(|c| c.status.as_slice()),
             };
+            let (index, time) = (frame.index, frame.state.time);
+            let moved = tool_displacements(frame.contact);
             if let Err(e) = self
                 .results
-                .write_frame(frame.index, frame.state.time, &data)
+                .write_frame(index, time, &data)
+                .and_then(|()| self.results.write_tools(index, time, &self.tools, &moved))
             {
                 self.error = Some(e);
             }
         }
+        self.frame_tools = tool_displacements(frame.contact);
     }
 
     fn checkpoint(&mut self, state: &State, driver: &DriverState) {
@@ -274,6 +304,7 @@ impl Observer for Recorder<'_> {
             driver: driver.clone(),
             rows: self.rows.clone(),
             frames: self.results.frames(),
+            peaks: self.peaks,
         };
         let path = Checkpoint::path(self.results.path());
         let written = serde_json::to_vec(&checkpoint)
@@ -374,6 +405,10 @@ pub fn run_in(
     progress: &mut dyn FnMut(&RunProgress) -> Control,
 ) -> Result<RunReport, FacadeError> {
     let model = &scene.model;
+    let peaks = options
+        .resume
+        .as_ref()
+        .map_or_else(Peaks::default, |c| c.peaks);
     let (record, mut state, rows, driver, last_checkpoint) = match options.resume {
         Some(c) => (
             SceneRecord {
@@ -427,20 +462,33 @@ pub fn run_in(
         error: None,
         last_energy: Energies::default(),
         callback: progress,
+        peaks,
+        tools: ToolMeshes::new(&model.tools, &model.x0),
+        frame_tools: Vec::new(),
     };
     let started = std::time::Instant::now();
+    // Where the tools are at the end, for the oblique picture.
+    let mut end_tools = Vec::new();
     let mut warnings = Vec::new();
     let outcome = Explicit::new(model, settings).and_then(|mut explicit| {
         if let Some(d) = driver {
             explicit.resume_from(d);
         }
         let outcome = explicit.run(&mut state, &mut recorder);
+        // A failed run's state is its last frame's; the tools are there too.
+        end_tools = if outcome.is_err() {
+            recorder.frame_tools.clone()
+        } else {
+            tool_displacements(explicit.contact())
+        };
         if let Ok(s) = &outcome {
             if s.stopped {
                 recorder.stop_frame(model, &state, &s.energy, explicit.contact());
             }
         }
-        warnings = explicit.warnings().to_vec();
+        // The scene's own (an imported file's units, repairs) first.
+        warnings = scene.warnings.clone();
+        warnings.extend_from_slice(explicit.warnings());
         outcome
     });
     let wall_s = started.elapsed().as_secs_f64();
@@ -477,6 +525,11 @@ pub fn run_in(
     };
     let locking = scene.spec.output.locking_angle_deg;
     let measures = model.measures(&state, locking).unwrap_or_default();
+    let fields = model.element_fields(&state).ok();
+    if let Some(f) = &fields {
+        // The end state, when it was not a frame (a failed run's last good step).
+        recorder.peaks.observe(model, &state, f);
+    }
     // Draw-in needs a rectangular blank's edges: NaN (null in the JSON)
     // for an imported mesh.
     let draw_in = measures.draw_in.unwrap_or(drape_model::measures::DrawIn {
@@ -496,8 +549,18 @@ pub fn run_in(
             dy: draw_in.dy,
             dd: draw_in.dd,
         },
-        max_fibre_tension_n: measures.max_fibre_tension_n,
+        // A truss force means nothing without trusses: null, not 0 N.
+        max_fibre_tension_n: if model.features().trusses {
+            measures.max_fibre_tension_n
+        } else {
+            f64::NAN
+        },
+        max_fibre_tension_n_per_mm: fields
+            .as_ref()
+            .and_then(|f| max_yarn_tension(model, &state.x, f))
+            .map_or(f64::NAN, |(t, _)| t),
         area_above_locking_mm2: measures.area_above_locking,
+        peak: recorder.peaks,
         energy: EnergySummary {
             balance_error: drape_time::guard::relative_balance_error(
                 &energy,
@@ -505,6 +568,7 @@ pub fn run_in(
             ),
             kinetic_to_internal: energy.kinetic_to_internal(),
         },
+        setup: run_setup(scene),
         run: RunInfo {
             wall_s,
             // Every step from the start, a resumed run's included.
@@ -517,9 +581,12 @@ pub fn run_in(
     let results = &recorder.results;
     results.write_energy(&recorder.rows)?;
     results.write_profiles(&measures)?;
-    if scene.spec.output.pictures {
-        if let Ok(fields) = model.element_fields(&state) {
-            results.write_pictures(model, &state, &fields, &measures)?;
+    if let Some(fields) = &fields {
+        let title = format!("{} at t = {} s", summary.scene, state.time);
+        results.write_orientations(model, &state, fields, &title)?;
+        if scene.spec.output.pictures {
+            results.write_pictures(model, &state, fields, &measures)?;
+            results.write_view(model, &state, fields, &recorder.tools, &end_tools)?;
         }
     }
     results.write_summary(&summary)?;

@@ -48,6 +48,7 @@
 mod explicit;
 mod mesh;
 mod mesh_file;
+mod mesh_repair;
 mod surface;
 mod tool;
 
@@ -57,5 +58,6 @@ pub use explicit::{
 };
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
+pub use mesh_repair::{RepairError, RepairOptions, RepairReport, repair};
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};
 pub use tool::{Amplitude, Tool, ToolMotion, ToolState};

@@ -87,7 +87,11 @@ pub struct MembraneOutput {
     /// Current fabric thickness h₀·λ₃ (mm).
     pub thickness: f64,
     /// Current unit directions of [warp, weft]: the area-weighted mean of
-    /// the integration points' directions, normalised.
+    /// the integration points' directions, normalised, then turned
+    /// symmetrically about their bisector so that the angle between them is
+    /// 90° − `shear_angle` (the mean of the points' shear; the plain means
+    /// differ from that by a second-order amount when the shear varies
+    /// over a quad).
     pub fibre_direction: [Vector3<f64>; 2],
 }
 
@@ -778,6 +782,20 @@ impl MembraneBatch {
             // A mean of unit vectors within one element: never near zero
             // unless the element is folded, where any unit vector will do.
             *d = d.try_normalize(0.0).unwrap_or_else(Vector3::x);
+        }
+        // The angle between the mean directions is not 90° − (the mean
+        // shear) when the shear varies over a quad (by a second-order
+        // amount: up to 0.5° on the hemisphere's corner elements pulled by
+        // springs). Turn both symmetrically about their bisector, in their
+        // plane, to the angle 90° − γ: the directions written with the
+        // element then show the shear written with it.
+        let [w, f] = out.fibre_direction;
+        if let (Some(bisector), Some(across)) =
+            ((w + f).try_normalize(1e-12), (w - f).try_normalize(1e-12))
+        {
+            let half = 0.5 * (std::f64::consts::FRAC_PI_2 - out.shear_angle);
+            let (s, c) = half.sin_cos();
+            out.fibre_direction = [bisector * c + across * s, bisector * c - across * s];
         }
         Ok(out)
     }

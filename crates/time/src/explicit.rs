@@ -537,6 +537,11 @@ impl<'m> Explicit<'m> {
         self.contact.as_ref()
     }
 
+    /// Mass added by mass scaling (t), 0 without it: known before the run.
+    pub fn added_mass(&self) -> f64 {
+        self.added_mass
+    }
+
     /// Runs from `state` to the end time. On error `state` holds the last
     /// output frame (or the start), which passed every check: a failed run
     /// reports no state on its way to the failure.

@@ -539,3 +539,47 @@ fn output_fibre_directions_are_the_deformed_yarns() {
         }
     }
 }
+
+#[test]
+fn output_fibre_directions_show_the_output_shear_under_a_varying_deformation() {
+    // x = X + a bending, shearing field: the shear varies over each quad,
+    // so its four points' directions and shears differ.
+    let map = |p: &Vector3<f64>| {
+        Vector3::new(
+            p.x + 0.02 * p.x * p.y,
+            p.y + 0.3 * p.x + 0.015 * p.x * p.x,
+            0.01 * (p.x * p.x + p.y * p.y),
+        )
+    };
+    let (warp, weft) = (Vector3::new(0.6, 0.8, 0.0), Vector3::new(-0.8, 0.6, 0.0));
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        let (b, x0, _) = patch(shape, true);
+        let x: Vec<_> = x0.iter().map(map).collect();
+        let h = b.initial_history();
+        let eh = b.element_history_len();
+        for e in 0..b.len() {
+            let o = b.element_output(e, &x, &h[e * eh..(e + 1) * eh]).unwrap();
+            let [w, f] = o.fibre_direction;
+            assert!((w.norm() - 1.0).abs() < 1e-14 && (f.norm() - 1.0).abs() < 1e-14);
+            let angle = w.cross(&f).norm().atan2(w.dot(&f));
+            assert!(
+                (std::f64::consts::FRAC_PI_2 - angle - o.shear_angle).abs() < 1e-13,
+                "{shape:?} {e}: angle {angle}, shear {}",
+                o.shear_angle
+            );
+            // And they are the yarns of the element: the mapped yarn
+            // directions at its centroid, to the variation over it.
+            let nodes = b.element_nodes(e);
+            let c =
+                nodes.iter().map(|&n| x0[n as usize]).sum::<Vector3<f64>>() / nodes.len() as f64;
+            let yarn = |n: Vector3<f64>| (map(&(c + n * 1e-6)) - map(&(c - n * 1e-6))).normalize();
+            for (got, n) in [(w, warp), (f, weft)] {
+                let off = got.dot(&yarn(n)).clamp(-1.0, 1.0).acos().to_degrees();
+                assert!(
+                    off < 1.0,
+                    "{shape:?} {e}: {off}° from the yarn at the centroid"
+                );
+            }
+        }
+    }
+}

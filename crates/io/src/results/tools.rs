@@ -142,9 +142,9 @@ fn tessellate(
                 .collect();
             revolve(*center, &profile, meridians)
         }
-        Surface::Revolution { origin, profile } => {
-            revolve(*origin, &sample_profile(profile), TURN_STEPS)
-        }
+        Surface::Revolution {
+            origin, profile, ..
+        } => revolve(*origin, &sample_profile(profile), TURN_STEPS),
         Surface::Mesh(mesh) => (mesh.vertices().collect(), mesh.triangles().to_vec()),
     }
 }

@@ -12,9 +12,12 @@
 //! corrects the tangential velocity towards sticking to the tool, capped by
 //! μ_f·λ.
 
+use std::time::Duration;
+
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+use crate::phases::{ContactPhase, PhaseTimer};
 use crate::tool::{Tool, ToolMotion, ToolState};
 
 /// The gap, as a fraction of the contact offset (the fabric's half
@@ -128,6 +131,7 @@ pub struct ExplicitContact {
     per_node: Vec<u32>,
     touched: Vec<u32>,
     scratch: Scratch,
+    phases: Option<PhaseTimer>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -177,7 +181,25 @@ impl ExplicitContact {
                 node_sum: vec![Vector3::zeros(); node_count],
                 ..Scratch::default()
             },
+            phases: None,
         }
+    }
+
+    /// Times the phases of every later pass by `clock` (a monotonic time
+    /// since a fixed origin), or stops timing with `None`; the sums start
+    /// from zero.
+    pub fn time_phases(&mut self, clock: Option<fn() -> Duration>) {
+        self.phases = clock.map(|clock| PhaseTimer {
+            clock,
+            last: Duration::ZERO,
+            times: [Duration::ZERO; ContactPhase::ALL.len()],
+        });
+    }
+
+    /// The phases' summed times since [`Self::time_phases`], in the order of
+    /// [`ContactPhase::ALL`] (none when not timing).
+    pub fn phase_times(&self) -> Option<[Duration; ContactPhase::ALL.len()]> {
+        self.phases.map(|t| t.times)
     }
 
     /// Whether any tool has friction (the friction pass runs only then).
@@ -265,6 +287,7 @@ impl ExplicitContact {
             dt_mean,
             damping,
         } = *step_times;
+        PhaseTimer::start(&mut self.phases);
         // A force f on a node at tₙ changes vₙ₊½ by f·τ/m and xₙ₊₁ by
         // f·τ·Δt/m, τ = Δt_mean/(1 + ½·α·Δt_mean) with the damping taken at
         // mid-step; an undamped force-driven tool responds with Δt_mean, so
@@ -302,6 +325,7 @@ impl ExplicitContact {
         self.touched.clear();
         self.tool_force.iter_mut().for_each(|f| *f = 0.0);
         self.refresh_candidates(x);
+        PhaseTimer::lap(&mut self.phases, ContactPhase::BroadPhase);
 
         // Narrow phase. A node within `touch` of a tool rests on it: in
         // contact with no force this step (nothing pushes it in).
@@ -331,6 +355,7 @@ impl ExplicitContact {
                 }
             }
         }
+        PhaseTimer::lap(&mut self.phases, ContactPhase::Projection);
         if self.constraints.is_empty() {
             return ContactStep::default();
         }
@@ -403,8 +428,10 @@ impl ExplicitContact {
             }
         }
 
+        PhaseTimer::lap(&mut self.phases, ContactPhase::Multipliers);
         if self.has_friction() {
             self.friction(x, v, mass, dt, tau);
+            PhaseTimer::lap(&mut self.phases, ContactPhase::Friction);
         }
         step
     }

@@ -46,6 +46,7 @@
 mod explicit;
 mod mesh;
 mod mesh_file;
+mod phases;
 mod surface;
 mod tool;
 
@@ -54,5 +55,6 @@ pub use explicit::{
 };
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
+pub use phases::ContactPhase;
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};
 pub use tool::{Amplitude, Tool, ToolMotion, ToolState};

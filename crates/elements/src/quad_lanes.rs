@@ -14,14 +14,86 @@
 //! so does any block with a degenerate or non-finite point, which the
 //! scalar path then names.
 //!
-//! Instruction set: `wide` picks it when drape is compiled (two SSE2
-//! operations per `f64x4` on the default x86-64 target, one AVX operation
-//! with `-C target-cpu=native` on a machine that has it); there is no
-//! run-time dispatch.
+//! Instruction set: the lanes are plain `[f64; 4]` with element-wise
+//! operators that the compiler turns into vector instructions; the kernel
+//! is compiled twice, for the target's baseline (two SSE2 operations per
+//! lane operation on x86-64) and with AVX2 enabled (one), and
+//! [`QuadLanes::block_forces`] picks the second at run time when the
+//! processor has it. Neither contracts a multiply and an add into an FMA,
+//! so both give the same bits.
+
+use std::ops::{Add, AddAssign, Div, Mul, Sub};
 
 use drape_kinematics::Vector2;
 use nalgebra::Vector3;
-use wide::f64x4;
+
+/// Four f64 lanes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
+#[allow(non_camel_case_types)]
+pub(crate) struct f64x4([f64; 4]);
+
+macro_rules! lane_op {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl $trait for f64x4 {
+            type Output = f64x4;
+            #[inline(always)]
+            fn $method(self, rhs: f64x4) -> f64x4 {
+                f64x4([
+                    self.0[0] $op rhs.0[0],
+                    self.0[1] $op rhs.0[1],
+                    self.0[2] $op rhs.0[2],
+                    self.0[3] $op rhs.0[3],
+                ])
+            }
+        }
+    };
+}
+lane_op!(Add, add, +);
+lane_op!(Sub, sub, -);
+lane_op!(Mul, mul, *);
+lane_op!(Div, div, /);
+
+impl AddAssign for f64x4 {
+    #[inline(always)]
+    fn add_assign(&mut self, rhs: f64x4) {
+        *self = *self + rhs;
+    }
+}
+
+impl f64x4 {
+    #[inline(always)]
+    fn new(v: [f64; 4]) -> Self {
+        Self(v)
+    }
+
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        Self([v; 4])
+    }
+
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Self(self.0.map(f64::sqrt))
+    }
+
+    #[inline(always)]
+    fn to_array(self) -> [f64; 4] {
+        self.0
+    }
+
+    /// Whether every lane is finite.
+    #[inline(always)]
+    fn all_finite(self) -> bool {
+        self.0.iter().fold(true, |ok, v| ok & v.is_finite())
+    }
+
+    /// Whether every lane is above `rhs`'s (false for a NaN).
+    #[inline(always)]
+    fn all_gt(self, rhs: f64x4) -> bool {
+        (0..4).fold(true, |ok, k| ok & (self.0[k] > rhs.0[k]))
+    }
+}
 
 /// Elements per block.
 pub(crate) const LANES: usize = 4;
@@ -109,6 +181,47 @@ impl QuadLanes {
         resin: &ResinStep<'_>,
         slots: &mut [Vector3<f64>],
     ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above).
+            return unsafe {
+                self.block_forces_avx2(b, nodes, x, h_in, h_out, stride, resin, slots)
+            };
+        }
+        self.block_forces_lanes(b, nodes, x, h_in, h_out, stride, resin, slots)
+    }
+
+    /// [`Self::block_forces`] compiled with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[allow(clippy::too_many_arguments)]
+    fn block_forces_avx2(
+        &self,
+        b: usize,
+        nodes: &[u32],
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_out: &mut [f64],
+        stride: usize,
+        resin: &ResinStep<'_>,
+        slots: &mut [Vector3<f64>],
+    ) -> bool {
+        self.block_forces_lanes(b, nodes, x, h_in, h_out, stride, resin, slots)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn block_forces_lanes(
+        &self,
+        b: usize,
+        nodes: &[u32],
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_out: &mut [f64],
+        stride: usize,
+        resin: &ResinStep<'_>,
+        slots: &mut [Vector3<f64>],
+    ) -> bool {
         debug_assert_eq!(nodes.len(), LANES * NODES);
         debug_assert_eq!(slots.len(), LANES * NODES);
         let eh = stride * POINTS;
@@ -121,7 +234,7 @@ impl QuadLanes {
         let zero = f64x4::splat(0.0);
         let half = f64x4::splat(0.5);
         let mut force = [[zero; 3]; NODES];
-        let mut ok = f64x4::splat(0.0).simd_le(zero); // all lanes set
+        let mut ok = true;
         let history = |h: &[f64], k: usize, p: usize, i: usize| h[k * eh + p * stride + i];
         for p in 0..POINTS {
             let grad = &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES];
@@ -137,7 +250,7 @@ impl QuadLanes {
             // Polar decomposition (closed form of right_stretch).
             for row in &f {
                 for v in row {
-                    ok &= v.is_finite();
+                    ok &= v.all_finite();
                 }
             }
             let c00 = f[0][0] * f[0][0] + f[1][0] * f[1][0] + f[2][0] * f[2][0];
@@ -145,8 +258,8 @@ impl QuadLanes {
             let c11 = f[0][1] * f[0][1] + f[1][1] * f[1][1] + f[2][1] * f[2][1];
             let det_c = c00 * c11 - c01 * c01;
             let tr_c = c00 + c11;
-            ok &= det_c.is_finite() & tr_c.is_finite();
-            ok &= !det_c.simd_le(f64x4::splat(DEGENERATE_DET_C) * tr_c * tr_c);
+            ok &= det_c.all_finite() & tr_c.all_finite();
+            ok &= det_c.all_gt(f64x4::splat(DEGENERATE_DET_C) * tr_c * tr_c);
             let det_u = det_c.sqrt();
             let s = (tr_c + f64x4::splat(2.0) * det_u).sqrt();
             let (u00, u01, u11) = ((c00 + det_u) / s, (c01 + zero) / s, (c11 + det_u) / s);
@@ -228,7 +341,7 @@ impl QuadLanes {
                 slots[k * NODES + a] = Vector3::new(fx[k], fy[k], fz[k]);
             }
         }
-        ok.all()
+        ok
     }
 }
 

@@ -63,6 +63,16 @@ pub struct ContactSettings {
     pub tolerance: f64,
     /// Iterations allowed to the coupled solve.
     pub max_iterations: usize,
+    /// The contact guard's slack (mm): how much more a node's gap may drop
+    /// in a step than the node and the tool travelled before the step is a
+    /// [`ContactFault`]. Round-off of the gap is far below it.
+    pub fault_tolerance: f64,
+    /// The largest travel of a node relative to a tool in one step that the
+    /// pass resolves (mm): a node found inside a tool after the node and
+    /// the tool together moved more than this is a [`ContactFault`]. The
+    /// explicit driver sets it to the fabric's thickness; the default does
+    /// not limit.
+    pub max_travel: f64,
 }
 
 impl Default for ContactSettings {
@@ -72,9 +82,82 @@ impl Default for ContactSettings {
             margin: 5.0,
             tolerance: 1e-9,
             max_iterations: 500,
+            fault_tolerance: 1e-3,
+            max_travel: f64::INFINITY,
         }
     }
 }
+
+/// What the contact guard found wrong.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FaultKind {
+    /// The gap dropped by more than the node's and the tool's travel in the
+    /// step (plus [`ContactSettings::fault_tolerance`]): a gap that is
+    /// 1-Lipschitz in the point and in the tool's position cannot, so the
+    /// node crossed a discontinuity (the cut behind an open tool's rim, see
+    /// [`Surface::revolution`](crate::Surface::revolution)) and the closest
+    /// point is on the wrong side.
+    GapJump {
+        /// The gap at the start of the step (mm, less the offset).
+        previous_gap: f64,
+    },
+    /// The node and the tool moved farther towards each other in one step
+    /// than [`ContactSettings::max_travel`]: the tool may have been forced
+    /// through the fabric, and the closest point need not be on the side
+    /// the node came from.
+    Overrun {
+        /// The limit (mm).
+        limit: f64,
+    },
+}
+
+/// A step the contact pass refuses: a node inside a tool by more than one
+/// step can explain. Pushing it out would inject energy (a jump of the
+/// fabric by the penetration in one step), so the step is not taken.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactFault {
+    /// The node.
+    pub node: usize,
+    /// The tool's index.
+    pub tool: usize,
+    /// The tool's name.
+    pub tool_name: String,
+    /// The node's gap to the tool at the end of the step, less the offset
+    /// (mm, negative: inside).
+    pub gap: f64,
+    /// How far the node moved in the step (mm).
+    pub node_travel: f64,
+    /// How far the tool moved in the step (mm).
+    pub tool_travel: f64,
+    /// What was wrong.
+    pub kind: FaultKind,
+}
+
+impl std::fmt::Display for ContactFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "node {} is {:.4e} mm inside tool `{}` (gap {:.4e} mm) after a step in which the node moved {:.3e} mm and the tool {:.3e} mm",
+            self.node, -self.gap, self.tool_name, self.gap, self.node_travel, self.tool_travel
+        )?;
+        match self.kind {
+            FaultKind::GapJump { previous_gap } => write!(
+                f,
+                "; its gap was {previous_gap:.4e} mm a step earlier and cannot drop by more than that travel: \
+                 the node has crossed behind an open edge of the tool (or the tool's gap is not continuous), \
+                 so it is not pushed out"
+            ),
+            FaultKind::Overrun { limit } => write!(
+                f,
+                ", more than the {limit:.3e} mm the contact resolves in one step (the fabric's thickness): \
+                 the tool or the node moves too fast for the step (was the tool forced through the blank?), \
+                 so it is not pushed out"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for ContactFault {}
 
 /// One active constraint of a step.
 #[derive(Debug, Clone, Copy)]
@@ -167,6 +250,8 @@ struct Scratch {
     added: Vec<Constraint>,
     /// (gap, normal) of each candidate of the tool being projected.
     projected: Vec<(f64, Vector3<f64>)>,
+    /// Each tool's displacement at the start of the step (for the guard).
+    tool_before: Vec<f64>,
 }
 
 impl ExplicitContact {
@@ -271,7 +356,7 @@ impl ExplicitContact {
         movable: &[bool],
         t_new: f64,
         dt: f64,
-    ) -> ContactStep {
+    ) -> Result<ContactStep, ContactFault> {
         let step = StepTimes {
             t_new,
             dt,
@@ -285,6 +370,22 @@ impl ExplicitContact {
     /// steps and mass-proportional damping (see [`StepTimes`]): the forces
     /// reported are the ones that, applied at tₙ in the velocity update,
     /// produce the corrections made to x̃ₙ₊₁.
+    ///
+    /// `x` and `v` are the predicted positions and mid-step velocities, so
+    /// that each node started the step at `x − v·Δt`.
+    ///
+    /// # Contact guard
+    ///
+    /// A node inside a tool by more than the step can explain is a
+    /// [`ContactFault`], and nothing is corrected: since the gap is
+    /// 1-Lipschitz in the point and the tool moves rigidly, a node's gap
+    /// drops in one step by at most the node's travel plus the tool's. A
+    /// larger drop means a discontinuity of the gap (a node behind an open
+    /// rim); a relative travel beyond [`ContactSettings::max_travel`] means a
+    /// step too coarse to resolve the contact. Both would push the node out
+    /// by the closest point, possibly on the wrong side and in any case by
+    /// far more than the tool moved. The first fault in tool order, then in
+    /// node order, is returned (independent of the thread count).
     pub fn enforce_step(
         &mut self,
         x: &mut [Vector3<f64>],
@@ -292,7 +393,7 @@ impl ExplicitContact {
         mass: &[f64],
         movable: &[bool],
         step_times: &StepTimes,
-    ) -> ContactStep {
+    ) -> Result<ContactStep, ContactFault> {
         let StepTimes {
             t_new,
             dt,
@@ -306,6 +407,10 @@ impl ExplicitContact {
         // in the nodes' units it weighs M·τ/Δt_mean.
         let tau = dt_mean / (1.0 + 0.5 * damping * dt_mean);
         let tool_mass_factor = tau / dt_mean;
+        self.scratch.tool_before.clear();
+        self.scratch
+            .tool_before
+            .extend(self.tool_state.iter().map(|s| s.displacement));
         // Tools: prescribed, or the force-driven predictor (reaction to come).
         for (tool, state) in self.tools.iter().zip(self.tool_state.iter_mut()) {
             match tool.prescribed_displacement(t_new) {
@@ -343,9 +448,12 @@ impl ExplicitContact {
         // contact with no force this step (nothing pushes it in).
         self.constraints.clear();
         let offset = self.settings.offset;
+        let (slack, max_travel) = (self.settings.fault_tolerance, self.settings.max_travel);
         let touch = TOUCHING * offset;
         for (t, tool) in self.tools.iter().enumerate() {
             let u = self.tool_state[t].displacement;
+            let u_before = self.scratch.tool_before[t];
+            let tool_travel = (u - u_before).abs() * tool.motion.direction().norm();
             // The projections are independent: in parallel, into a buffer
             // read in candidate order below (the same constraints in the
             // same order for any thread count).
@@ -368,6 +476,27 @@ impl ExplicitContact {
                 }
                 let gap = gap - offset;
                 if gap < 0.0 {
+                    let node_travel = v[i as usize].norm() * dt;
+                    let travel = node_travel + tool_travel;
+                    let fault = |kind| ContactFault {
+                        node: i as usize,
+                        tool: t,
+                        tool_name: tool.name.clone(),
+                        gap,
+                        node_travel,
+                        tool_travel,
+                        kind,
+                    };
+                    if travel > max_travel {
+                        return Err(fault(FaultKind::Overrun { limit: max_travel }));
+                    }
+                    if -gap > travel + slack {
+                        let before = x[i as usize] - v[i as usize] * dt;
+                        let previous_gap = tool.project(&before, u_before).gap - offset;
+                        if previous_gap - gap > travel + slack {
+                            return Err(fault(FaultKind::GapJump { previous_gap }));
+                        }
+                    }
                     self.constraints.push(Constraint {
                         node: i,
                         tool: t as u32,
@@ -384,7 +513,7 @@ impl ExplicitContact {
         }
         PhaseTimer::lap(&mut self.phases, ContactPhase::Projection);
         if self.constraints.is_empty() {
-            return ContactStep::default();
+            return Ok(ContactStep::default());
         }
         let mut step = ContactStep::default();
         // Solve; then, as long as the corrections would push a node into a
@@ -460,7 +589,7 @@ impl ExplicitContact {
             self.friction(x, v, mass, dt, tau);
             PhaseTimer::lap(&mut self.phases, ContactPhase::Friction);
         }
-        step
+        Ok(step)
     }
 
     /// Adds to the constraint set every (node, tool) pair of the candidates
@@ -806,7 +935,9 @@ mod tests {
                 dt_mean,
                 damping,
             };
-            contact.enforce_step(&mut x, &mut v, &[m], &[true], &step);
+            contact
+                .enforce_step(&mut x, &mut v, &[m], &[true], &step)
+                .unwrap();
             assert!(
                 (contact.force[0].z - m * a).abs() < 1e-9 * m * a,
                 "{dt} {dt_mean}: {}",
@@ -838,7 +969,9 @@ mod tests {
         let mut x = vec![Vector3::new(0.0, 0.0, offset)];
         let mut v = vec![Vector3::zeros()];
         for step in 1..=3 {
-            contact.enforce(&mut x, &mut v, &[m], &[true], step as f64 * dt, dt);
+            contact
+                .enforce(&mut x, &mut v, &[m], &[true], step as f64 * dt, dt)
+                .unwrap();
             assert!((x[0].z - offset).abs() < 1e-12, "node at {}", x[0].z);
             assert!(contact.tool_state[1].displacement.abs() < 1e-12);
             assert!(
@@ -852,5 +985,96 @@ mod tests {
                 contact.tool_force
             );
         }
+    }
+
+    #[test]
+    fn a_node_crossing_behind_an_open_rim_is_a_fault_not_pushed_out() {
+        // A flat open ring facing down (the fabric below), its free inner
+        // end at r = 95. A node 1 mm above the face's plane in the opening
+        // drifts 1 µm outwards, across the cut behind the free end: its gap
+        // jumps from +1 to −1 mm. Pushed out it would jump 1 mm down in one
+        // step; the guard refuses the step instead.
+        let ring = Tool {
+            name: "ring".into(),
+            surface: Surface::revolution(
+                Vector3::zeros(),
+                vec![crate::ProfileSegment::Line {
+                    from: [250.0, 0.0],
+                    to: [95.0, 0.0],
+                }],
+            )
+            .unwrap(),
+            motion: ToolMotion::Fixed,
+            friction: 0.0,
+        };
+        let (dt, offset) = (1e-3, 0.1);
+        let mut contact = ExplicitContact::new(vec![ring], 1, settings(offset));
+        let v0 = Vector3::new(1.0, 0.0, 0.0);
+        let mut x = vec![Vector3::new(95.0 - 0.5e-3, 0.0, 1.0) + v0 * dt];
+        let mut v = vec![v0];
+        let before = (x.clone(), v.clone());
+        let fault = contact
+            .enforce(&mut x, &mut v, &[1e-6], &[true], dt, dt)
+            .unwrap_err();
+        assert_eq!((fault.node, fault.tool), (0, 0));
+        assert!((fault.gap + 1.0 + offset).abs() < 1e-9, "{}", fault.gap);
+        assert!((fault.node_travel - 1e-3).abs() < 1e-12 && fault.tool_travel == 0.0);
+        let FaultKind::GapJump { previous_gap } = fault.kind else {
+            panic!("{fault:?}")
+        };
+        assert!((previous_gap - (1.0 - offset)).abs() < 1e-6);
+        assert_eq!((x, v), before, "nothing is corrected");
+        let message = fault.to_string();
+        assert!(
+            message.contains("node 0") && message.contains("`ring`"),
+            "{message}"
+        );
+        // The same drift in front of the face (below it) is an ordinary
+        // contact: the node is within its travel of the face.
+        let mut x = vec![Vector3::new(120.0, 0.0, -offset + 0.5e-3)];
+        let mut v = vec![Vector3::new(0.0, 0.0, 1.0)];
+        assert!(
+            contact
+                .enforce(&mut x, &mut v, &[1e-6], &[true], 2.0 * dt, dt)
+                .is_ok()
+        );
+        assert!((x[0].z + offset).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_tool_forced_through_the_fabric_in_one_step_is_a_fault() {
+        // A plate coming down on a node at rest by 5 mm in one step, far
+        // more than the fabric's thickness (0.2 mm): with the limit the
+        // step is refused; without it the node would be thrown 5 mm.
+        let plate = |limit: f64| {
+            let tool = Tool {
+                name: "plate".into(),
+                surface: Surface::plane(Vector3::new(0.0, 0.0, 0.2), -Vector3::z()).unwrap(),
+                motion: ToolMotion::Displacement {
+                    direction: -Vector3::z(),
+                    distance: 5.0,
+                    amplitude: Amplitude::Ramp { duration: 1e-3 },
+                },
+                friction: 0.0,
+            };
+            let settings = ContactSettings {
+                max_travel: limit,
+                ..settings(0.1)
+            };
+            ExplicitContact::new(vec![tool], 1, settings)
+        };
+        let (mut x, mut v) = (vec![Vector3::zeros()], vec![Vector3::zeros()]);
+        let fault = plate(0.2)
+            .enforce(&mut x, &mut v, &[1e-6], &[true], 1e-3, 1e-3)
+            .unwrap_err();
+        assert!(matches!(fault.kind, FaultKind::Overrun { limit } if limit == 0.2));
+        assert!((fault.tool_travel - 5.0).abs() < 1e-12 && fault.node_travel == 0.0);
+        assert!((fault.gap + 4.9).abs() < 1e-12);
+        assert_eq!(x[0], Vector3::zeros());
+        // Absorbed when nothing limits the travel.
+        plate(f64::INFINITY)
+            .enforce(&mut x, &mut v, &[1e-6], &[true], 1e-3, 1e-3)
+            .unwrap();
+        assert!((x[0].z + 4.9).abs() < 1e-12);
     }
 }

@@ -17,7 +17,9 @@
 //!   a bounding-box broad phase with a margin, forward-increment Lagrange
 //!   multipliers for the normal constraints (closed form per node when
 //!   uncoupled, projected preconditioned CG when coupled) and Coulomb
-//!   friction by return mapping, with per-node force, status and tool.
+//!   friction by return mapping, with per-node force, status and tool; and
+//!   a guard that refuses a step whose penetration the step cannot explain
+//!   ([`ContactFault`]).
 //!
 //! What it is not: no elements and no time loop; the explicit driver in
 //! `drape-time` calls [`ExplicitContact::enforce`] between its predictor and
@@ -38,7 +40,7 @@
 //! let mut contact = ExplicitContact::new(vec![floor], 1, settings);
 //! let mut x = vec![Vector3::new(0.0, 0.0, 0.09)];
 //! let mut v = vec![Vector3::new(0.0, 0.0, -10.0)];
-//! contact.enforce(&mut x, &mut v, &[1e-6], &[true], 1e-3, 1e-3);
+//! contact.enforce(&mut x, &mut v, &[1e-6], &[true], 1e-3, 1e-3).unwrap();
 //! assert!((x[0].z - 0.1).abs() < 1e-15); // back at half a thickness
 //! assert!((contact.force[0].z - 1e-6 * 0.01 / 1e-6).abs() < 1e-9); // λ = m·|g|/Δt²
 //! ```
@@ -51,7 +53,8 @@ mod surface;
 mod tool;
 
 pub use explicit::{
-    ContactSettings, ContactStatus, ContactStep, ExplicitContact, StepTimes, TOUCHING,
+    ContactFault, ContactSettings, ContactStatus, ContactStep, ExplicitContact, FaultKind,
+    StepTimes, TOUCHING,
 };
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};

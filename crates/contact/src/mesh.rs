@@ -74,13 +74,15 @@ pub enum MeshError {
 /// - A **closed** mesh (every edge shared by exactly two triangles) must be
 ///   wound with its normals pointing out of the solid: the gap is then
 ///   negative inside the solid and positive outside, like a sphere's.
-/// - An **open** mesh (a die face, a sheet) has no inside: the gap's sign is
-///   the side of the triangles' normals. Off a boundary edge the sign is the
-///   side of that edge's normal, so a point behind the sheet *and* beyond its
-///   rim reads as inside (as with the end of a revolution profile); make an
-///   open tool extend beyond the fabric's reach. A point in the sheet's plane
-///   beyond its rim is at the border of the two sides: it reads as outside,
-///   but rounding can flip it.
+/// - An **open** mesh (a die face, a sheet) has edges with one triangle
+///   only, its rim. Behind a triangle is inside (negative gap), in front is
+///   outside; a point whose closest surface point is on the rim (an open
+///   edge or one of its vertices) is outside from every side: its gap is the
+///   distance to the rim. As for the free end of a profile (see
+///   [`Surface::revolution`](crate::Surface::revolution)) the gap then jumps
+///   across the *cut* behind the rim, where "behind the last triangle" meets
+///   "beside the rim"; elsewhere it is continuous and 1-Lipschitz. Close the
+///   mesh if the fabric can come near the back of its rim.
 ///
 /// The side of a point whose closest surface point is on an edge or a vertex
 /// is decided with the angle-weighted pseudo-normals of Bærentzen & Aanæs
@@ -126,9 +128,48 @@ pub struct MeshSurface {
     mesh: Arc<TriMesh>,
     /// Every edge has two triangles.
     closed: bool,
+    /// The rim of an open mesh: per triangle, whether its edges (in parry's
+    /// numbering: ab, bc, ac) have no neighbour; per vertex, whether it is on
+    /// such an edge. Empty for a closed mesh.
+    rim: Arc<Rim>,
     /// Below this distance a query point is on the surface (relative to the
     /// mesh's size): the direction to it is then rounding noise.
     on_surface: f64,
+}
+
+/// The open edges and vertices of a mesh.
+#[derive(Debug, Default)]
+struct Rim {
+    edges: Vec<[bool; 3]>,
+    vertices: Vec<bool>,
+}
+
+impl Rim {
+    /// The rim of the triangles `indices` over `vertex_count` vertices.
+    fn of(indices: &[[u32; 3]], vertex_count: usize) -> Self {
+        let key = |a: u32, b: u32| (a.min(b), a.max(b));
+        let mut count = std::collections::HashMap::new();
+        for t in indices {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])] {
+                *count.entry(key(a, b)).or_insert(0u32) += 1;
+            }
+        }
+        let mut vertices = vec![false; vertex_count];
+        let edges = indices
+            .iter()
+            .map(|t| {
+                [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])].map(|(a, b)| {
+                    let open = count[&key(a, b)] == 1;
+                    if open {
+                        vertices[a as usize] = true;
+                        vertices[b as usize] = true;
+                    }
+                    open
+                })
+            })
+            .collect();
+        Self { edges, vertices }
+    }
 }
 
 /// Relative area below which a triangle counts as degenerate: the sine of
@@ -226,11 +267,17 @@ impl MeshSurface {
         let closed = mesh
             .topology()
             .is_some_and(|t| t.half_edges.iter().all(|h| h.twin != u32::MAX));
+        let rim = if closed {
+            Rim::default()
+        } else {
+            Rim::of(mesh.indices(), mesh.vertices().len())
+        };
         let aabb = mesh.local_aabb();
         let size = (aabb.maxs - aabb.mins).length();
         Ok(Self {
             mesh: Arc::new(mesh),
             closed,
+            rim: Arc::new(rim),
             on_surface: ON_SURFACE * size,
         })
     }
@@ -282,9 +329,24 @@ impl MeshSurface {
             }
             _ => {
                 let dist = d.length();
-                // Strictly behind: a point level with an open mesh's rim
-                // (d ⟂ pseudo-normal) is outside, not in contact.
-                let sign = if d.dot(pseudo) < 0.0 { -1.0 } else { 1.0 };
+                let on_rim = !self.closed
+                    && match location {
+                        TrianglePointLocation::OnEdge(i, _) => {
+                            self.rim.edges[tri as usize][i as usize]
+                        }
+                        TrianglePointLocation::OnVertex(i) => {
+                            self.rim.vertices
+                                [self.mesh.indices()[tri as usize][i as usize] as usize]
+                        }
+                        _ => false,
+                    };
+                // A rim is outside from every side; elsewhere strictly
+                // behind the pseudo-normal is inside.
+                let sign = if !on_rim && d.dot(pseudo) < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                };
                 if dist > self.on_surface {
                     (d * (sign / dist), sign * dist)
                 } else {
@@ -680,10 +742,16 @@ mod tests {
         let q = up.project(&Vector3::new(1.3, 0.5, 0.4));
         assert!((q.gap - 0.5).abs() < 1e-15);
         assert!((q.normal - Vector3::new(0.6, 0.0, 0.8)).norm() < 1e-15);
-        // Beyond the rim, below: the back side (documented limitation).
+        // Beyond the rim, below: the rim is outside from every side.
         let q = up.project(&Vector3::new(1.3, 0.5, -0.4));
-        assert!((q.gap + 0.5).abs() < 1e-15);
-        assert!((q.normal - Vector3::new(-0.6, 0.0, 0.8)).norm() < 1e-15);
+        assert!((q.gap - 0.5).abs() < 1e-15);
+        assert!((q.normal - Vector3::new(0.6, 0.0, -0.8)).norm() < 1e-15);
+        // Off a rim corner, below: outside too.
+        let q = up.project(&Vector3::new(-0.3, 1.4, -1.2));
+        assert!((q.gap - 1.3).abs() < 1e-14);
+        // Behind the plate, inside its rim: inside.
+        let q = up.project(&Vector3::new(0.9, 0.5, -0.4));
+        assert!((q.gap + 0.4).abs() < 1e-15);
         // Level with the rim: outside.
         let q = up.project(&Vector3::new(-0.5, 0.5, 0.0));
         assert!((q.gap - 0.5).abs() < 1e-15);
@@ -759,5 +827,99 @@ mod tests {
         );
         let message = SurfaceError::from(e).to_string();
         assert!(message.contains("triangles 0 and 1"), "{message}");
+    }
+
+    /// |g(a) − g(b)| ≤ |a − b| up to round-off.
+    fn lipschitz(s: &Surface, a: &Vector3<f64>, b: &Vector3<f64>) -> Result<(), String> {
+        let (ga, gb) = (s.project(a).gap, s.project(b).gap);
+        let d = (a - b).norm();
+        if (ga - gb).abs() <= d + 1e-12 * (1.0 + a.norm() + b.norm()) {
+            Ok(())
+        } else {
+            Err(format!("g({a:?}) = {ga}, g({b:?}) = {gb}, |a − b| = {d}"))
+        }
+    }
+
+    /// Points on every edge (midpoint and a point near one end) and every
+    /// vertex of a mesh, where the side is decided by pseudo-normals.
+    fn features(s: &Surface) -> Vec<Vector3<f64>> {
+        let Surface::Mesh(m) = s else { unreachable!() };
+        let v: Vec<_> = m.vertices().collect();
+        let mut out = v.clone();
+        for t in m.triangles() {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])] {
+                let (a, b) = (v[a as usize], v[b as usize]);
+                out.extend([(a + b) / 2.0, a * 0.9 + b * 0.1]);
+            }
+        }
+        out
+    }
+
+    proptest::proptest! {
+        /// A closed mesh's gap is 1-Lipschitz: random pairs, and pairs
+        /// straddling every edge and vertex (where a wrong pseudo-normal
+        /// would flip the side).
+        #[test]
+        fn a_closed_meshs_gap_is_1_lipschitz(
+            a in proptest::array::uniform3(-60.0f64..60.0),
+            dir in proptest::array::uniform3(-1.0f64..1.0),
+            log_d in -8.0f64..2.0,
+            pick in 0usize..10_000,
+        ) {
+            let dir = Vector3::from(dir);
+            proptest::prop_assume!(dir.norm() > 1e-3);
+            let step = dir.normalize() * 10f64.powf(log_d);
+            let a = Vector3::from(a);
+            let (v, f) = icosphere(50.0, 1);
+            for s in [closed_box(), Surface::triangle_mesh(v, f).unwrap()] {
+                lipschitz(&s, &a, &(a + step)).map_err(proptest::test_runner::TestCaseError::fail)?;
+                let feats = features(&s);
+                let p = feats[pick % feats.len()];
+                lipschitz(&s, &(p - step), &(p + step))
+                    .map_err(proptest::test_runner::TestCaseError::fail)?;
+            }
+        }
+
+        /// An open plate is 1-Lipschitz across its interior edges and
+        /// wherever a pair does not cross the cut behind its rim (below
+        /// z = 0, on the square's border), and beyond the rim its gap is the
+        /// distance to the rim, from every side.
+        #[test]
+        fn an_open_plate_is_1_lipschitz_off_its_cut(
+            a in proptest::array::uniform3(-1.0f64..2.0),
+            dir in proptest::array::uniform3(-1.0f64..1.0),
+            log_d in -8.0f64..-1.0,
+            pick in 0usize..10_000,
+        ) {
+            let dir = Vector3::from(dir);
+            proptest::prop_assume!(dir.norm() > 1e-3);
+            let d = 10f64.powf(log_d);
+            let step = dir.normalize() * d;
+            let a = Vector3::from(a);
+            let up = plate(false);
+            let near_cut = |p: &Vector3<f64>| {
+                p.z < 2.0 * d
+                    && (0..2).any(|k| {
+                        let other = 1 - k;
+                        (p[k].abs() < 2.0 * d || (p[k] - 1.0).abs() < 2.0 * d)
+                            && p[other] > -2.0 * d
+                            && p[other] < 1.0 + 2.0 * d
+                    })
+            };
+            if !near_cut(&a) {
+                lipschitz(&up, &a, &(a + step)).map_err(proptest::test_runner::TestCaseError::fail)?;
+            }
+            // Interior edges and vertices, straddled (the diagonal, and
+            // points of the plate away from its border).
+            let p = Vector3::new(0.5, 0.5, 0.0) + Vector3::new(0.3, 0.3, 0.0) * ((pick % 7) as f64 / 3.0 - 1.0);
+            lipschitz(&up, &(p - step), &(p + step)).map_err(proptest::test_runner::TestCaseError::fail)?;
+            // Beside the rim (outside the square's footprint): the distance
+            // to the square, positive above and below.
+            let clamp = Vector3::new(a.x.clamp(0.0, 1.0), a.y.clamp(0.0, 1.0), 0.0);
+            if clamp.xy() != a.xy() {
+                let q = up.project(&a);
+                proptest::prop_assert!((q.gap - (a - clamp).norm()).abs() < 1e-12, "{:?}: {}", a, q.gap);
+            }
+        }
     }
 }

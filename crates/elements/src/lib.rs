@@ -57,7 +57,7 @@ mod quad_lanes;
 mod spring;
 mod truss;
 
-pub use drape_kinematics::{KinematicsError, Matrix2, Matrix3x2, Vector2, Vector3};
+pub use drape_kinematics::{Degeneracy, KinematicsError, Matrix2, Matrix3x2, Vector2, Vector3};
 pub use membrane::{FabricSection, MembraneBatch, MembraneOutput, MembraneShape};
 pub use spring::{ForceTable, ForceTableError, SpringBatch};
 pub use truss::{TrussBatch, TrussOutput};

@@ -458,9 +458,59 @@ impl MembraneBatch {
         Ok(())
     }
 
+    /// The current normal of point `p` of element `e`, F·e₁ × F·e₂, times
+    /// the point's reference area (so its length is the current area).
+    fn weighted_normal(&self, e: usize, p: usize, x: &[Vector3<f64>]) -> Vector3<f64> {
+        let xe = self.gather(e, x);
+        let f = deformation_gradient(&xe[..self.shape.nodes()], self.point_grad(e, p));
+        f.column(0).cross(&f.column(1)) * self.area[e * self.shape.points() + p]
+    }
+
+    /// Judges the orientation of a degenerate membrane point at positions
+    /// `x` (see [`Degeneracy`](drape_kinematics::Degeneracy)): `inverted` when the point's normal opposes
+    /// the summed normals of its element's other points (quads; a triangle
+    /// has one point), `folded` when it opposes the summed normals of the
+    /// elements sharing a node with it. Normals are compared as the mesh
+    /// orients them, which is consistent for drape's blanks and for imported
+    /// meshes (checked on import). Any other error is returned unchanged.
+    ///
+    /// A cold path (it scans the batch for neighbours): for failure
+    /// messages.
+    pub fn diagnose(&self, error: ElementError, x: &[Vector3<f64>]) -> ElementError {
+        let KinematicsError::DegenerateMembrane(mut d) = error.cause else {
+            return error;
+        };
+        let (e, p) = (error.element, error.point);
+        if e >= self.len() || p >= self.shape.points() {
+            return error;
+        }
+        let n = self.weighted_normal(e, p, x);
+        let own: Vector3<f64> = (0..self.shape.points())
+            .filter(|&q| q != p)
+            .map(|q| self.weighted_normal(e, q, x))
+            .sum();
+        if self.shape.points() > 1 {
+            d.inverted = Some(n.dot(&own) < 0.0);
+        }
+        let mine = self.element_nodes(e);
+        let around: Vector3<f64> = (0..self.len())
+            .filter(|&o| o != e && self.element_nodes(o).iter().any(|i| mine.contains(i)))
+            .flat_map(|o| (0..self.shape.points()).map(move |q| (o, q)))
+            .map(|(o, q)| self.weighted_normal(o, q, x))
+            .sum();
+        if around != Vector3::zeros() {
+            d.folded = Some(n.dot(&around) < 0.0);
+        }
+        ElementError {
+            cause: KinematicsError::DegenerateMembrane(d),
+            ..error
+        }
+    }
+
     /// Writes every element's nodal forces into `slots` (nodes-per-element
     /// entries per element, in element order) and the new history into
-    /// `h_out`, in parallel.
+    /// `h_out`, in parallel. A degenerate point's error is
+    /// [diagnosed](Self::diagnose).
     pub fn forces_into(
         &self,
         x: &[Vector3<f64>],
@@ -497,6 +547,7 @@ impl MembraneBatch {
                     self.element_force_with(e, x, &h_in[e * eh..(e + 1) * eh], out, step, f)
                 }),
         )
+        .map_err(|error| self.diagnose(error, x))
     }
 
     /// [`Self::forces_into`] of a resin-only quad batch: whole blocks of

@@ -275,8 +275,15 @@ fn bad_input_is_an_error_naming_it() {
         }],
     )
     .unwrap();
-    let e = Net::drape(&ring, &spec(100.0, 5.0)).unwrap_err();
+    // Seeded over the ring itself: the axis passes through its opening,
+    // whose free edge is outside from every side.
+    let mut over_ring = spec(100.0, 5.0);
+    over_ring.outline.center = Vector3::new(100.0, 0.0, 5.0);
+    over_ring.seed = [100.0, 0.0];
+    let e = Net::drape(&ring, &over_ring).unwrap_err();
     assert!(matches!(e, FishnetError::SeedBehindMould { .. }), "{e}");
+    let e = Net::drape(&ring, &spec(100.0, 5.0)).unwrap_err();
+    assert!(matches!(e, FishnetError::SeedMissesMould { .. }), "{e}");
     // A generator curve that misses the seed.
     let mut s = spec(100.0, 5.0);
     s.warp_curve = Some(vec![

@@ -254,14 +254,23 @@ pub enum GeometrySpec {
         /// Outer radius of the face.
         outer_radius: f64,
     },
-    /// A flat ring facing down (a blank holder), the fabric below.
+    /// A blank holder: a ring facing down, the fabric below, its inner
+    /// edge rounded into an inner wall (see [`Surface::ring`]).
     Ring {
         /// Axis position (x, y) and face height z.
         center: [f64; 3],
-        /// Inner radius.
+        /// Inner radius (of the inner wall; the flat face starts at
+        /// `inner_radius + edge_radius`).
         inner_radius: f64,
         /// Outer radius.
         outer_radius: f64,
+        /// Radius of the rounded inner edge (0: sharp).
+        #[serde(default)]
+        edge_radius: f64,
+        /// Height of the ring (default: the larger of 10 mm and twice the
+        /// edge radius).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        thickness: Option<f64>,
     },
     /// A surface of revolution about the vertical axis through `origin`.
     Revolution {
@@ -1176,30 +1185,18 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
                     positive(at, &format!("{g}.fillet_radius"), *fillet_radius)?,
                 );
                 positive(at, &format!("{g}.depth"), *depth)?;
-                if *outer_radius <= a + f {
+                if outer_radius.is_nan() || *outer_radius <= a + f {
                     return Err(at.error(
                         &format!("{g}.outer_radius"),
                         format!("{outer_radius} is not allowed: expected more than opening + fillet radius ({})", a + f),
                     ));
                 }
-                Surface::revolution(
+                Surface::die(
                     finite3(at, &format!("{g}.center"), *center)?,
-                    vec![
-                        ProfileSegment::Line {
-                            from: [a, -f - depth],
-                            to: [a, -f],
-                        },
-                        ProfileSegment::Arc {
-                            center: [a + f, -f],
-                            radius: f,
-                            from_deg: 180.0,
-                            to_deg: 90.0,
-                        },
-                        ProfileSegment::Line {
-                            from: [a + f, 0.0],
-                            to: [*outer_radius, 0.0],
-                        },
-                    ],
+                    a,
+                    f,
+                    *depth,
+                    *outer_radius,
                 )
                 .map_err(surface_err)?
             }
@@ -1207,23 +1204,45 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
                 center,
                 inner_radius,
                 outer_radius,
+                edge_radius,
+                thickness,
             } => {
                 positive(at, &format!("{g}.inner_radius"), *inner_radius)?;
-                if *outer_radius <= *inner_radius {
+                if !(edge_radius.is_finite() && *edge_radius >= 0.0) {
                     return Err(at.error(
-                        &format!("{g}.outer_radius"),
+                        &format!("{g}.edge_radius"),
                         format!(
-                            "{outer_radius} is not allowed: expected more than the inner radius"
+                            "{edge_radius} is not allowed: expected a radius ≥ 0 (0: a sharp edge)"
                         ),
                     ));
                 }
-                // Travelled outwards-in along the face, the fabric (below) is on the left.
-                Surface::revolution(
+                if outer_radius.is_nan() || *outer_radius <= inner_radius + edge_radius {
+                    return Err(at.error(
+                        &format!("{g}.outer_radius"),
+                        format!(
+                            "{outer_radius} is not allowed: expected more than the inner radius plus the edge radius ({})",
+                            inner_radius + edge_radius
+                        ),
+                    ));
+                }
+                let thickness = match thickness {
+                    Some(t) => {
+                        if !(t.is_finite() && *t > 0.0 && t >= edge_radius) {
+                            return Err(at.error(
+                                &format!("{g}.thickness"),
+                                format!("{t} is not allowed: expected a height > 0 and at least the edge radius ({edge_radius})"),
+                            ));
+                        }
+                        *t
+                    }
+                    None => f64::max(10.0, 2.0 * edge_radius),
+                };
+                Surface::ring(
                     finite3(at, &format!("{g}.center"), *center)?,
-                    vec![ProfileSegment::Line {
-                        from: [*outer_radius, 0.0],
-                        to: [*inner_radius, 0.0],
-                    }],
+                    *inner_radius,
+                    *outer_radius,
+                    *edge_radius,
+                    thickness,
                 )
                 .map_err(surface_err)?
             }

@@ -121,6 +121,35 @@ fn a_tool_file_that_does_not_exist_names_the_field() {
     assert!(e.message.contains("missing-punch.stl"), "{e}");
 }
 
+#[test]
+fn a_holder_ring_is_a_closed_tool_and_bad_radii_name_their_field() {
+    let ring = |extra: &str| {
+        format!(
+            "{GOOD}\n[[tools]]\nname = \"holder\"\ngeometry = {{ kind = \"ring\", center = [0, 0, 0.3], inner_radius = 95, outer_radius = 250{extra} }}\n"
+        )
+    };
+    // Defaults: a sharp edge, 10 mm tall; with an edge radius, twice it.
+    for extra in ["", ", edge_radius = 8", ", edge_radius = 5, thickness = 5"] {
+        let scene = Scene::parse(&ring(extra), Path::new("good.toml"), &[]).unwrap();
+        assert!(scene.model.tools[1].surface.is_closed(), "{extra}");
+    }
+    let scene = Scene::parse(&ring(", edge_radius = 8"), Path::new("good.toml"), &[]).unwrap();
+    let top = scene.model.tools[1].surface.aabb().max.z;
+    assert!((top - 16.3).abs() < 1e-12, "{top}");
+    for (extra, field) in [
+        (", edge_radius = -1", "tools[1].geometry.edge_radius"),
+        (
+            ", edge_radius = 5, thickness = 4",
+            "tools[1].geometry.thickness",
+        ),
+        (", edge_radius = 200", "tools[1].geometry.outer_radius"),
+    ] {
+        let e = error_of(&ring(extra));
+        assert_eq!(e.field, field, "{e}");
+        assert_eq!(e.line, Some(17), "{e}");
+    }
+}
+
 fn with_sets(text: &str, sets: &[(&str, &str)]) -> Result<Scene, drape_io::scene::SceneError> {
     let sets: Vec<(String, String)> = sets
         .iter()

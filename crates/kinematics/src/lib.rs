@@ -14,8 +14,11 @@
 //! loops or history storage (that is `drape-elements`). Everything here is a
 //! pure function on fixed-size nalgebra types; nothing allocates.
 //!
-//! A degenerate configuration (det C ≤ 0, a zero-length truss, a collapsed
-//! reference element) is a typed [`KinematicsError`], never a NaN.
+//! A degenerate configuration (a membrane point without area, a
+//! zero-length truss, a collapsed reference element) is a typed
+//! [`KinematicsError`], never a NaN; a degenerate membrane point says what
+//! it looks like ([`Degeneracy`]: principal stretches, over-stretched,
+//! collapsed, and — judged by the element — folded or inverted).
 //!
 //! ```
 //! use drape_kinematics::{polar_decomposition, rotated_strain_increment, Matrix2, Matrix3x2};
@@ -43,8 +46,8 @@ pub mod reference;
 
 pub use fibre::{FibreKinematics, fibre_stretch, shear_angle, truss_stretch};
 pub use membrane::{
-    PolarDecomposition, add_nodal_forces, deformation_gradient, first_piola, polar_decomposition,
-    right_cauchy_green, right_stretch, rotated_strain_increment,
+    DEGENERATE_DET_C, Degeneracy, PolarDecomposition, add_nodal_forces, deformation_gradient,
+    first_piola, polar_decomposition, right_cauchy_green, right_stretch, rotated_strain_increment,
 };
 pub use nalgebra::{Matrix2, Matrix3x2, Vector2, Vector3};
 pub use reference::{LocalFrame, ReferencePoint, quad_point, triangle_point};
@@ -52,13 +55,11 @@ pub use reference::{LocalFrame, ReferencePoint, quad_point, triangle_point};
 /// What can go wrong when measuring a deformation.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum KinematicsError {
-    /// The membrane point has collapsed to a line or a point (det C ≤ 0 up to
-    /// round-off), so neither U⁻¹ nor R exists.
-    #[error("degenerate membrane: det C = {det_c:e} is not positive (the element has collapsed)")]
-    DegenerateMembrane {
-        /// det C at the point.
-        det_c: f64,
-    },
+    /// The membrane point has no area left for its size: det C/(tr C)² ≤
+    /// 1e-14, so neither U⁻¹ nor R can be trusted. What it looks like is
+    /// in the [`Degeneracy`].
+    #[error("degenerate membrane: {0}")]
+    DegenerateMembrane(Degeneracy),
     /// A truss or fibre has zero current length, so it has no direction.
     #[error("degenerate fibre: current length {length:e} is not positive")]
     DegenerateFibre {

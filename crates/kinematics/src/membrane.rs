@@ -7,7 +7,92 @@ use crate::KinematicsError;
 
 /// Relative threshold under which det C counts as zero: a point squeezed to
 /// a sliver this thin has no trustworthy rotation, and a NaN would follow.
-const DEGENERATE_DET_C: f64 = 1e-14;
+/// The test is det C ≤ `DEGENERATE_DET_C`·(tr C)², i.e. λ₂/λ₁ ≲ 1e-7 for
+/// the principal stretches λ₁ ≥ λ₂.
+pub const DEGENERATE_DET_C: f64 = 1e-14;
+
+/// A principal stretch above which a membrane point is "over-stretched":
+/// twice its length, far beyond anything a woven fabric survives (yarns
+/// break at a few percent, shear alone stretches a diagonal by at most √2).
+pub const OVERSTRETCHED: f64 = 2.0;
+
+/// What a degenerate membrane point looks like, for a failure message that
+/// says what happened.
+///
+/// Since C = FᵀF, det C = J² ≥ 0 whatever the orientation: C cannot tell a
+/// point turned over from one squeezed flat. Orientation is judged by the
+/// element, which sees the point's current normal n = F·e₁ × F·e₂ and its
+/// surroundings: `inverted` when n opposes the normals of the element's
+/// other integration points (a quad turned inside out about a corner),
+/// `folded` when it opposes the mean normal of the elements that share a
+/// node with it (the element turned over onto its neighbours, through zero
+/// area). `None` where nobody judged it (the kinematics alone cannot).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Degeneracy {
+    /// Principal stretches λ₁ ≥ λ₂ ≥ 0 (square roots of C's eigenvalues).
+    pub stretches: [f64; 2],
+    /// det C/(tr C)² (at most ¼, for an equal stretch).
+    pub det_ratio: f64,
+    /// Turned against the element's other points (quads).
+    pub inverted: Option<bool>,
+    /// Turned against the elements around it.
+    pub folded: Option<bool>,
+}
+
+impl Degeneracy {
+    /// From det C and tr C, orientation not judged.
+    pub fn from_invariants(det_c: f64, tr_c: f64) -> Self {
+        // λ₁² from the larger root, λ₂² = det C/λ₁² (no cancellation).
+        let disc = (tr_c * tr_c - 4.0 * det_c).max(0.0).sqrt();
+        let l1 = 0.5 * (tr_c + disc);
+        let l2 = if l1 > 0.0 { (det_c / l1).max(0.0) } else { 0.0 };
+        Self {
+            stretches: [l1.sqrt(), l2.sqrt()],
+            det_ratio: det_c / (tr_c * tr_c),
+            inverted: None,
+            folded: None,
+        }
+    }
+
+    /// Stretched beyond [`OVERSTRETCHED`] along one direction.
+    pub fn over_stretched(&self) -> bool {
+        self.stretches[0] > OVERSTRETCHED
+    }
+}
+
+impl std::fmt::Display for Degeneracy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [l1, l2] = self.stretches;
+        write!(
+            f,
+            "principal stretches {l1:.4e} and {l2:.4e}, det C/(tr C)² = {:.3e} ≤ {DEGENERATE_DET_C:e} \
+             (no area left for its size):",
+            self.det_ratio
+        )?;
+        let mut what = Vec::new();
+        if self.inverted == Some(true) {
+            what.push("inverted (turned inside out against the element's other points)".to_owned());
+        }
+        if self.folded == Some(true) {
+            what.push("folded (turned over against the elements around it)".to_owned());
+        }
+        if self.over_stretched() {
+            what.push(format!(
+                "over-stretched ({l1:.3e} times its length along one direction)"
+            ));
+        }
+        if what.is_empty() {
+            what.push(format!(
+                "collapsed (squeezed to {l2:.3e} of its width across, {l1:.3} along)"
+            ));
+        }
+        write!(f, " {}", what.join(", "))?;
+        if self.inverted.is_none() && self.folded.is_none() {
+            write!(f, " (orientation not judged)")?;
+        }
+        Ok(())
+    }
+}
 
 /// The membrane deformation gradient F = Σₐ xₐ ⊗ ∂Nₐ/∂X (3×2).
 ///
@@ -33,8 +118,8 @@ pub fn right_cauchy_green(f: &Matrix3x2<f64>) -> Matrix2<f64> {
 /// The right stretch U = √C and its inverse U⁻¹, in closed form
 /// (SPEC §3): √C = (C + √det C·I)/√(tr C + 2√det C).
 ///
-/// Errors when det C is not positive relative to (tr C)², i.e. the point has
-/// collapsed.
+/// Errors when det C ≤ [`DEGENERATE_DET_C`]·(tr C)², i.e. the point has no
+/// area left for its size (see [`Degeneracy`]).
 #[inline]
 pub fn right_stretch(c: &Matrix2<f64>) -> Result<(Matrix2<f64>, Matrix2<f64>), KinematicsError> {
     let det_c = c[(0, 0)] * c[(1, 1)] - c[(0, 1)] * c[(1, 0)];
@@ -45,7 +130,9 @@ pub fn right_stretch(c: &Matrix2<f64>) -> Result<(Matrix2<f64>, Matrix2<f64>), K
         });
     }
     if det_c <= DEGENERATE_DET_C * tr_c * tr_c {
-        return Err(KinematicsError::DegenerateMembrane { det_c });
+        return Err(KinematicsError::DegenerateMembrane(
+            Degeneracy::from_invariants(det_c, tr_c),
+        ));
     }
     let det_u = det_c.sqrt();
     let u = (c + Matrix2::identity() * det_u) / (tr_c + 2.0 * det_u).sqrt();
@@ -258,11 +345,63 @@ mod tests {
     }
 
     #[test]
+    fn a_degenerate_point_reports_its_principal_stretches() {
+        // Stretched 1.4e4 times along x, squeezed to 1e-3 across (rotated):
+        // det C/(tr C)² ≈ 5e-15.
+        let (s, c) = 0.4f64.sin_cos();
+        let f = Matrix3x2::new(1.4e4 * c, -1e-3 * s, 1.4e4 * s, 1e-3 * c, 0.0, 0.0);
+        let Err(KinematicsError::DegenerateMembrane(d)) = polar_decomposition(&f) else {
+            panic!("not degenerate")
+        };
+        assert!(
+            (d.stretches[0] / 1.4e4 - 1.0).abs() < 1e-12,
+            "{:?}",
+            d.stretches
+        );
+        assert!(
+            (d.stretches[1] / 1e-3 - 1.0).abs() < 1e-6,
+            "{:?}",
+            d.stretches
+        );
+        assert!(
+            (d.det_ratio - (1.4e4f64 * 1e-3).powi(2) / (1.4e4f64.powi(2) + 1e-6).powi(2)).abs()
+                < 1e-25
+        );
+        assert!(d.over_stretched());
+        let m = KinematicsError::DegenerateMembrane(d).to_string();
+        for part in [
+            "principal stretches 1.4000e4 and 1.0000e-3",
+            "det C/(tr C)²",
+            "over-stretched",
+        ] {
+            assert!(m.contains(part), "{m}");
+        }
+        // Squeezed flat without stretching: collapsed.
+        let f = Matrix3x2::new(0.9, 0.0, 0.0, 1e-8, 0.0, 0.0);
+        let Err(KinematicsError::DegenerateMembrane(d)) = polar_decomposition(&f) else {
+            panic!("not degenerate")
+        };
+        assert!(!d.over_stretched());
+        let m = d.to_string();
+        assert!(m.contains("collapsed") && m.contains("not judged"), "{m}");
+        let judged = Degeneracy {
+            folded: Some(true),
+            inverted: Some(false),
+            ..d
+        };
+        let m = judged.to_string();
+        assert!(
+            m.contains("folded") && !m.contains("collapsed") && !m.contains("judged"),
+            "{m}"
+        );
+    }
+
+    #[test]
     fn collapsed_point_is_a_typed_error() {
         let f = Matrix3x2::new(1.0, 2.0, 0.0, 0.0, 1.0, 2.0);
         assert!(matches!(
             polar_decomposition(&f),
-            Err(KinematicsError::DegenerateMembrane { .. })
+            Err(KinematicsError::DegenerateMembrane(_))
         ));
         let f = Matrix3x2::new(f64::NAN, 0.0, 0.0, 1.0, 0.0, 0.0);
         assert!(matches!(

@@ -1,5 +1,6 @@
 //! How a run ends: its summary, or why it stopped early.
 
+use drape_contact::ContactFault;
 use drape_elements::ElementError;
 
 use crate::Energies;
@@ -42,6 +43,17 @@ pub enum RunError {
         /// What the guard found.
         what: Instability,
     },
+    /// The contact guard refused a step: a node inside a tool by more than
+    /// the step can explain (see [`ContactFault`]).
+    #[error("step {step}, t = {time:.6e} s: contact fault: {fault}")]
+    ContactFault {
+        /// The step that failed.
+        step: u64,
+        /// Its time.
+        time: f64,
+        /// The node, the tool, the gap and why.
+        fault: ContactFault,
+    },
     /// The settings or the model cannot run.
     #[error("cannot run: {0}")]
     Setup(String),
@@ -54,7 +66,8 @@ impl RunError {
         match self {
             Self::Element { step, time, .. }
             | Self::NonFinite { step, time, .. }
-            | Self::Unstable { step, time, .. } => Some((*step, *time)),
+            | Self::Unstable { step, time, .. }
+            | Self::ContactFault { step, time, .. } => Some((*step, *time)),
             Self::Setup(_) => None,
         }
     }

@@ -182,6 +182,13 @@ impl<'m> Explicit<'m> {
                 ContactSettings {
                     offset: model.contact_offset,
                     margin: settings.contact_margin,
+                    // A node and a tool closing in by more than the fabric's
+                    // thickness in one step are beyond what a step resolves.
+                    max_travel: if model.contact_offset > 0.0 {
+                        2.0 * model.contact_offset
+                    } else {
+                        f64::INFINITY
+                    },
                     ..ContactSettings::default()
                 },
             )
@@ -723,18 +730,24 @@ impl<'m> Explicit<'m> {
             }
             self.lap(Pass::BoundaryConditions);
             if let Some(contact) = &mut self.contact {
-                contact.enforce_step(
-                    &mut self.x_new,
-                    &mut self.v_new,
-                    &self.mass,
-                    &self.movable,
-                    &StepTimes {
-                        t_new,
-                        dt: h,
-                        dt_mean: dt_avg,
-                        damping,
-                    },
-                );
+                contact
+                    .enforce_step(
+                        &mut self.x_new,
+                        &mut self.v_new,
+                        &self.mass,
+                        &self.movable,
+                        &StepTimes {
+                            t_new,
+                            dt: h,
+                            dt_mean: dt_avg,
+                            damping,
+                        },
+                    )
+                    .map_err(|fault| RunError::ContactFault {
+                        step: state.step + 1,
+                        time: t_new,
+                        fault,
+                    })?;
                 for (touched, f) in self.tool_touched.iter_mut().zip(&contact.tool_force) {
                     *touched |= *f != 0.0;
                 }

@@ -14,6 +14,7 @@
 //! `<target>/validation/report.md` and exits non-zero on any failure. A
 //! panicking case counts as one failed check carrying the panic message.
 
+use std::cell::RefCell;
 use std::fmt::Write as _;
 use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
@@ -24,6 +25,7 @@ mod contact;
 mod explicit;
 mod fishnet;
 mod kinematics;
+mod scenes;
 
 /// Every case of every crate, in the order they run and are reported.
 pub fn registry() -> Vec<Case> {
@@ -33,6 +35,7 @@ pub fn registry() -> Vec<Case> {
         explicit::CASES,
         contact::CASES,
         fishnet::CASES,
+        scenes::CASES,
     ]
     .concat()
 }
@@ -164,10 +167,25 @@ pub struct CaseResult {
     pub name: &'static str,
     /// Its checks (one failed check if it panicked).
     pub checks: Vec<Check>,
+    /// Markdown sections the case wrote with [`note`] (tables of results
+    /// beside published ones), printed after its checks.
+    pub notes: Vec<String>,
+}
+
+thread_local! {
+    static NOTES: RefCell<Vec<String>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Adds a Markdown section to the report of the case running on this
+/// thread: results that are reported rather than checked (a published
+/// table beside drape's numbers). A case's checks still decide its status.
+pub fn note(markdown: impl Into<String>) {
+    NOTES.with(|n| n.borrow_mut().push(markdown.into()));
 }
 
 /// Runs one case, turning a panic into a failed check.
 pub fn run_case(case: &Case) -> CaseResult {
+    NOTES.with(|n| n.borrow_mut().clear());
     let checks = match panic::catch_unwind(AssertUnwindSafe(case.run)) {
         Ok(checks) => checks,
         Err(payload) => {
@@ -182,6 +200,7 @@ pub fn run_case(case: &Case) -> CaseResult {
     CaseResult {
         name: case.name,
         checks,
+        notes: NOTES.with(|n| std::mem::take(&mut *n.borrow_mut())),
     }
 }
 
@@ -326,6 +345,10 @@ fn text_table(result: &CaseResult) -> String {
         out.push_str(&line(row));
     }
     out.push('\n');
+    for note in &result.notes {
+        out.push_str(note);
+        out.push_str("\n\n");
+    }
     out
 }
 
@@ -355,6 +378,9 @@ fn markdown_report(results: &[CaseResult], options: &Options, summary: &str) -> 
             let _ = writeln!(out, "| {} |", row.join(" | "));
         }
         out.push('\n');
+        for note in &result.notes {
+            let _ = writeln!(out, "{note}\n");
+        }
     }
     out
 }
@@ -442,6 +468,28 @@ mod tests {
     }
 
     #[test]
+    fn notes_belong_to_the_case_that_wrote_them() {
+        fn writes() -> Vec<Check> {
+            note("| a | b |");
+            vec![Check::abs("x", 1.0, 1.0, 0.0)]
+        }
+        fn silent() -> Vec<Check> {
+            Vec::new()
+        }
+        let case = |name, run| Case {
+            name,
+            quick: true,
+            run,
+        };
+        let first = run_case(&case("test/notes", writes));
+        let second = run_case(&case("test/silent", silent));
+        assert_eq!(first.notes, vec!["| a | b |".to_owned()]);
+        assert!(second.notes.is_empty());
+        let report = markdown_report(&[first], &Options::default(), "1 passed");
+        assert!(report.contains("| a | b |"), "{report}");
+    }
+
+    #[test]
     fn a_panicking_case_is_one_failure_with_its_message() {
         fn boom() -> Vec<Check> {
             panic!("boom {}", 42)
@@ -484,6 +532,7 @@ mod tests {
     fn table_columns_align_with_combining_marks() {
         let r = CaseResult {
             name: "test/table",
+            notes: Vec::new(),
             checks: vec![
                 Check::abs("τ̄₁₂", 1.0, 1.0, 0.0),
                 Check::abs("a longer quantity", -2.5e-7, -2.5e-7, 1e-3),

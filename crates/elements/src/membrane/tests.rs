@@ -417,6 +417,100 @@ fn free_element_keeps_its_energy() {
     );
 }
 
+/// A row of three unit quads along x (nodes 0–3 at y = 0, 4–7 at y = 1),
+/// warp along x.
+fn quad_row() -> (MembraneBatch, Vec<Vector3<f64>>) {
+    let x0: Vec<_> = (0..8)
+        .map(|i| Vector3::new((i % 4) as f64, (i / 4) as f64, 0.0))
+        .collect();
+    let nodes = vec![[0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6]];
+    let batch = MembraneBatch::quads(
+        FabricSection::new(glass(), false),
+        &x0,
+        nodes,
+        &[Vector3::x(); 3],
+    )
+    .unwrap();
+    (batch, x0)
+}
+
+fn forces_error(batch: &MembraneBatch, x: &[Vector3<f64>]) -> ElementError {
+    let h = batch.initial_history();
+    let mut out = h.clone();
+    let mut slots = vec![Vector3::zeros(); 4 * batch.len()];
+    batch
+        .forces_into(x, &h, &mut out, 1e-5, &mut slots)
+        .unwrap_err()
+}
+
+#[test]
+fn a_degenerate_element_says_whether_it_folded_or_collapsed() {
+    let (batch, x0) = quad_row();
+    // The last quad squeezed to 1e-9 of its width, its free edge pushed
+    // just past the shared one: turned over onto its neighbour.
+    let mut x = x0.clone();
+    x[3].x = 2.0 - 1e-9;
+    x[7].x = 2.0 - 1e-9;
+    let e = forces_error(&batch, &x);
+    assert_eq!(e.element, 2);
+    let KinematicsError::DegenerateMembrane(d) = e.cause else {
+        panic!("{e}")
+    };
+    assert_eq!((d.inverted, d.folded), (Some(false), Some(true)), "{e}");
+    assert!((d.stretches[0] - 1.0).abs() < 1e-9 && (d.stretches[1] - 1e-9).abs() < 1e-15);
+    let message = e.to_string();
+    assert!(
+        message.contains("folded") && message.contains("element 2"),
+        "{message}"
+    );
+    // Squeezed the same amount without turning over: collapsed.
+    x[3].x = 2.0 + 1e-9;
+    x[7].x = 2.0 + 1e-9;
+    let e = forces_error(&batch, &x);
+    let KinematicsError::DegenerateMembrane(d) = e.cause else {
+        panic!("{e}")
+    };
+    assert_eq!((d.inverted, d.folded), (Some(false), Some(false)), "{e}");
+    assert!(e.to_string().contains("collapsed"), "{e}");
+    // Pulled 1e9 times its length: over-stretched.
+    let mut x = x0.clone();
+    x[3].x = 2.0 + 1e9;
+    x[7].x = 2.0 + 1e9;
+    let e = forces_error(&batch, &x);
+    assert!(e.to_string().contains("over-stretched"), "{e}");
+}
+
+#[test]
+fn a_quad_turned_inside_out_about_a_corner_is_inverted() {
+    // The middle quad's corner 6 pulled across its diagonal to (1.2, 0.2):
+    // the Gauss point next to it turns over, the others do not. (Judged
+    // directly: such a point is not degenerate.)
+    let (batch, x0) = quad_row();
+    let mut x = x0.clone();
+    x[6] = Vector3::new(1.2, 0.2, 0.0);
+    let z: Vec<f64> = (0..4).map(|p| batch.weighted_normal(1, p, &x).z).collect();
+    let p = z.iter().position(|&n| n < 0.0).expect("a turned point");
+    assert!(z.iter().filter(|&&n| n > 0.0).count() >= 2, "{z:?}");
+    let error = ElementError {
+        element: 1,
+        point: p,
+        cause: KinematicsError::DegenerateMembrane(drape_kinematics::Degeneracy::from_invariants(
+            1e-20, 1.0,
+        )),
+    };
+    let KinematicsError::DegenerateMembrane(d) = batch.diagnose(error, &x).cause else {
+        unreachable!()
+    };
+    assert_eq!(d.inverted, Some(true));
+    // Other errors pass through unchanged.
+    let other = ElementError {
+        element: 1,
+        point: 0,
+        cause: KinematicsError::NonFinite { what: "F" },
+    };
+    assert_eq!(batch.diagnose(other, &x), other);
+}
+
 #[test]
 fn output_fibre_directions_are_the_deformed_yarns() {
     // Under a uniform deformation x = A·X every element of the distorted

@@ -32,6 +32,35 @@ pub const TOUCHING: f64 = 1e-6;
 /// ≈ 1000 punch candidates in two.
 const PROJECTIONS_PER_TASK: usize = 512;
 
+/// A candidate's last projection on its tool: the gap (less nothing: the
+/// surface's own), the normal, and where the node and the tool were. On a
+/// closed tool the gap is 1-Lipschitz in the node's position and in the
+/// tool's displacement (`Surface::is_closed`), so while
+/// gap − |x − at| − |u − u_at|·|axis| stays beyond the contact reach the
+/// node cannot touch the tool and is not projected again: a far node costs
+/// a distance, not a closest-point query, and the constraints found are
+/// the same.
+#[derive(Debug, Clone, Copy)]
+struct Projected {
+    gap: f64,
+    normal: Vector3<f64>,
+    at: Vector3<f64>,
+    u: f64,
+    /// Whether the gap and normal are this step's.
+    fresh: bool,
+}
+
+impl Projected {
+    /// Never projected: the next step projects it.
+    const STALE: Self = Self {
+        gap: f64::NEG_INFINITY,
+        normal: Vector3::new(0.0, 0.0, 0.0),
+        at: Vector3::new(0.0, 0.0, 0.0),
+        u: 0.0,
+        fresh: false,
+    };
+}
+
 /// Nodes checked for broad-phase motion per rayon task (≈ 2 ns each).
 const NODES_PER_TASK: usize = 16_384;
 
@@ -248,8 +277,8 @@ struct Scratch {
     tool_sum: Vec<f64>,
     tool_shift: Vec<f64>,
     added: Vec<Constraint>,
-    /// (gap, normal) of each candidate of the tool being projected.
-    projected: Vec<(f64, Vector3<f64>)>,
+    /// Per tool, per candidate: its last projection (see [`Projected`]).
+    projected: Vec<Vec<Projected>>,
     /// Each tool's displacement at the start of the step (for the guard).
     tool_before: Vec<f64>,
 }
@@ -324,6 +353,10 @@ impl ExplicitContact {
         for (t, tool) in self.tools.iter().enumerate() {
             let shift = tool.motion.direction() * self.tool_state[t].displacement;
             let aabb = tool.surface.aabb().translated(&shift).grown(reach);
+            if let Some(p) = self.scratch.projected.get_mut(t) {
+                // New candidates: all projected at the next narrow phase.
+                p.clear();
+            }
             self.candidates[t] = (0..x.len() as u32)
                 .into_par_iter()
                 .filter(|&i| aabb.contains(&x[i as usize]))
@@ -457,23 +490,48 @@ impl ExplicitContact {
             // The projections are independent: in parallel, into a buffer
             // read in candidate order below (the same constraints in the
             // same order for any thread count).
+            // A node of a closed tool whose last gap, less the travel of
+            // the node and of the tool since, is beyond the reach is not
+            // projected ([`Projected`]); a margin of 2·touch covers the
+            // round-off of the bound.
             let candidates = &self.candidates[t];
-            let projected = &mut self.scratch.projected;
-            projected.resize(candidates.len(), (f64::INFINITY, Vector3::zeros()));
+            if self.scratch.projected.len() < self.tools.len() {
+                self.scratch.projected.resize(self.tools.len(), Vec::new());
+            }
+            let projected = &mut self.scratch.projected[t];
+            projected.resize(candidates.len(), Projected::STALE);
+            let skip_far = tool.surface.is_closed();
+            let axis = tool.motion.direction().norm();
+            let reach = offset + 2.0 * touch;
             candidates
                 .par_iter()
                 .zip(projected.par_iter_mut())
                 .with_min_len(PROJECTIONS_PER_TASK)
                 .for_each(|(&i, out)| {
-                    if movable[i as usize] {
-                        let p = tool.project(&x[i as usize], u);
-                        *out = (p.gap, p.normal);
+                    let xi = x[i as usize];
+                    out.fresh = false;
+                    if !movable[i as usize] {
+                        return;
                     }
+                    if skip_far && out.gap - (xi - out.at).norm() - (u - out.u).abs() * axis > reach
+                    {
+                        return;
+                    }
+                    let p = tool.project(&xi, u);
+                    *out = Projected {
+                        gap: p.gap,
+                        normal: p.normal,
+                        at: xi,
+                        u,
+                        fresh: true,
+                    };
                 });
-            for (&i, &(gap, normal)) in candidates.iter().zip(projected.iter()) {
-                if !movable[i as usize] {
+            for (&i, out) in candidates.iter().zip(projected.iter()) {
+                if !out.fresh {
+                    // Not movable, or too far to touch.
                     continue;
                 }
+                let (gap, normal) = (out.gap, out.normal);
                 let gap = gap - offset;
                 if gap < 0.0 {
                     let node_travel = v[i as usize].norm() * dt;

@@ -534,7 +534,9 @@ impl MembraneBatch {
         let step = Step { dt, prony: factors };
         if let Some(lanes) = &self.lanes {
             if factors.len() == resin.prony.len() {
-                return self.forces_into_lanes(lanes, x, h_in, h_out, step, slots);
+                return self
+                    .forces_into_lanes(lanes, x, h_in, h_out, step, slots)
+                    .map_err(|error| self.diagnose(error, x));
             }
         }
         lowest_error(

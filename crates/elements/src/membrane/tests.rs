@@ -665,7 +665,7 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
 }
 
 #[test]
-fn a_degenerate_quad_in_a_block_is_named_as_on_the_scalar_path() {
+fn a_degenerate_quad_in_a_block_is_named_and_diagnosed_as_on_the_scalar_path() {
     let (b, x0) = lane_grid(carbon());
     let h = b.initial_history();
     // Collapse element 5 (in the second block) onto a line.
@@ -675,7 +675,7 @@ fn a_degenerate_quad_in_a_block_is_named_as_on_the_scalar_path() {
     for (k, &n) in nodes.iter().enumerate() {
         x[n as usize] = p + (q - p) * (k as f64 * 0.3);
     }
-    let expected = scalar_forces(&b, &x, &h, 1e-3).unwrap_err();
+    let expected = b.diagnose(scalar_forces(&b, &x, &h, 1e-3).unwrap_err(), &x);
     let mut slots = vec![Vector3::zeros(); 4 * b.len()];
     let mut h_out = h.clone();
     let err = b
@@ -688,6 +688,9 @@ fn a_degenerate_quad_in_a_block_is_named_as_on_the_scalar_path() {
     let err = b
         .forces_into(&x, &h, &mut h_out, 1e-3, &mut slots)
         .unwrap_err();
-    assert_eq!(err, scalar_forces(&b, &x, &h, 1e-3).unwrap_err());
+    assert_eq!(
+        err,
+        b.diagnose(scalar_forces(&b, &x, &h, 1e-3).unwrap_err(), &x)
+    );
     assert_eq!(err.element, 9);
 }

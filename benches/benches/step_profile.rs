@@ -29,6 +29,9 @@ use drape_io::scene::Scene;
 use drape_model::State;
 use drape_time::{Explicit, ExplicitSettings, NoObserver, ProfileClock, StepProfile, profile};
 
+/// `--set key.path=value` pairs.
+type Overrides = Vec<(String, String)>;
+
 /// How far into a run a measurement starts and how many steps it takes.
 #[derive(Debug, Clone, Copy)]
 struct Window {
@@ -54,7 +57,7 @@ fn main() {
         }
     );
     let hemisphere = root.join("scenes/hemisphere-0-90.toml");
-    let cases: [(&str, Vec<(String, String)>, Window); 2] = [
+    let cases: [(&str, Overrides, Window); 2] = [
         (
             "hemisphere 40×40",
             Vec::new(),

@@ -1006,7 +1006,7 @@ mod tests {
         let speed: Vec<f64> = (0..n).map(|i| 0.05 + 0.01 * (i % 7) as f64).collect();
         let mass = vec![1e-6; n];
         let movable = vec![true; n];
-        let mut remembering = ExplicitContact::new(vec![ball()], n, margin.clone());
+        let mut remembering = ExplicitContact::new(vec![ball()], n, margin);
         let mut tool_state = ToolState::default();
         let mut in_contact = 0;
         let dt = 0.01;
@@ -1018,7 +1018,7 @@ mod tests {
                 .collect();
             let mut x_pred: Vec<Vector3<f64>> = x.iter().zip(&v).map(|(p, w)| p + w * dt).collect();
             let (mut x_ref, mut v_ref) = (x_pred.clone(), v.clone());
-            let mut fresh = ExplicitContact::new(vec![ball()], n, margin.clone());
+            let mut fresh = ExplicitContact::new(vec![ball()], n, margin);
             fresh.tool_state[0] = tool_state;
             fresh.friction_dissipation = remembering.friction_dissipation;
             remembering

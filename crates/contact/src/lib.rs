@@ -49,6 +49,7 @@ mod explicit;
 mod mesh;
 mod mesh_file;
 mod mesh_repair;
+mod phases;
 mod surface;
 mod tool;
 
@@ -59,5 +60,6 @@ pub use explicit::{
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
 pub use mesh_repair::{RepairError, RepairOptions, RepairReport, repair};
+pub use phases::ContactPhase;
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};
 pub use tool::{Amplitude, Tool, ToolMotion, ToolState};

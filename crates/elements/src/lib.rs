@@ -53,6 +53,7 @@
 //! ```
 
 mod membrane;
+mod quad_lanes;
 mod spring;
 mod truss;
 

@@ -10,6 +10,7 @@ use drape_kinematics::{
 use nalgebra::{DMatrix, Matrix2, Matrix3x2, Vector2, Vector3};
 use rayon::prelude::*;
 
+use crate::quad_lanes::{LANES, QuadLanes, ResinStep};
 use crate::{ElementError, MIN_CHUNK, lowest_error};
 
 /// Values per integration point before the resin's own history:
@@ -114,6 +115,9 @@ pub struct MembraneBatch {
     area: Vec<f64>,
     nodal_area: Vec<f64>,
     stride: usize,
+    /// The struct-of-arrays lanes of resin-only quads (none otherwise), see
+    /// [`crate::quad_lanes`].
+    lanes: Option<QuadLanes>,
 }
 
 /// A step's Δt and its Prony factors (e^(−Δt/τₖ), gₖ·φ): computed once
@@ -248,6 +252,8 @@ impl MembraneBatch {
             }
         }
         let stride = KINEMATIC_HISTORY + section.material.resin.history_len();
+        let lanes = (shape == MembraneShape::Quad && !section.embedded_fibres)
+            .then(|| QuadLanes::new(&grad_n, &area, count));
         Ok(Self {
             section,
             shape,
@@ -256,6 +262,7 @@ impl MembraneBatch {
             area,
             nodal_area,
             stride,
+            lanes,
         })
     }
 
@@ -528,6 +535,14 @@ impl MembraneBatch {
         } else {
             &[]
         };
+        let step = Step { dt, prony: factors };
+        if let Some(lanes) = &self.lanes {
+            if factors.len() == resin.prony.len() {
+                return self
+                    .forces_into_lanes(lanes, x, h_in, h_out, step, slots)
+                    .map_err(|error| self.diagnose(error, x));
+            }
+        }
         lowest_error(
             slots
                 .par_chunks_mut(nn)
@@ -535,17 +550,79 @@ impl MembraneBatch {
                 .with_min_len(MIN_CHUNK)
                 .enumerate()
                 .map(|(e, (f, out))| {
-                    self.element_force_with(
-                        e,
-                        x,
-                        &h_in[e * eh..(e + 1) * eh],
-                        out,
-                        Step { dt, prony: factors },
-                        f,
-                    )
+                    self.element_force_with(e, x, &h_in[e * eh..(e + 1) * eh], out, step, f)
                 }),
         )
         .map_err(|error| self.diagnose(error, x))
+    }
+
+    /// [`Self::forces_into`] of a resin-only quad batch: whole blocks of
+    /// [`LANES`] elements on the lanes (a block with a failing point again
+    /// on the scalar path, which names it), the rest on the scalar path.
+    fn forces_into_lanes(
+        &self,
+        lanes: &QuadLanes,
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_out: &mut [f64],
+        step: Step<'_>,
+        slots: &mut [Vector3<f64>],
+    ) -> Result<(), ElementError> {
+        let (nn, eh) = (self.shape.nodes(), self.element_history_len());
+        let m = &self.section.material;
+        let mut long_term = 1.0;
+        for p in &m.resin.prony {
+            long_term -= p.g;
+        }
+        let resin = ResinStep {
+            wave_modulus: m.resin.wave_modulus(),
+            poisson: m.resin.poisson,
+            shear_modulus: m.resin.shear_modulus(),
+            long_term,
+            thickness: m.resin_thickness(),
+            prony: step.prony,
+        };
+        let split = lanes.blocks() * LANES;
+        let (block_slots, tail_slots) = slots.split_at_mut(split * nn);
+        let (block_h, tail_h) = h_out.split_at_mut(split * eh);
+        lowest_error(
+            block_slots
+                .par_chunks_mut(LANES * nn)
+                .zip(block_h.par_chunks_mut(LANES * eh))
+                .with_min_len(MIN_CHUNK / LANES)
+                .enumerate()
+                .map(|(b, (f, out))| {
+                    let e0 = b * LANES;
+                    let (nodes, h) = (
+                        &self.nodes[e0 * nn..(e0 + LANES) * nn],
+                        &h_in[e0 * eh..(e0 + LANES) * eh],
+                    );
+                    if lanes.block_forces(b, nodes, x, h, out, self.stride, &resin, f) {
+                        return Ok(());
+                    }
+                    for k in 0..LANES {
+                        let e = e0 + k;
+                        self.element_force_with(
+                            e,
+                            x,
+                            &h_in[e * eh..(e + 1) * eh],
+                            &mut out[k * eh..(k + 1) * eh],
+                            step,
+                            &mut f[k * nn..(k + 1) * nn],
+                        )?;
+                    }
+                    Ok(())
+                }),
+        )?;
+        for (k, (f, out)) in tail_slots
+            .chunks_mut(nn)
+            .zip(tail_h.chunks_mut(eh))
+            .enumerate()
+        {
+            let e = split + k;
+            self.element_force_with(e, x, &h_in[e * eh..(e + 1) * eh], out, step, f)?;
+        }
+        Ok(())
     }
 
     /// The tangent ∂f/∂x of element `e` (3n × 3n, node-major) at positions

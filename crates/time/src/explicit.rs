@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use crate::energy::{chunked_sum, chunked_sums_into};
 use crate::guard::{self, Guard, GuardSettings};
+use crate::profile::{Pass, ProfileClock, Profiler, StepProfile};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
 /// Settings of an explicit run.
@@ -116,6 +117,8 @@ pub struct Explicit<'m> {
     warnings: Vec<String>,
     /// Which tools have touched the blank.
     tool_touched: Vec<bool>,
+    /// The per-pass profile, when asked for ([`Self::enable_profile`]).
+    profiler: Option<Profiler>,
 }
 
 impl<'m> Explicit<'m> {
@@ -204,6 +207,7 @@ impl<'m> Explicit<'m> {
             guard,
             warnings: Vec::new(),
             tool_touched: vec![false; model.tools.len()],
+            profiler: None,
             slots: vec![Vector3::zeros(); layout.len],
             layout,
             mass: model.mass.clone(),
@@ -268,6 +272,27 @@ impl<'m> Explicit<'m> {
         driver.warnings =
             guard::check_tools_at_start(model, &model.x0, dt).map_err(RunError::Setup)?;
         Ok(driver)
+    }
+
+    /// Profiles the steps of every later [`Self::run`] by `clock` (see
+    /// [`crate::profile`]); the sums start from zero.
+    pub fn enable_profile(&mut self, clock: ProfileClock) {
+        self.profiler = Some(Profiler::new(clock));
+        if let Some(contact) = &mut self.contact {
+            contact.time_phases(Some(clock));
+        }
+    }
+
+    /// The per-pass profile of the steps run since [`Self::enable_profile`].
+    pub fn profile(&self) -> Option<&StepProfile> {
+        self.profiler.as_ref().map(|p| &p.profile)
+    }
+
+    #[inline]
+    fn lap(&mut self, pass: Pass) {
+        if let Some(p) = &mut self.profiler {
+            p.lap(pass);
+        }
     }
 
     /// What the run found doubtful: start-up warnings (a blank closer to a
@@ -448,8 +473,11 @@ impl<'m> Explicit<'m> {
             let slots = &mut self.slots[start..start + 2 * b.len()];
             b.forces_into(x, slots)
                 .map_err(|e| fail(format!("truss batch {i}"), e))?;
+            self.lap(Pass::Trusses);
             if !self.truss_damping[i].is_empty() {
+                let slots = &mut self.slots[start..start + 2 * b.len()];
                 b.add_damping_into(x, v, &self.truss_damping[i], slots);
+                self.lap(Pass::TrussDashpots);
             }
         }
         for (i, b) in model.membranes.iter().enumerate() {
@@ -463,12 +491,15 @@ impl<'m> Explicit<'m> {
                 &mut self.slots[start..start + n],
             )
             .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
+            self.lap(Pass::Membranes);
         }
         for (i, b) in model.springs.iter().enumerate() {
             let start = self.layout.spring_offsets[i];
             b.forces_into(x, &mut self.slots[start..start + b.len()]);
         }
+        self.lap(Pass::Springs);
         self.layout.gather(&self.slots, &mut self.f_int);
+        self.lap(Pass::Gather);
         Ok(())
     }
 
@@ -625,6 +656,9 @@ impl<'m> Explicit<'m> {
         let mut steps = 0u64;
         let mut stopped = false;
         let mut last_progress = Instant::now();
+        if let Some(p) = &mut self.profiler {
+            p.begin();
+        }
         // A remainder below a millionth of a step is round-off of the sum of
         // steps, not time left to simulate.
         while end - state.time > 1e-6 * dt {
@@ -648,6 +682,7 @@ impl<'m> Explicit<'m> {
                     }
                 }
             }
+            self.lap(Pass::StableStep);
             if !(dt > 0.0 && dt.is_finite()) {
                 return Err(RunError::Setup(format!(
                     "stable time step {dt:e} at step {} is not positive",
@@ -687,6 +722,7 @@ impl<'m> Explicit<'m> {
                         *xn = x[i] + *vn * h;
                     });
             }
+            self.lap(Pass::Update);
             // Prescribed components.
             for (j, c) in self.constraints.iter().enumerate() {
                 let (i, k) = (c.node as usize, c.component as usize);
@@ -697,6 +733,7 @@ impl<'m> Explicit<'m> {
                 self.x_new[i][k] = self.prescribed[j];
                 self.v_new[i][k] = (self.x_new[i][k] - state.x[i][k]) / h;
             }
+            self.lap(Pass::BoundaryConditions);
             if let Some(contact) = &mut self.contact {
                 contact
                     .enforce_step(
@@ -719,6 +756,9 @@ impl<'m> Explicit<'m> {
                 for (touched, f) in self.tool_touched.iter_mut().zip(&contact.tool_force) {
                     *touched |= *f != 0.0;
                 }
+                if let Some(p) = &mut self.profiler {
+                    p.lap(Pass::Contact);
+                }
                 // A partly constrained node keeps its prescribed components;
                 // its constraint takes the contact force there.
                 for (j, c) in self.constraints.iter().enumerate() {
@@ -728,6 +768,7 @@ impl<'m> Explicit<'m> {
                         self.v_new[i][k] = (self.prescribed[j] - state.x[i][k]) / h;
                     }
                 }
+                self.lap(Pass::BoundaryConditions);
             }
             // Work of step n over the centred increment (x_{n+1} − x_{n−1})/2.
             {
@@ -767,8 +808,10 @@ impl<'m> Explicit<'m> {
                 energy.damping += w_damp;
                 energy.boundary_work += w_bc;
             }
+            self.lap(Pass::Works);
             if !model.loads.is_empty() {
                 self.external_forces(t_new);
+                self.lap(Pass::Loads);
             }
             // Forces at n+1 from the committed history.
             let history = std::mem::take(&mut state.history);
@@ -809,6 +852,7 @@ impl<'m> Explicit<'m> {
                 let travel = contact.tool_state.iter().map(|t| t.displacement);
                 self.guard.tools(model, travel).map_err(unstable)?;
             }
+            self.lap(Pass::Checks);
             dt_prev = h;
             dt_min = dt_min.min(h);
             dt_max = dt_max.max(h);
@@ -832,12 +876,14 @@ impl<'m> Explicit<'m> {
                         .map_or(0.0, |c| c.friction_dissipation),
                 };
                 observer.checkpoint(state, &driver);
+                self.lap(Pass::Output);
             }
             let at_end = end - state.time <= 1e-6 * dt;
             let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
             let at_check = state.time >= next_check * check_dt * (1.0 - 1e-12);
             if at_frame || at_end || at_check {
                 let report = self.energies_at(state, &energy, kinetic0, h);
+                self.lap(Pass::Energies);
                 self.guard
                     .energy(&report, state.time)
                     .map_err(|what| RunError::Unstable {
@@ -879,6 +925,15 @@ impl<'m> Explicit<'m> {
                     break;
                 }
             }
+            self.lap(Pass::Output);
+        }
+        let contact_phases = self.contact.as_ref().and_then(|c| c.phase_times());
+        if let Some(p) = &mut self.profiler {
+            p.end(steps, contact_phases);
+        }
+        if let (Some(p), Some(c)) = (&self.profiler, &mut self.contact) {
+            // The phases were added to the profile: count afresh.
+            c.time_phases(Some(p.clock()));
         }
         let energy = self.energies_at(state, &energy, kinetic0, dt_prev);
         if stopped {

@@ -54,9 +54,11 @@ mod error;
 mod explicit;
 pub mod guard;
 mod observer;
+pub mod profile;
 
 pub use energy::Energies;
 pub use error::{RunError, RunSummary};
 pub use explicit::{Explicit, ExplicitSettings};
 pub use guard::{Guard, GuardSettings, Instability};
 pub use observer::{Control, DriverState, Frame, NoObserver, Observer, Progress};
+pub use profile::{Pass, ProfileClock, StepProfile};

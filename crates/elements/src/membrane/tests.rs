@@ -583,3 +583,157 @@ fn output_fibre_directions_show_the_output_shear_under_a_varying_deformation() {
         }
     }
 }
+/// A 4 × 3 grid of resin-only quads (11 elements: two blocks of lanes and a
+/// scalar tail of 3) on a wavy, distorted reference, with the warp at 20°.
+fn lane_grid(material: Material) -> (MembraneBatch, Vec<Vector3<f64>>) {
+    let (nx, ny) = (5usize, 4usize);
+    let x0: Vec<Vector3<f64>> = (0..ny)
+        .flat_map(|j| {
+            (0..nx).map(move |i| {
+                let (x, y) = (4.0 * i as f64, 3.5 * j as f64);
+                Vector3::new(
+                    x + 0.3 * (y * 0.7).sin(),
+                    y + 0.2 * (x * 0.5).cos(),
+                    0.1 * (x + y).sin(),
+                )
+            })
+        })
+        .collect();
+    let mut quads = Vec::new();
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            let n = (j * nx + i) as u32;
+            quads.push([n, n + 1, n + 1 + nx as u32, n + nx as u32]);
+        }
+    }
+    quads.pop();
+    let warp =
+        vec![Vector3::new(20f64.to_radians().cos(), 20f64.to_radians().sin(), 0.0); quads.len()];
+    let batch =
+        MembraneBatch::quads(FabricSection::new(material, false), &x0, quads, &warp).unwrap();
+    (batch, x0)
+}
+
+/// The scalar path of the whole batch, element by element, with the same
+/// step factors as `forces_into`.
+fn scalar_forces(
+    b: &MembraneBatch,
+    x: &[Vector3<f64>],
+    h_in: &[f64],
+    dt: f64,
+) -> Result<(Vec<Vector3<f64>>, Vec<f64>), ElementError> {
+    let (nn, eh) = (4, b.element_history_len());
+    let mut table = [(0.0, 0.0); 8];
+    let resin = &b.section.material.resin;
+    resin.prony_factors(dt, &mut table);
+    let step = Step {
+        dt,
+        prony: &table[..resin.prony.len()],
+    };
+    let mut slots = vec![Vector3::zeros(); nn * b.len()];
+    let mut h_out = h_in.to_vec();
+    for e in 0..b.len() {
+        b.element_force_with(
+            e,
+            x,
+            &h_in[e * eh..(e + 1) * eh],
+            &mut h_out[e * eh..(e + 1) * eh],
+            step,
+            &mut slots[e * nn..(e + 1) * nn],
+        )?;
+    }
+    Ok((slots, h_out))
+}
+
+#[test]
+fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
+    for material in [carbon(), glass()] {
+        let (b, x0) = lane_grid(material);
+        assert!(b.lanes.as_ref().is_some_and(|l| l.blocks() == 2));
+        let mut h = b.initial_history();
+        // Three steps of a growing, rotating, shearing motion, so that U,
+        // τ̄ and the Prony history are all non-trivial.
+        for step in 1..=3 {
+            let s = step as f64;
+            let a = nalgebra::Matrix3::new(
+                1.0 + 0.01 * s,
+                0.03 * s,
+                0.0,
+                -0.01 * s,
+                1.0 - 0.004 * s,
+                0.0,
+                0.002 * s,
+                0.001,
+                1.0,
+            );
+            let x = deform(&x0, &a, step);
+            let dt = 1e-3 * s;
+            let (expected, expected_h) = scalar_forces(&b, &x, &h, dt).unwrap();
+            let mut slots = vec![Vector3::zeros(); 4 * b.len()];
+            let mut h_out = vec![f64::NAN; h.len()];
+            b.forces_into(&x, &h, &mut h_out, dt, &mut slots).unwrap();
+            // The blocks really ran on the lanes (no fallback).
+            let (eh, lanes) = (b.element_history_len(), b.lanes.as_ref().unwrap());
+            let (mut f, mut out) = ([Vector3::zeros(); 16], vec![0.0; 4 * eh]);
+            let resin = ResinStep {
+                wave_modulus: b.section.material.resin.wave_modulus(),
+                poisson: b.section.material.resin.poisson,
+                shear_modulus: b.section.material.resin.shear_modulus(),
+                long_term: 1.0,
+                thickness: b.section.material.resin_thickness(),
+                prony: &[(0.5, 0.1); 6][..b.section.material.resin.prony.len()],
+            };
+            assert!(lanes.block_forces(
+                1,
+                &b.nodes[16..32],
+                &x,
+                &h[4 * eh..8 * eh],
+                &mut out,
+                b.stride,
+                &resin,
+                &mut f
+            ));
+            // Stated round-off: none. The lanes do the scalar operations in
+            // the scalar order, without fused multiply-adds.
+            for (e, (f, g)) in slots.iter().zip(&expected).enumerate() {
+                assert_eq!(f, g, "slot {e}, step {step}");
+                assert!(f.norm() > 0.0);
+            }
+            for (k, (v, w)) in h_out.iter().zip(&expected_h).enumerate() {
+                assert_eq!(v.to_bits(), w.to_bits(), "history value {k}, step {step}");
+            }
+            h = h_out;
+        }
+    }
+}
+
+#[test]
+fn a_degenerate_quad_in_a_block_is_named_and_diagnosed_as_on_the_scalar_path() {
+    let (b, x0) = lane_grid(carbon());
+    let h = b.initial_history();
+    // Collapse element 5 (in the second block) onto a line.
+    let mut x = x0.clone();
+    let nodes = b.element_nodes(5).to_vec();
+    let (p, q) = (x[nodes[0] as usize], x[nodes[1] as usize]);
+    for (k, &n) in nodes.iter().enumerate() {
+        x[n as usize] = p + (q - p) * (k as f64 * 0.3);
+    }
+    let expected = b.diagnose(scalar_forces(&b, &x, &h, 1e-3).unwrap_err(), &x);
+    let mut slots = vec![Vector3::zeros(); 4 * b.len()];
+    let mut h_out = h.clone();
+    let err = b
+        .forces_into(&x, &h, &mut h_out, 1e-3, &mut slots)
+        .unwrap_err();
+    assert_eq!(err, expected);
+    // A NaN in the scalar tail (element 9) is named too.
+    let mut x = x0;
+    x[b.element_nodes(9)[2] as usize].x = f64::NAN;
+    let err = b
+        .forces_into(&x, &h, &mut h_out, 1e-3, &mut slots)
+        .unwrap_err();
+    assert_eq!(
+        err,
+        b.diagnose(scalar_forces(&b, &x, &h, 1e-3).unwrap_err(), &x)
+    );
+    assert_eq!(err.element, 9);
+}

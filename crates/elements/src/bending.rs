@@ -128,6 +128,12 @@ pub struct BendingBatch {
     stiffness: Vec<f64>,
     /// ℓ̄, the mean reference length of the two edges.
     mean_length: Vec<f64>,
+    /// w, the width of fabric the line carries there.
+    width: Vec<f64>,
+    /// ℓ_rep, the length of line the triplet stands for.
+    represented: Vec<f64>,
+    /// The reference lengths [|a|, |b|].
+    edge_length: Vec<[f64; 2]>,
 }
 
 /// The geometry of one triplet at current positions.
@@ -166,6 +172,9 @@ impl BendingBatch {
             rigidity,
             stiffness: Vec::with_capacity(triplets.len()),
             mean_length: Vec::with_capacity(triplets.len()),
+            width: Vec::with_capacity(triplets.len()),
+            represented: Vec::with_capacity(triplets.len()),
+            edge_length: Vec::with_capacity(triplets.len()),
         };
         for (e, t) in triplets.iter().enumerate() {
             let [i, j, k] = t.nodes.map(|n| n as usize);
@@ -190,15 +199,44 @@ impl BendingBatch {
             if t.line_ends[1] {
                 represented += 0.5 * lb;
             }
-            let b = rigidity[t.family as usize];
             batch.nodes.push(t.nodes);
             batch.family.push(t.family);
-            batch
-                .stiffness
-                .push(2.0 * b * width * represented / (mean * mean));
             batch.mean_length.push(mean);
+            batch.width.push(width);
+            batch.represented.push(represented);
+            batch.edge_length.push([la, lb]);
+            batch.stiffness.push(0.0);
+            batch.update_stiffness(batch.len() - 1);
         }
         Ok(batch)
+    }
+
+    fn update_stiffness(&mut self, e: usize) {
+        let b = self.rigidity[self.family[e] as usize];
+        let mean = self.mean_length[e];
+        self.stiffness[e] = 2.0 * b * self.width[e] * self.represented[e] / (mean * mean);
+    }
+
+    /// Clamps the lines at the nodes marked `held` (fixed in place): a
+    /// triplet whose middle node and one neighbour are held has a rigid
+    /// half, so it bends over its free half edge only, ℓ̄ = ℓ_rep = |b|/2
+    /// (or |a|/2) in place of the Voronoi length. That is the mirror
+    /// ("ghost node") condition of a clamped end, second order like the
+    /// interior; without it the clamp sits half an edge behind the held
+    /// node and a cantilever converges only as O(h).
+    pub fn clamp(&mut self, held: &[bool]) {
+        for e in 0..self.len() {
+            let [i, j, k] = self.nodes[e].map(|n| held[n as usize]);
+            let [la, lb] = self.edge_length[e];
+            let free = match (i, j, k) {
+                (true, true, false) => lb,
+                (false, true, true) => la,
+                _ => continue,
+            };
+            self.mean_length[e] = 0.5 * free;
+            self.represented[e] = 0.5 * free;
+            self.update_stiffness(e);
+        }
     }
 
     /// Number of triplets.
@@ -501,6 +539,22 @@ mod tests {
         let e = t.element_energy(0, &x).unwrap();
         assert!((e - expected).abs() < 1e-14 * expected, "{e} vs {expected}");
         assert!((t.element_curvature(0, &x).unwrap() - kappa).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_clamp_bends_the_free_half_edge_only() {
+        // i and j held: ℓ̄ = ℓ_rep = |b|/2 = 2, w stays 7/3.5.
+        let mut t = single();
+        t.clamp(&[true, true, false]);
+        let x = bent(0.3, 3);
+        let kappa = 2.0 * 0.15f64.tan() / 2.0;
+        let expected = 0.5 * 0.8 * 2.0 * 2.0 * kappa * kappa;
+        let e = t.element_energy(0, &x).unwrap();
+        assert!((e - expected).abs() < 1e-14 * expected, "{e} vs {expected}");
+        // Only the middle node and one neighbour held: nothing changes.
+        let mut u = single();
+        u.clamp(&[true, false, true]);
+        assert_eq!(u.element_energy(0, &x), single().element_energy(0, &x));
     }
 
     #[test]

@@ -19,6 +19,7 @@ use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod bending;
 mod constitutive;
 mod contact;
 mod explicit;
@@ -33,6 +34,7 @@ pub fn registry() -> Vec<Case> {
         explicit::CASES,
         contact::CASES,
         fishnet::CASES,
+        bending::CASES,
     ]
     .concat()
 }

@@ -25,6 +25,7 @@ mod contact;
 mod explicit;
 mod fishnet;
 mod kinematics;
+mod locking;
 
 /// Every case of every crate, in the order they run and are reported.
 pub fn registry() -> Vec<Case> {
@@ -35,6 +36,7 @@ pub fn registry() -> Vec<Case> {
         contact::CASES,
         fishnet::CASES,
         bending::CASES,
+        locking::CASES,
     ]
     .concat()
 }

@@ -126,6 +126,8 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         },
         max_fibre_tension_n: 0.0,
         area_above_locking_mm2: m.area_above_locking,
+        max_waviness_deg: m.max_waviness_deg,
+        wrinkle_area_mm2: m.wrinkle_area,
         energy: EnergySummary::default(),
         run: RunInfo {
             wall_s,

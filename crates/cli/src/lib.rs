@@ -498,6 +498,8 @@ pub fn run_in(
         },
         max_fibre_tension_n: measures.max_fibre_tension_n,
         area_above_locking_mm2: measures.area_above_locking,
+        max_waviness_deg: measures.max_waviness_deg,
+        wrinkle_area_mm2: measures.wrinkle_area,
         energy: EnergySummary {
             balance_error: drape_time::guard::relative_balance_error(
                 &energy,

@@ -30,7 +30,8 @@
 //! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_direction_warp`,
 //! `fibre_direction_weft` (unit vectors), `fibre_tension_warp`,
 //! `fibre_tension_weft` (N/mm), `resin_stress` (3 components: 11, 22, 12 in
-//! fibre axes, MPa), `thickness` (mm). The encoding (inline base64 binary
+//! fibre axes, MPa), `thickness` (mm), `waviness` (degrees, the wrinkle
+//! indicator of `drape_model::measures::waviness`). The encoding (inline base64 binary
 //! with a `UInt64` header) and why are in the `vtk` submodule's docs.
 //!
 //! # Numbers in text files
@@ -162,6 +163,12 @@ pub struct Summary {
     pub max_fibre_tension_n: f64,
     /// Reference area above the locking angle (mm²).
     pub area_above_locking_mm2: f64,
+    /// Largest element waviness (degrees): the wrinkle indicator.
+    #[serde(default)]
+    pub max_waviness_deg: f64,
+    /// Reference area of the elements wavier than 5° (mm²).
+    #[serde(default)]
+    pub wrinkle_area_mm2: f64,
     /// Energy.
     pub energy: EnergySummary,
     /// Run statistics.

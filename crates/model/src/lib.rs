@@ -332,6 +332,9 @@ pub struct ElementFields {
     pub centroid: Vec<Vector3<f64>>,
     /// Reference area.
     pub area: Vec<f64>,
+    /// Out-of-plane waviness at the scale of the mesh (degrees), see
+    /// [`measures::waviness`].
+    pub waviness: Vec<f64>,
 }
 
 /// The derived measures of a state (SPEC §8).
@@ -351,6 +354,11 @@ pub struct Measures {
     pub area_above_locking: f64,
     /// Largest truss tension (N), 0 without trusses.
     pub max_fibre_tension_n: f64,
+    /// Largest element waviness (degrees), see [`measures::waviness`].
+    pub max_waviness_deg: f64,
+    /// Reference area of the elements whose waviness exceeds
+    /// [`measures::WRINKLE_THRESHOLD_DEG`] (mm²).
+    pub wrinkle_area: f64,
 }
 
 impl Model {
@@ -701,7 +709,19 @@ impl Model {
                 out.area.push(b.element_area(e));
             }
         }
+        out.waviness = self.waviness(&state.x);
         Ok(out)
+    }
+
+    /// The waviness of every membrane element at positions `x` (degrees),
+    /// see [`measures::waviness`].
+    pub fn waviness(&self, x: &[Vector3<f64>]) -> Vec<f64> {
+        let elements: Vec<&[u32]> = self
+            .membranes
+            .iter()
+            .flat_map(|b| (0..b.len()).map(move |e| b.element_nodes(e)))
+            .collect();
+        measures::waviness(&elements, x)
     }
 
     /// The largest truss tension (N) at positions `x`.
@@ -732,6 +752,13 @@ impl Model {
         m.area_above_locking =
             measures::area_above(&fields.shear, &fields.area, locking_deg.to_radians());
         m.max_fibre_tension_n = self.max_truss_tension(&state.x)?;
+        m.max_waviness_deg = fields.waviness.iter().fold(0.0, |a: f64, &w| a.max(w));
+        m.wrinkle_area = fields
+            .waviness
+            .iter()
+            .zip(&fields.area)
+            .filter(|(w, _)| **w > measures::WRINKLE_THRESHOLD_DEG)
+            .fold(0.0, |total, (_, a)| total + a);
         if let Some(info) = &self.blank {
             m.draw_in = Some(measures::draw_in(
                 &info.frame,

@@ -131,7 +131,7 @@ impl ShearLocking {
         for n in 0..=170 {
             let gamma = CHECKED_RANGE * n as f64 / 170.0;
             let t = self.tangent(gamma);
-            if !(t >= 0.0) {
+            if t.is_nan() || t < 0.0 {
                 return Err(MaterialError {
                     field: field("coefficients"),
                     value: t,

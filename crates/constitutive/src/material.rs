@@ -98,7 +98,7 @@ impl Material {
     /// Both have no compression stiffness in the yarns.
     ///
     /// Bending rigidities (used only when a scene switches bending on) are
-    /// **[assumptions]**: the paper gives none and no measurement of these
+    /// **\[assumptions\]**: the paper gives none and no measurement of these
     /// two fabrics was at hand. Each is B = w·c³ (Peirce's cantilever
     /// relation) from the preset's own areal weight w = ρ·h·g and an
     /// assumed bending length c, the same for warp and weft (balanced

@@ -32,6 +32,7 @@
 //! - *Discrete Kirchhoff triangles*: rotations as extra unknowns, a new
 //!   element type for both triangles and quads; far more than a stiffness
 //!   three orders below the membrane's needs.
+//!
 //! The triplet converges as O(h²) to the elastica (a cantilever under its
 //! weight is the Peirce test, `cargo xtask validate --filter bending`), it
 //! is objective (it reads only lengths and a dot product), it has no

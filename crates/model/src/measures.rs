@@ -173,7 +173,7 @@ pub fn area_above(shear_rad: &[f64], areas: &[f64], locking_rad: f64) -> f64 {
 }
 
 /// Waviness above which an element counts as wrinkled (degrees) in
-/// [`crate::Measures::wrinkle_area`] **[choice]**: about the deviation a
+/// [`crate::Measures::wrinkle_area`] **\[choice\]**: about the deviation a
 /// wrinkle of amplitude a and wavelength λ gives on elements of size h,
 /// 2π²·a·h²/λ², for a = h on λ = 6h; far above what a smooth tool
 /// curvature κ leaves (≈ (κh)² rad).

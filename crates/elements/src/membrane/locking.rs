@@ -27,19 +27,22 @@ pub(super) struct LockingPoint {
     dphi: f64,
 }
 
+/// Unit directions, lengths and the cosine u₁·u₂ of the two fibres.
+type FibrePair = ([Vector3<f64>; 2], [f64; 2], f64);
+
 /// The fibres' kinematics at F; an error when a fibre has collapsed or the
 /// two families have closed to within 1e-6 rad of each other.
-fn kinematics(f: &Matrix3x2<f64>) -> Result<([Vector3<f64>; 2], [f64; 2], f64), KinematicsError> {
+fn kinematics(f: &Matrix3x2<f64>) -> Result<FibrePair, KinematicsError> {
     let a = [f.column(0).into_owned(), f.column(1).into_owned()];
     let len = [a[0].norm(), a[1].norm()];
-    if !(len[0] > 0.0 && len[1] > 0.0) {
+    if len[0].is_nan() || len[1].is_nan() || len[0] <= 0.0 || len[1] <= 0.0 {
         return Err(KinematicsError::DegenerateFibre {
             length: len[0].min(len[1]),
         });
     }
     let u = [a[0] / len[0], a[1] / len[1]];
     let c = u[0].dot(&u[1]);
-    if !(c.abs() < 1.0 - 5e-13) {
+    if c.is_nan() || c.abs() >= 1.0 - 5e-13 {
         return Err(KinematicsError::NonFinite {
             what: "shear-locking law (the yarn families have closed onto each other)",
         });

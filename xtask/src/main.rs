@@ -6,6 +6,9 @@
 //! - `stress [--quick] [--filter SUBSTR] [--seed N]`: extremes and hostile
 //!   input through the facade, one table of case, expectation and outcome
 //!   (see [`stress`]);
+//! - `fit-shear CSV --side L --material M [--terms N] [--out FILE]`: a
+//!   shear-locking law fitted from a picture-frame curve, as a material
+//!   card (see [`fit`]);
 //! - `bench [--quick] [--profile-only] [ARGS…]`: the explicit step's per-pass
 //!   profile and 1- vs 2-thread table (`benches/benches/step_profile.rs`),
 //!   then the criterion benches, `cargo bench -p drape-benches ARGS…`;
@@ -17,6 +20,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
+mod fit;
 mod stress;
 mod validate;
 
@@ -37,6 +41,11 @@ tasks:
       energy balance or stop with a diagnosis; none may panic, hang or
       write NaN. --quick is the subset CI runs, --seed changes the
       generators' seed. Writes target/stress/report.md.
+  fit-shear CSV --side L --material PRESET|card.toml [--terms N] [--out FILE]
+      fit a shear-locking law τ = c1·γ + c3·γ³ + … (N terms, default 3) to a
+      picture-frame curve (CSV of shear angle in degrees, frame force in N;
+      frame side L in mm) and print (or write) the material card: the base
+      material with resin.shear_locking set.
   bench [--quick] [--profile-only] [ARGS...]
       print the explicit step's per-pass profile (hemisphere scene and a
       200x200 blank, 1 and 2 threads) and the ms/step table of the shipped
@@ -63,6 +72,10 @@ fn main() -> ExitCode {
         },
         "stress" => match stress::Options::parse(rest) {
             Ok(options) => stress::main(&options, &workspace_root(), &target_dir()),
+            Err(message) => usage_error(&message),
+        },
+        "fit-shear" => match fit::Options::parse(rest) {
+            Ok(options) => fit::main(&options),
             Err(message) => usage_error(&message),
         },
         "bench" => bench(rest),

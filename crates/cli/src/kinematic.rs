@@ -165,6 +165,8 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             peak.observe(&results.model, &results.state, &results.fields);
             peak
         },
+        max_waviness_deg: m.max_waviness_deg,
+        wrinkle_area_mm2: m.wrinkle_area,
         energy: EnergySummary::default(),
         setup: None,
         run: RunInfo {

@@ -561,6 +561,8 @@ pub fn run_in(
             .map_or(f64::NAN, |(t, _)| t),
         area_above_locking_mm2: measures.area_above_locking,
         peak: recorder.peaks,
+        max_waviness_deg: measures.max_waviness_deg,
+        wrinkle_area_mm2: measures.wrinkle_area,
         energy: EnergySummary {
             balance_error: drape_time::guard::relative_balance_error(
                 &energy,

@@ -488,6 +488,10 @@ fn print_summary(s: &Summary, out: &Path) {
     );
     println!("above locking     {:.0} mm²", s.area_above_locking_mm2);
     println!(
+        "wrinkle indicator max waviness {:.1}°, area above 5° {:.0} mm²",
+        s.max_waviness_deg, s.wrinkle_area_mm2
+    );
+    println!(
         "energy            balance error {:.2e}, E_kin/E_int {:.2e}",
         s.energy.balance_error, s.energy.kinetic_to_internal
     );

@@ -13,6 +13,9 @@ use rayon::prelude::*;
 use crate::quad_lanes::{LANES, QuadLanes, ResinStep};
 use crate::{ElementError, MIN_CHUNK, lowest_error};
 
+mod locking;
+use locking::LockingPoint;
+
 /// Values per integration point before the resin's own history:
 /// U (11, 22, 12) and τ̄ (11, 22, 12).
 const KINEMATIC_HISTORY: usize = 6;
@@ -137,8 +140,11 @@ struct PointResponse {
     fibres: [FibreKinematics; 2],
     /// (τ, E_t) of each family, zero when the fibres are not embedded.
     fibre_law: [(f64, f64); 2],
-    /// Thickness-weighted first Piola stress h_m·P_resin + t_f·Σ P_fibre.
+    /// Thickness-weighted first Piola stress h_m·P_resin + t_f·Σ P_fibre
+    /// (+ the shear-locking law's, if any).
     p: Matrix3x2<f64>,
+    /// The shear-locking law's state, when the resin has one.
+    locking: Option<LockingPoint>,
 }
 
 #[inline]
@@ -400,6 +406,14 @@ impl MembraneBatch {
                 column += fib.direction * (t_f * s / fib.stretch);
             }
         }
+        let locking = match &m.resin.shear_locking {
+            Some(law) => {
+                let point = LockingPoint::new(law, m.thickness, &f)?;
+                point.add_stress(&mut p_eff);
+                Some(point)
+            }
+            None => None,
+        };
         Ok(PointResponse {
             f,
             polar,
@@ -408,6 +422,7 @@ impl MembraneBatch {
             fibres,
             fibre_law,
             p: p_eff,
+            locking,
         })
     }
 
@@ -691,6 +706,9 @@ impl MembraneBatch {
                             d_p += d_dir * n_ref.transpose() * t_f;
                         }
                     }
+                    if let Some(point) = &r.locking {
+                        point.add_stress_derivative(&d_f, &mut d_p);
+                    }
                     for (a, ga) in grads.iter().enumerate() {
                         let col = d_p * ga * self.area[ip];
                         for j in 0..3 {
@@ -731,6 +749,15 @@ impl MembraneBatch {
                     })?;
                     w += m.family_thickness() * m.fibre.energy(fib.log_strain);
                 }
+            }
+            if let Some(law) = &m.resin.shear_locking {
+                let f = deformation_gradient(&xe[..nn], self.point_grad(e, p));
+                let gamma = locking::shear_angle(&f).map_err(|cause| ElementError {
+                    element: e,
+                    point: p,
+                    cause,
+                })?;
+                w += m.thickness * law.energy(gamma);
             }
             energy += w * self.area[ip];
         }
@@ -789,6 +816,19 @@ impl MembraneBatch {
                 }
             }
         }
+        let mut kappa = self.stiffness_bound();
+        if let Some(law) = &self.section.material.resin.shear_locking {
+            // ½·h·τ_s'·δγ² ≤ ½·(2h·τ_s')·|∇u|² at the element's current
+            // shear angle (δγ² ≤ 2|∇u|²); a stiffening law's stress term
+            // τ_s is below τ_s'·γ and inside the safety factor.
+            let worst = (0..self.shape.points())
+                .map(|p| {
+                    let f = deformation_gradient(&xe[..nn], self.point_grad(e, p));
+                    locking::shear_angle(&f).map_or(f64::INFINITY, |g| law.tangent(g.abs()))
+                })
+                .fold(0.0, f64::max);
+            kappa += 2.0 * self.section.material.thickness * worst;
+        }
         let rho_h = self.section.material.areal_density();
         let mass = self.nodal_areas(e);
         let lambda = (0..nn)
@@ -798,7 +838,7 @@ impl MembraneBatch {
                     .sum::<f64>()
             })
             .fold(0.0, f64::max);
-        2.0 / (self.stiffness_bound() * lambda).sqrt()
+        2.0 / (kappa * lambda).sqrt()
     }
 
     /// The smallest stable time step of the batch (∞ when empty).

@@ -34,7 +34,8 @@
 //! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_direction_warp`,
 //! `fibre_direction_weft` (unit vectors), `fibre_tension_warp`,
 //! `fibre_tension_weft` (N/mm), `resin_stress` (3 components: 11, 22, 12 in
-//! fibre axes, MPa), `thickness` (mm). The encoding (inline base64 binary
+//! fibre axes, MPa), `thickness` (mm), `waviness` (degrees, the wrinkle
+//! indicator of `drape_model::measures::waviness`). The encoding (inline base64 binary
 //! with a `UInt64` header) and why are in the `vtk` submodule's docs.
 //!
 //! # Numbers in text files
@@ -183,6 +184,12 @@ pub struct Summary {
     /// The largest values over the run's frames, and when.
     #[serde(default)]
     pub peak: Peaks,
+    /// Largest element waviness (degrees): the wrinkle indicator.
+    #[serde(default)]
+    pub max_waviness_deg: f64,
+    /// Reference area of the elements wavier than 5° (mm²).
+    #[serde(default)]
+    pub wrinkle_area_mm2: f64,
     /// Energy.
     pub energy: EnergySummary,
     /// What the run started with (absent for a kinematic drape).

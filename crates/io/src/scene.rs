@@ -228,6 +228,10 @@ pub struct FabricSpec {
     pub fibres: FibreRepresentation,
     /// The blank.
     pub blank: BlankSpec,
+    /// Yarn bending (beyond the paper): a discrete elastica along the
+    /// mesh's yarn lines with the material's `bending_rigidity`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub bending: bool,
 }
 
 /// A tool's shape.
@@ -1528,6 +1532,21 @@ fn build(spec: &SceneFile, at: &Locator<'_>) -> Result<(Model, ExplicitSettings)
     }
     if let Some(g) = spec.gravity {
         model.gravity = finite3(at, "gravity", g)?;
+    }
+    // After the boundary conditions: lines are clamped at the fixed nodes.
+    if fabric.bending {
+        let rigidity = material.bending_rigidity.ok_or_else(|| {
+            at.error(
+                "fabric.bending",
+                "yarn bending needs the material's `bending_rigidity = [warp, weft]` (N·mm); \
+                 this material has none",
+            )
+        })?;
+        let theta = fabric.orientation_deg.to_radians();
+        let warp = Vector3::new(theta.cos(), theta.sin(), 0.0);
+        model
+            .add_yarn_bending(warp, Vector3::z(), rigidity)
+            .map_err(|e| at.error("fabric.bending", e.to_string()))?;
     }
     if !(spec.output.locking_angle_deg.is_finite() && spec.output.locking_angle_deg > 0.0) {
         return Err(at.error("output.locking_angle_deg", "expected a positive angle"));

@@ -22,7 +22,7 @@ const POINT_ARRAYS: [&str; 4] = [
     "contact_force",
     "contact_status",
 ];
-const CELL_ARRAYS: [&str; 9] = [
+const CELL_ARRAYS: [&str; 10] = [
     "shear_angle_deg",
     "fibre_stretch_warp",
     "fibre_stretch_weft",
@@ -32,6 +32,7 @@ const CELL_ARRAYS: [&str; 9] = [
     "fibre_tension_weft",
     "resin_stress",
     "thickness",
+    "waviness",
 ];
 
 fn blank(element: ElementKind, cells: usize) -> RectangleBlank {
@@ -426,6 +427,8 @@ fn writes_a_complete_results_directory() {
             max_shear_time_s: 0.02,
             ..Peaks::default()
         },
+        max_waviness_deg: measures.max_waviness_deg,
+        wrinkle_area_mm2: measures.wrinkle_area,
         energy: EnergySummary {
             balance_error: 1e-4,
             kinetic_to_internal: 0.01,

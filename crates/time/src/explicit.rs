@@ -91,6 +91,8 @@ pub struct Explicit<'m> {
     /// Dashpot coefficient of each truss of a batch with a kinked fibre
     /// law (empty for the others), see [`ExplicitSettings::fibre_damping`].
     truss_damping: Vec<Vec<f64>>,
+    /// Each bending triplet's shares of its nodes' masses, as the trusses'.
+    bending_mass: Vec<Vec<[f64; 3]>>,
     /// √(mass scale) per element of each membrane batch.
     membrane_scale: Vec<Vec<f64>>,
     constraints: Vec<Constraint>,
@@ -213,6 +215,7 @@ impl<'m> Explicit<'m> {
             mass: model.mass.clone(),
             truss_mass: Vec::new(),
             truss_damping: Vec::new(),
+            bending_mass: Vec::new(),
             membrane_scale: model.membranes.iter().map(|b| vec![1.0; b.len()]).collect(),
             constraints,
             constrained,
@@ -316,6 +319,16 @@ impl<'m> Explicit<'m> {
                 b.nodes.iter().map(|&[i, j]| [share(i), share(j)]).collect()
             })
             .collect();
+        self.bending_mass = self
+            .model
+            .bending
+            .iter()
+            .map(|b| {
+                let degree = b.node_degree(n);
+                let share = |i: u32| self.mass[i as usize] / f64::from(degree[i as usize]);
+                b.nodes.iter().map(|t| t.map(share)).collect()
+            })
+            .collect();
         let ratio = self.settings.fibre_damping;
         self.truss_damping = self
             .model
@@ -395,7 +408,7 @@ impl<'m> Explicit<'m> {
 
     /// The stable step (times the safety factor) at positions `x`.
     ///
-    /// Trusses, membranes and springs share the nodes' masses and add their
+    /// Trusses, membranes, springs and yarn bending share the nodes' masses and add their
     /// stiffnesses, so ω_max² ≤ Σ over kinds of each kind's ω_max²: the
     /// kinds' steps combine as 1/Δt² = Σ 1/Δt_kind², each kind's step the
     /// smallest of its elements' (SPEC §7: fibres at the full E_f). A truss
@@ -445,6 +458,12 @@ impl<'m> Explicit<'m> {
             .iter()
             .flat_map(|b| (0..b.len()).map(move |e| (b, e)))
             .map(|(b, e)| b.element_stable_time_step(e, x, self.mass[b.nodes[e] as usize]))
+            .fold(f64::INFINITY, f64::min));
+        add(model
+            .bending
+            .iter()
+            .zip(&self.bending_mass)
+            .map(|(b, m)| smallest(b.len(), &|e| b.element_stable_time_step(e, x, m[e])))
             .fold(f64::INFINITY, f64::min));
         self.settings.safety_factor / inverse_square.sqrt()
     }
@@ -498,6 +517,12 @@ impl<'m> Explicit<'m> {
             b.forces_into(x, &mut self.slots[start..start + b.len()]);
         }
         self.lap(Pass::Springs);
+        for (i, b) in model.bending.iter().enumerate() {
+            let start = self.layout.bending_offsets[i];
+            b.forces_into(x, &mut self.slots[start..start + 3 * b.len()])
+                .map_err(|e| fail(format!("bending batch {i}"), e))?;
+        }
+        self.lap(Pass::Bending);
         self.layout.gather(&self.slots, &mut self.f_int);
         self.lap(Pass::Gather);
         Ok(())
@@ -534,6 +559,9 @@ impl<'m> Explicit<'m> {
             e += (0..b.len())
                 .map(|i| b.element_energy(i, &state.x))
                 .sum::<f64>();
+        }
+        for b in &model.bending {
+            e += b.energy(&state.x).unwrap_or(f64::NAN);
         }
         e
     }

@@ -56,6 +56,8 @@ pub enum Pass {
     Membranes,
     /// Holding springs.
     Springs,
+    /// Yarn bending (when the scene switches it on).
+    Bending,
     /// Element slots summed per node.
     Gather,
     /// Finite values and the guard's kinematic checks.
@@ -68,7 +70,7 @@ pub enum Pass {
 
 impl Pass {
     /// Every pass, in step order.
-    pub const ALL: [Pass; 14] = [
+    pub const ALL: [Pass; 15] = [
         Pass::StableStep,
         Pass::Update,
         Pass::BoundaryConditions,
@@ -79,6 +81,7 @@ impl Pass {
         Pass::TrussDashpots,
         Pass::Membranes,
         Pass::Springs,
+        Pass::Bending,
         Pass::Gather,
         Pass::Checks,
         Pass::Energies,
@@ -98,6 +101,7 @@ impl Pass {
             Pass::TrussDashpots => "element forces: yarn dashpots",
             Pass::Membranes => "element forces: membranes",
             Pass::Springs => "element forces: springs",
+            Pass::Bending => "element forces: yarn bending",
             Pass::Gather => "gather",
             Pass::Checks => "finite and guard checks",
             Pass::Energies => "energies at outputs",

@@ -20,12 +20,14 @@ use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod bending;
 mod constitutive;
 mod contact;
 mod explicit;
 mod fishnet;
 mod kinematics;
 mod scenes;
+mod locking;
 
 /// Every case of every crate, in the order they run and are reported.
 pub fn registry() -> Vec<Case> {
@@ -36,6 +38,8 @@ pub fn registry() -> Vec<Case> {
         contact::CASES,
         fishnet::CASES,
         scenes::CASES,
+        bending::CASES,
+        locking::CASES,
     ]
     .concat()
 }

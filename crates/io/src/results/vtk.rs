@@ -80,6 +80,7 @@ fn check_sizes(frame: &FrameData<'_>) -> Result<(), SizeMismatch> {
         ("fields.fibre_tension", f.fibre_tension.len(), cells),
         ("fields.resin_stress", f.resin_stress.len(), cells),
         ("fields.thickness", f.thickness.len(), cells),
+        ("fields.waviness", f.waviness.len(), cells),
     ];
     for (what, len, expected) in checks {
         if len != expected {
@@ -209,6 +210,7 @@ pub(super) fn frame_vtu(time: f64, frame: &FrameData<'_>) -> Result<String, Size
         push_f64,
     );
     scalars(&mut xml, "thickness", &fields.thickness);
+    scalars(&mut xml, "waviness", &fields.waviness);
     xml.push_str("      </CellData>\n");
 
     xml.push_str("      <Points>\n");

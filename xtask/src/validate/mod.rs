@@ -26,8 +26,8 @@ mod contact;
 mod explicit;
 mod fishnet;
 mod kinematics;
-mod scenes;
 mod locking;
+mod scenes;
 
 /// Every case of every crate, in the order they run and are reported.
 pub fn registry() -> Vec<Case> {

@@ -258,8 +258,12 @@ impl MembraneBatch {
             }
         }
         let stride = KINEMATIC_HISTORY + section.material.resin.history_len();
-        let lanes = (shape == MembraneShape::Quad && !section.embedded_fibres)
-            .then(|| QuadLanes::new(&grad_n, &area, count));
+        // The lanes carry the paper's resin only: a shear-locking law (an
+        // option beyond the paper) keeps its quads on the scalar path.
+        let lanes = (shape == MembraneShape::Quad
+            && !section.embedded_fibres
+            && section.material.resin.shear_locking.is_none())
+        .then(|| QuadLanes::new(&grad_n, &area, count));
         Ok(Self {
             section,
             shape,

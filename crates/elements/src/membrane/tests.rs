@@ -838,3 +838,27 @@ fn a_membrane_without_the_law_is_unchanged_and_with_it_stiffer() {
     // Sheared ~45°: the law stiffens and shortens the step.
     assert!(with.element_stable_time_step(0, &x) < without.element_stable_time_step(0, &x));
 }
+
+#[test]
+fn a_batch_with_the_locking_law_feels_it_in_every_element() {
+    // Quads with the law stay off the lanes (which carry the paper's resin
+    // only): the batch's forces are the per-element ones, law included.
+    let (with, x0) = lane_grid(locking_glass());
+    let (without, _) = lane_grid(glass());
+    assert!(with.lanes.is_none() && without.lanes.is_some());
+    let x = deform(&x0, &shearing()[1], 3);
+    let h = with.initial_history();
+    let (expected, _) = scalar_forces(&with, &x, &h, 1e-3).unwrap();
+    let (plain, _) = scalar_forces(&without, &x, &h, 1e-3).unwrap();
+    let mut slots = vec![Vector3::zeros(); 4 * with.len()];
+    let mut h_out = h.clone();
+    with.forces_into(&x, &h, &mut h_out, 1e-3, &mut slots)
+        .unwrap();
+    for (e, ((f, g), p)) in slots.iter().zip(&expected).zip(&plain).enumerate() {
+        assert_eq!(f, g, "slot {e}");
+        assert!(
+            (f - p).norm() > 1e-6 * p.norm(),
+            "slot {e}: no law in the force"
+        );
+    }
+}

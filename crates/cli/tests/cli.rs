@@ -1,35 +1,11 @@
 //! The `drape` command end to end: runs, templates, sweeps, inspection,
 //! exit codes, and bad input that must exit 2 and write nothing.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
-fn drape(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_drape"))
-        .args(args)
-        .current_dir(workspace())
-        .output()
-        .expect("the drape binary runs")
-}
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("drape-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+mod common;
+use common::*;
 
 #[test]
 fn picture_frame_runs_and_writes_results() {

@@ -124,22 +124,7 @@ pub(super) fn frame_vtu(time: f64, frame: &FrameData<'_>) -> Result<String, Size
     // About 4/3 of the binary size (some 120 bytes a point and a cell)
     // plus the markup.
     let mut xml = String::with_capacity(170 * (n_points + n_cells) + 4096);
-    xml.push_str(concat!(
-        "<?xml version=\"1.0\"?>\n",
-        "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
-        "  <UnstructuredGrid>\n",
-        "    <FieldData>\n",
-    ));
-    let _ = writeln!(
-        xml,
-        "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{}</DataArray>",
-        fmt_f64(time)
-    );
-    xml.push_str("    </FieldData>\n");
-    let _ = writeln!(
-        xml,
-        "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">"
-    );
+    vtu_head(&mut xml, time, n_points, n_cells);
 
     xml.push_str("      <PointData Vectors=\"displacement\" Scalars=\"contact_status\">\n");
     let displacement = state.x.iter().zip(&model.x0).map(|(x, x0)| x - x0);

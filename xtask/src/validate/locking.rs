@@ -4,11 +4,8 @@
 //! derived here from the coefficients, never from drape's law.
 
 use std::f64::consts::{FRAC_PI_4, SQRT_2};
-use std::sync::Arc;
 
 use drape_constitutive::{Material, ShearLocking};
-use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
-use drape_model::{BoundaryCondition, Model, Motion};
 use drape_time::{Explicit, ExplicitSettings, Frame, Observer};
 use nalgebra::Vector3;
 
@@ -41,28 +38,9 @@ impl<F: FnMut(&Frame<'_>)> Observer for Frames<F> {
 /// 60° in 0.05 s, at each of 6 frames: [(γ, F)].
 fn frame_forces(material: &Material) -> Vec<(f64, f64)> {
     let (side, gamma_max, duration) = (100.0, 60f64.to_radians(), 0.05);
-    let blank = RectangleBlank {
-        width: side,
-        height: side,
-        center: Vector3::zeros(),
-        orientation_deg: 0.0,
-        element: ElementKind::Quad,
-        meshing: Meshing::Cells([10, 10]),
-        fibres: FibreRepresentation::Trusses,
-    };
-    let mut model = Model::from_blank(&blank, material).expect("model");
+    let model = super::explicit::picture_frame_model(material, side, 10, gamma_max, duration);
     let pin = Vector3::new(-side / 2.0, -side / 2.0, 0.0);
     let gamma_at = move |t: f64| gamma_max * smooth_step(t / duration);
-    let frame_map = move |x0: &Vector3<f64>, gamma: f64| {
-        let (s, c) = (gamma / 2.0).sin_cos();
-        let d = x0 - pin;
-        pin + Vector3::new(c * d.x + s * d.y, s * d.x + c * d.y, d.z)
-    };
-    model.boundary.push(BoundaryCondition {
-        nodes: model.node_set("boundary").expect("set").to_vec(),
-        components: [true; 3],
-        motion: Motion::Trajectory(Arc::new(move |x0, t| frame_map(x0, gamma_at(t)) - x0)),
-    });
     let mut samples = Vec::new();
     let mut observer = Frames(|f: &Frame<'_>| {
         if f.index == 0 {

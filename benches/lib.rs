@@ -79,9 +79,12 @@ pub fn time_iters(clock: Clock, iters: u64, mut f: impl FnMut()) -> Duration {
     watch.elapsed()
 }
 
-/// The calling thread's CPU time.
+/// The calling thread's CPU time (Linux `CLOCK_THREAD_CPUTIME_ID`).
+///
+/// # Panics
+/// On a platform without it here (anything but 64-bit Linux).
 #[cfg(all(target_os = "linux", target_pointer_width = "64"))]
-fn thread_cpu_time() -> Duration {
+pub fn thread_cpu_time() -> Duration {
     #[repr(C)]
     struct Timespec {
         tv_sec: i64,
@@ -102,9 +105,13 @@ fn thread_cpu_time() -> Duration {
     Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32)
 }
 
+/// The calling thread's CPU time: not available on this platform.
+///
+/// # Panics
+/// Always (see [`Clock::from_env`]).
 #[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
-fn thread_cpu_time() -> Duration {
-    unreachable!("Clock::from_env only picks ThreadCpu on 64-bit Linux")
+pub fn thread_cpu_time() -> Duration {
+    panic!("thread CPU time needs 64-bit Linux")
 }
 
 #[cfg(test)]

@@ -6,7 +6,12 @@
 //! - `stress [--quick] [--filter SUBSTR] [--seed N]`: extremes and hostile
 //!   input through the facade, one table of case, expectation and outcome
 //!   (see [`stress`]);
-//! - `bench [ARGS…]`: the criterion benches, `cargo bench -p drape-benches ARGS…`;
+//! - `fit-shear CSV --side L --material M [--terms N] [--out FILE]`: a
+//!   shear-locking law fitted from a picture-frame curve, as a material
+//!   card (see [`fit`]);
+//! - `bench [--quick] [--profile-only] [ARGS…]`: the explicit step's per-pass
+//!   profile and 1- vs 2-thread table (`benches/benches/step_profile.rs`),
+//!   then the criterion benches, `cargo bench -p drape-benches ARGS…`;
 //! - `ci`: what CI runs, the script `.ci/run`.
 //!
 //! Only std and the workspace's own dependencies: an xtask that needs a
@@ -15,6 +20,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
+mod fit;
 mod stress;
 mod validate;
 
@@ -35,9 +41,20 @@ tasks:
       energy balance or stop with a diagnosis; none may panic, hang or
       write NaN. --quick is the subset CI runs, --seed changes the
       generators' seed. Writes target/stress/report.md.
-  bench [ARGS...]
-      run the criterion benches: cargo bench -p drape-benches ARGS...
-      (e.g. cargo xtask bench -- --warm-up-time 1 --measurement-time 2)
+  fit-shear CSV --side L --material PRESET|card.toml [--terms N] [--out FILE]
+      fit a shear-locking law τ = c1·γ + c3·γ³ + … (N terms, default 3) to a
+      picture-frame curve (CSV of shear angle in degrees, frame force in N;
+      frame side L in mm) and print (or write) the material card: the base
+      material with resin.shear_locking set.
+  bench [--quick] [--profile-only] [ARGS...]
+      print the explicit step's per-pass profile (hemisphere scene and a
+      200x200 blank, 1 and 2 threads) and the ms/step table of the shipped
+      scenes on 1 and 2 threads, then run the criterion benches:
+      cargo bench -p drape-benches ARGS... (e.g. cargo xtask bench --
+      --warm-up-time 1 --measurement-time 2). --quick profiles shorter
+      windows and runs the criterion benches with short warm-up and
+      measurement times; --profile-only stops after the tables.
+      DRAPE_BENCH_CLOCK=thread-cpu times one-thread figures by CPU time.
   ci
       run what CI runs (.ci/run): the test suite, the quick validation,
       then the quick stress suite";
@@ -57,10 +74,11 @@ fn main() -> ExitCode {
             Ok(options) => stress::main(&options, &workspace_root(), &target_dir()),
             Err(message) => usage_error(&message),
         },
-        "bench" => run(Command::new(cargo())
-            .args(["bench", "-p", "drape-benches"])
-            .args(rest)
-            .current_dir(workspace_root())),
+        "fit-shear" => match fit::Options::parse(rest) {
+            Ok(options) => fit::main(&options),
+            Err(message) => usage_error(&message),
+        },
+        "bench" => bench(rest),
         "ci" if rest.is_empty() => run(Command::new("bash")
             .arg(workspace_root().join(".ci/run"))
             .current_dir(workspace_root())),
@@ -74,6 +92,37 @@ fn main() -> ExitCode {
         }
         other => usage_error(&format!("unknown task `{other}`")),
     }
+}
+
+/// The step profile, then (unless `--profile-only`) the criterion benches.
+fn bench(args: &[String]) -> ExitCode {
+    let quick = args.iter().any(|a| a == "--quick");
+    let profile_only = args.iter().any(|a| a == "--profile-only");
+    let mut rest: Vec<&str> = args
+        .iter()
+        .map(String::as_str)
+        .filter(|a| !matches!(*a, "--quick" | "--profile-only"))
+        .collect();
+    let mut profile = Command::new(cargo());
+    profile
+        .args(["bench", "-p", "drape-benches", "--bench", "step_profile"])
+        .current_dir(workspace_root());
+    if quick {
+        profile.args(["--", "--quick"]);
+    }
+    let status = run(&mut profile);
+    if profile_only || status != ExitCode::SUCCESS {
+        return status;
+    }
+    if quick && !rest.contains(&"--") {
+        rest.extend(["--", "--warm-up-time", "0.5", "--measurement-time", "1"]);
+    }
+    let mut criterion = Command::new(cargo());
+    criterion.args(["bench", "-p", "drape-benches"]);
+    for name in ["kernels", "elements", "explicit", "contact", "fishnet"] {
+        criterion.args(["--bench", name]);
+    }
+    run(criterion.args(rest).current_dir(workspace_root()))
 }
 
 fn usage_error(message: &str) -> ExitCode {

@@ -12,8 +12,8 @@ use std::path::Path;
 
 use drape_fishnet::{Net, NetResults, NetStats};
 use drape_io::results::{
-    DrawInMm, EnergySummary, FrameData, MapPanel, ResultsDir, ResultsError, RunInfo, Summary,
-    write_flat_maps,
+    DrawInMm, EnergySummary, FrameData, MapPanel, Peaks, ResultsDir, ResultsError, RunInfo,
+    Summary, ToolMeshes, write_flat_maps,
 };
 use drape_io::scene::Scene;
 use drape_model::measures::{ProfileLine, profile_elements};
@@ -95,14 +95,46 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             },
         )?;
     }
+    // The tools where the net lies: the mould moved as the net was, the
+    // others where the run's end time puts them.
+    let tools = ToolMeshes::new(&model.tools, &model.x0);
+    let moved: Vec<f64> = model
+        .tools
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            if k == setup.mould {
+                setup.mould_displacement
+            } else {
+                t.prescribed_displacement(scene.settings.end_time)
+                    .unwrap_or(0.0)
+            }
+        })
+        .collect();
+    if scene.spec.output.vtu {
+        dir.write_tools(0, 0.0, &tools, &moved)?;
+    }
     dir.write_energy(&[])?;
     dir.write_profiles(&results.measures)?;
+    dir.write_orientations(
+        &results.model,
+        &results.state,
+        &results.fields,
+        &format!("{file}, kinematic net"),
+    )?;
     if scene.spec.output.pictures {
         dir.write_pictures(
             &results.model,
             &results.state,
             &results.fields,
             &results.measures,
+        )?;
+        dir.write_view(
+            &results.model,
+            &results.state,
+            &results.fields,
+            &tools,
+            &moved,
         )?;
     }
     let m = &results.measures;
@@ -124,9 +156,19 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             dy: draw_in.dy,
             dd: draw_in.dd,
         },
-        max_fibre_tension_n: 0.0,
+        // A net carries no load: no truss force (null), no yarn tension.
+        max_fibre_tension_n: f64::NAN,
+        max_fibre_tension_n_per_mm: 0.0,
         area_above_locking_mm2: m.area_above_locking,
+        peak: {
+            let mut peak = Peaks::default();
+            peak.observe(&results.model, &results.state, &results.fields);
+            peak
+        },
+        max_waviness_deg: m.max_waviness_deg,
+        wrinkle_area_mm2: m.wrinkle_area,
         energy: EnergySummary::default(),
+        setup: None,
         run: RunInfo {
             wall_s,
             steps: 0,

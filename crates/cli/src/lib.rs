@@ -16,15 +16,21 @@
 
 use std::path::{Path, PathBuf};
 
+mod compare;
 mod kinematic;
+mod orientations;
+mod setup;
+pub use compare::{CompareError, MeasureRow, RunComparison, RunComparisonSummary, compare_runs};
 pub use kinematic::{
     Comparison, ComparisonReport, ComparisonSummary, KinematicError, KinematicReport,
     ProfileDifference, compare, compare_scene, kinematic_scene,
 };
+pub use orientations::{MappedReport, map_orientations};
+pub use setup::run_setup;
 
 use drape_io::results::{
-    DrawInMm, EnergyRow, EnergySummary, FrameData, ImplicitRunInfo, ResultsDir, ResultsError,
-    RunInfo, Summary,
+    DrawInMm, EnergyRow, EnergySummary, FrameData, ImplicitRunInfo, Peaks, ResultsDir,
+    ResultsError, RunInfo, Summary, ToolMeshes, max_yarn_tension,
 };
 use drape_io::scene::{Scene, SceneFile, Solver};
 use drape_model::{Measures, State};
@@ -90,6 +96,9 @@ pub struct Checkpoint {
     pub rows: Vec<EnergyRow>,
     /// The frames written so far: (index, time).
     pub frames: Vec<(usize, f64)>,
+    /// The peaks over the frames so far.
+    #[serde(default)]
+    pub peaks: Peaks,
 }
 
 /// A file a scene reads (a mesh), with its size and a fingerprint of its
@@ -228,6 +237,21 @@ struct Recorder<'a> {
     error: Option<ResultsError>,
     last_energy: Energies,
     callback: &'a mut dyn FnMut(&RunProgress) -> Control,
+    /// The largest values over the frames.
+    peaks: Peaks,
+    /// The tools, tessellated once for the `tools.pvd` series.
+    tools: ToolMeshes,
+    /// The tools' displacements at the last frame (where a failed run's
+    /// results are: the driver falls back to that frame).
+    frame_tools: Vec<f64>,
+}
+
+/// Each tool's displacement along its axis where `contact` left it
+/// (zeros without tools).
+fn tool_displacements(contact: Option<drape_contact::ContactView<'_>>) -> Vec<f64> {
+    contact.map_or_else(Vec::new, |c| {
+        c.tool_state.iter().map(|s| s.displacement).collect()
+    })
 }
 
 impl Observer for Recorder<'_> {
@@ -246,6 +270,7 @@ impl Observer for Recorder<'_> {
             .iter()
             .fold(0.0f64, |m, g| m.max(g.abs()))
             .to_degrees();
+        self.peaks.observe(frame.model, frame.state, &fields);
         if self.write_frames && self.error.is_none() {
             let data = FrameData {
                 model: frame.model,
@@ -254,13 +279,17 @@ impl Observer for Recorder<'_> {
                 contact_force: frame.contact.map(|c| c.force),
                 contact_status: frame.contact.map(|c| c.status),
             };
+            let (index, time) = (frame.index, frame.state.time);
+            let moved = tool_displacements(frame.contact);
             if let Err(e) = self
                 .results
-                .write_frame(frame.index, frame.state.time, &data)
+                .write_frame(index, time, &data)
+                .and_then(|()| self.results.write_tools(index, time, &self.tools, &moved))
             {
                 self.error = Some(e);
             }
         }
+        self.frame_tools = tool_displacements(frame.contact);
     }
 
     fn checkpoint(&mut self, state: &State, driver: &DriverState) {
@@ -278,6 +307,7 @@ impl Observer for Recorder<'_> {
             driver: driver.clone(),
             rows: self.rows.clone(),
             frames: self.results.frames(),
+            peaks: self.peaks,
         };
         let path = Checkpoint::path(self.results.path());
         let written = serde_json::to_vec(&checkpoint)
@@ -386,6 +416,10 @@ pub fn run_in(
     progress: &mut dyn FnMut(&RunProgress) -> Control,
 ) -> Result<RunReport, FacadeError> {
     let model = &scene.model;
+    let peaks = options
+        .resume
+        .as_ref()
+        .map_or_else(Peaks::default, |c| c.peaks);
     let (record, mut state, rows, driver, last_checkpoint) = match options.resume {
         Some(c) => (
             SceneRecord {
@@ -439,23 +473,35 @@ pub fn run_in(
         error: None,
         last_energy: Energies::default(),
         callback: progress,
+        peaks,
+        tools: ToolMeshes::new(&model.tools, &model.x0),
+        frame_tools: Vec::new(),
     };
     let started = std::time::Instant::now();
     let solver = scene.spec.simulation.solver;
-    let mut warnings = Vec::new();
+    // Where the tools are at the end, for the oblique picture.
+    let mut end_tools = Vec::new();
+    // The scene's own (an imported file's units, repairs) first.
+    let mut warnings = scene.warnings.clone();
     let outcome: Result<RunSummary, RunError> = match solver {
         Solver::Explicit => Explicit::new(model, settings).and_then(|mut explicit| {
             if let Some(d) = driver {
                 explicit.resume_from(d);
             }
             let outcome = explicit.run(&mut state, &mut recorder);
+            let contact = explicit.contact().map(drape_contact::ExplicitContact::view);
+            // A failed run's state is its last frame's; the tools are there too.
+            end_tools = if outcome.is_err() {
+                recorder.frame_tools.clone()
+            } else {
+                tool_displacements(contact)
+            };
             if let Ok(s) = &outcome {
                 if s.stopped {
-                    let contact = explicit.contact().map(drape_contact::ExplicitContact::view);
                     recorder.stop_frame(model, &state, &s.energy, contact);
                 }
             }
-            warnings = explicit.warnings().to_vec();
+            warnings.extend_from_slice(explicit.warnings());
             outcome
         }),
         Solver::Implicit => {
@@ -466,12 +512,17 @@ pub fn run_in(
                     implicit.resume_from(d);
                 }
                 let outcome = implicit.run(&mut state, &mut recorder);
+                end_tools = if outcome.is_err() {
+                    recorder.frame_tools.clone()
+                } else {
+                    tool_displacements(implicit.contact())
+                };
                 if let Ok(s) = &outcome {
                     if s.stopped {
                         recorder.stop_frame(model, &state, &s.energy, implicit.contact());
                     }
                 }
-                warnings = implicit.warnings().to_vec();
+                warnings.extend_from_slice(implicit.warnings());
                 outcome
             })
         }
@@ -510,6 +561,11 @@ pub fn run_in(
     };
     let locking = scene.spec.output.locking_angle_deg;
     let measures = model.measures(&state, locking).unwrap_or_default();
+    let fields = model.element_fields(&state).ok();
+    if let Some(f) = &fields {
+        // The end state, when it was not a frame (a failed run's last good step).
+        recorder.peaks.observe(model, &state, f);
+    }
     // Draw-in needs a rectangular blank's edges: NaN (null in the JSON)
     // for an imported mesh.
     let draw_in = measures.draw_in.unwrap_or(drape_model::measures::DrawIn {
@@ -529,8 +585,20 @@ pub fn run_in(
             dy: draw_in.dy,
             dd: draw_in.dd,
         },
-        max_fibre_tension_n: measures.max_fibre_tension_n,
+        // A truss force means nothing without trusses: null, not 0 N.
+        max_fibre_tension_n: if model.features().trusses {
+            measures.max_fibre_tension_n
+        } else {
+            f64::NAN
+        },
+        max_fibre_tension_n_per_mm: fields
+            .as_ref()
+            .and_then(|f| max_yarn_tension(model, &state.x, f))
+            .map_or(f64::NAN, |(t, _)| t),
         area_above_locking_mm2: measures.area_above_locking,
+        peak: recorder.peaks,
+        max_waviness_deg: measures.max_waviness_deg,
+        wrinkle_area_mm2: measures.wrinkle_area,
         energy: EnergySummary {
             balance_error: drape_time::guard::relative_balance_error(
                 &energy,
@@ -538,6 +606,7 @@ pub fn run_in(
             ),
             kinetic_to_internal: energy.kinetic_to_internal(),
         },
+        setup: run_setup(scene),
         run: RunInfo {
             wall_s,
             // Every step from the start, a resumed run's included.
@@ -574,9 +643,12 @@ pub fn run_in(
     let results = &recorder.results;
     results.write_energy(&recorder.rows)?;
     results.write_profiles(&measures)?;
-    if scene.spec.output.pictures {
-        if let Ok(fields) = model.element_fields(&state) {
-            results.write_pictures(model, &state, &fields, &measures)?;
+    if let Some(fields) = &fields {
+        let title = format!("{} at t = {} s", summary.scene, state.time);
+        results.write_orientations(model, &state, fields, &title)?;
+        if scene.spec.output.pictures {
+            results.write_pictures(model, &state, fields, &measures)?;
+            results.write_view(model, &state, fields, &recorder.tools, &end_tools)?;
         }
     }
     results.write_summary(&summary)?;

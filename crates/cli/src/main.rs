@@ -1,4 +1,5 @@
-//! The `drape` command: run, new, sweep, inspect, kinematic, compare.
+//! The `drape` command: run, new, sweep, inspect, kinematic, compare,
+//! export.
 //!
 //! Exit codes: 0 done, 1 the run failed (diverged or could not write its
 //! results; what it reached is kept), 2 bad input (a bad scene, an output
@@ -15,7 +16,9 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow};
 use clap::{Parser, Subcommand};
 use drape::{Checkpoint, RunControl, RunOptions, RunProgress, open_output, run_in, run_scene};
-use drape_io::results::{OutputLock, ResultsError, Summary};
+use drape_io::results::{
+    OutputLock, ResultsError, Summary, SweepAxis, SweepRun, write_sweep_picture,
+};
 use drape_io::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -101,20 +104,52 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
-    /// Run the scene both ways, kinematic net and forming run, and write
-    /// them side by side with their difference.
+    /// Compare two runs' results folders (RUN_A RUN_B: their measures side
+    /// by side and a map of their shear difference), or run one scene both
+    /// ways (SCENE: the kinematic net against the forming run).
+    #[command(after_long_help = "\
+Which is which: the number of arguments decides.
+  drape compare RUN_A RUN_B   two results folders of any runs (`drape run`,
+                              `drape kinematic`, a sweep's run_NNN, `drape
+                              compare SCENE`'s mechanical/ and kinematic/).
+                              Nothing is run. A is the reference: differences
+                              are B - A, on A's mesh at A's flat (reference)
+                              positions; B is carried onto it by closest point
+                              when the meshes differ. Writes comparison.json,
+                              comparison.csv and comparison.png.
+  drape compare SCENE         one scene file, run both ways: the kinematic net
+                              into OUT/kinematic, the forming run into
+                              OUT/mechanical, and their comparison into OUT.
+                              --set and --threads apply to this form only.")]
     Compare {
-        /// The scene file (TOML).
-        scene: PathBuf,
-        /// Output directory (default: results/<scene name>-compare).
+        /// Two results folders, or one scene file (TOML).
+        #[arg(required = true, num_args = 1..=2, value_name = "RUN_A RUN_B | SCENE")]
+        inputs: Vec<PathBuf>,
+        /// Output directory (default: results/<A>-vs-<B>, or
+        /// results/<scene name>-compare).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Override a scene value: --set tools.0.friction=0 (repeatable).
+        /// With a scene: override a scene value, --set tools.0.friction=0
+        /// (repeatable).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
-        /// Worker threads of the forming run (default: all cores).
+        /// With a scene: worker threads of the forming run (default: all
+        /// cores).
         #[arg(long)]
         threads: Option<usize>,
+    },
+    /// Carry a run's draped fibre orientations onto a structural mesh by
+    /// closest point (an Abaqus include and a CSV table).
+    Export {
+        /// The run's results folder (it holds orientations.inp).
+        run: PathBuf,
+        /// The structural mesh: Gmsh .msh (4.1) or Abaqus .inp, triangles
+        /// and quads, in the formed part's coordinates (mm).
+        #[arg(long, value_name = "MESH")]
+        onto: PathBuf,
+        /// Output directory (default: the run's folder).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -222,11 +257,19 @@ fn main() -> ExitCode {
         Command::Inspect { dir } => inspect(&dir),
         Command::Kinematic { scene, out, set } => kinematic(&scene, out, &set),
         Command::Compare {
-            scene,
+            inputs,
             out,
             set,
             threads,
-        } => with_threads(threads, || compare(&scene, out, &set)),
+        } => match inputs.as_slice() {
+            [scene] => with_threads(threads, || compare(scene, out, &set)),
+            [a, b] if set.is_empty() && threads.is_none() => compare_folders(a, b, out),
+            _ => Err(bad(
+                "--set and --threads belong to `drape compare SCENE` (a scene run both \
+                 ways), not to two results folders",
+            )),
+        },
+        Command::Export { run, onto, out } => export(&run, &onto, out),
     };
     match result {
         Ok(code) => code,
@@ -265,7 +308,12 @@ fn with_threads(
                 .context("cannot start the thread pool")?
                 .install(f)
         }
-        None => f(),
+        // The run itself on a worker of the global pool, not on the main
+        // thread: from outside, every parallel pass of every step is a job
+        // injected into the pool that the main thread sleeps on (measured
+        // on the hemisphere scene: 34 context switches a step and 8 % more
+        // CPU time, against 0.04 from inside).
+        None => rayon::scope(|_| f()),
     }
 }
 
@@ -316,7 +364,11 @@ fn parse_sets(set: &[String]) -> Result<Vec<(String, String)>> {
 }
 
 fn load(path: &Path, overrides: &[(String, String)]) -> Result<Scene> {
-    Scene::from_file(path, overrides).map_err(|e| bad(e.to_string()))
+    let scene = Scene::from_file(path, overrides).map_err(|e| bad(e.to_string()))?;
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+    Ok(scene)
 }
 
 fn default_out(scene: &Path, suffix: &str) -> PathBuf {
@@ -440,8 +492,33 @@ fn print_summary(s: &Summary, out: &Path) {
     } else {
         println!("draw-in           n/a (not a rectangular blank)");
     }
-    println!("max fibre tension {:.1} N", s.max_fibre_tension_n);
+    let p = &s.peak;
+    if p.max_shear_time_s < s.time && p.max_shear_deg > s.max_shear_deg {
+        println!(
+            "peak shear        {:.2}° at t = {:.6} s, at ({:.1}, {:.1}, {:.1}) mm",
+            p.max_shear_deg,
+            p.max_shear_time_s,
+            p.max_shear_at[0],
+            p.max_shear_at[1],
+            p.max_shear_at[2]
+        );
+    }
+    println!(
+        "yarn tension      {:.4} N/mm at the end, {:.4} N/mm largest (t = {:.6} s){}",
+        s.max_fibre_tension_n_per_mm,
+        p.max_fibre_tension_n_per_mm,
+        p.max_fibre_tension_time_s,
+        if s.max_fibre_tension_n.is_finite() {
+            format!("; largest truss force {:.4} N", s.max_fibre_tension_n)
+        } else {
+            String::new()
+        }
+    );
     println!("above locking     {:.0} mm²", s.area_above_locking_mm2);
+    println!(
+        "wrinkle indicator max waviness {:.1}°, area above 5° {:.0} mm²",
+        s.max_waviness_deg, s.wrinkle_area_mm2
+    );
     println!(
         "energy            balance error {:.2e}, E_kin/E_int {:.2e}",
         s.energy.balance_error, s.energy.kinetic_to_internal
@@ -468,6 +545,32 @@ fn print_summary(s: &Summary, out: &Path) {
         println!("warning           {w}");
     }
     println!("results           {}", out.display());
+}
+
+/// The model and the time step of a run, before it starts (on stderr, with
+/// the progress).
+fn print_setup(s: &drape_io::results::RunSetup) {
+    let fibres = if s.trusses > 0 {
+        format!("{} trusses", s.trusses)
+    } else {
+        format!("fibres {}", s.fibres)
+    };
+    eprintln!(
+        "model             {} nodes, {} membrane elements, {fibres}",
+        s.nodes, s.membrane_elements
+    );
+    let scaled = match s.mass_scaling_dt_s {
+        Some(target) => format!(
+            "; mass-scaled to {target:.3e} s, adding {:.3e} t ({:.1} % of the mass)",
+            s.added_mass_t,
+            100.0 * s.added_mass_fraction
+        ),
+        None => String::new(),
+    };
+    eprintln!(
+        "time step         stable {:.3e} s{scaled}; starts at {:.3e} s, about {} steps",
+        s.stable_time_step_s, s.time_step_s, s.expected_steps
+    );
 }
 
 fn run(
@@ -578,6 +681,9 @@ fn finish_run(scene: &Scene, out: &Path, options: RunOptions) -> Result<ExitCode
             c.state.time
         );
     }
+    if let Some(setup) = drape::run_setup(scene) {
+        print_setup(&setup);
+    }
     let mut reporter = Reporter::new();
     let report = run_in(scene, results, options, &mut |p| reporter.update(p))
         .with_context(|| format!("writing results to {}", out.display()))?;
@@ -673,7 +779,7 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
         table.push(',');
         table.push_str(key);
     }
-    table.push_str(",status,max_shear_deg,draw_in_dx_mm,draw_in_dy_mm,draw_in_dd_mm,max_fibre_tension_n,balance_error,steps,wall_s\n");
+    table.push_str(",status,max_shear_deg,draw_in_dx_mm,draw_in_dy_mm,draw_in_dd_mm,max_fibre_tension_n,balance_error,steps,wall_s,peak_max_shear_deg,peak_time_s,max_fibre_tension_n_per_mm\n");
     let mut failed = false;
     for (i, (combo, report)) in combos.iter().zip(&reports).enumerate() {
         table.push_str(&format!("run_{i:03}"));
@@ -685,7 +791,7 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
             Ok(s) => {
                 failed |= s.status == "failed";
                 table.push_str(&format!(
-                    ",{},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3e},{},{:.2}\n",
+                    ",{},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3e},{},{:.2},{:.4},{:.6},{:.5}\n",
                     s.status,
                     s.max_shear_deg,
                     s.draw_in_mm.dx,
@@ -694,13 +800,16 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
                     s.max_fibre_tension_n,
                     s.energy.balance_error,
                     s.run.steps,
-                    s.run.wall_s
+                    s.run.wall_s,
+                    s.peak.max_shear_deg,
+                    s.peak.max_shear_time_s,
+                    s.max_fibre_tension_n_per_mm
                 ));
             }
             Err(e) => {
                 failed = true;
                 table.push_str(&format!(
-                    ",error: {},,,,,,,,\n",
+                    ",error: {},,,,,,,,,,,\n",
                     describe(e).replace(',', ";")
                 ));
             }
@@ -709,6 +818,37 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
     let path = out.join("sweep.csv");
     drape_io::atomic::write(&path, table.as_bytes())
         .with_context(|| format!("writing {}", path.display()))?;
+    // A key given one value is a setting, not a swept parameter: the
+    // picture has a column per key with more than one value (the first key
+    // when none has).
+    let mut drawn: Vec<usize> = (0..axes.len()).filter(|&k| axes[k].1.len() > 1).collect();
+    if drawn.is_empty() {
+        drawn.push(0);
+    }
+    let sweep_axes: Vec<SweepAxis> = drawn
+        .iter()
+        .map(|&k| SweepAxis {
+            key: axes[k].0.clone(),
+            values: axes[k].1.clone(),
+        })
+        .collect();
+    let runs: Vec<SweepRun> = combos
+        .iter()
+        .zip(&reports)
+        .map(|(combo, report)| {
+            let s = report.as_ref().ok();
+            let value = |f: fn(&Summary) -> f64| s.map_or(f64::NAN, f);
+            SweepRun {
+                values: drawn.iter().map(|&k| combo[k].1.clone()).collect(),
+                max_shear_deg: value(|s| s.max_shear_deg),
+                draw_in_dx_mm: value(|s| s.draw_in_mm.dx),
+                draw_in_dd_mm: value(|s| s.draw_in_mm.dd),
+            }
+        })
+        .collect();
+    let picture = out.join("sweep.png");
+    write_sweep_picture(&picture, &sweep_axes, &runs)
+        .with_context(|| format!("writing {}", picture.display()))?;
     print!("{table}");
     Ok(if failed {
         ExitCode::from(1)
@@ -722,7 +862,7 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
 fn inspect(dir: &Path) -> Result<ExitCode> {
     if !dir.is_dir() {
         return Err(bad(format!(
-            "{}: {}: inspect takes a run's output folder",
+            "{}: {}: inspect takes a run's or a sweep's output folder",
             dir.display(),
             if dir.exists() {
                 "not a folder"
@@ -731,12 +871,16 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
             }
         )));
     }
+    let sweep = dir.join("sweep.csv");
+    if sweep.is_file() && !dir.join("summary.json").exists() {
+        return inspect_sweep(dir, &sweep);
+    }
     let path = dir.join("summary.json");
     let text = std::fs::read_to_string(&path).map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {
             bad(format!(
-                "{}: no summary.json: no run has finished writing here (one may still be \
-                 running, or was killed)",
+                "{}: no summary.json (nor a sweep's sweep.csv): no run has finished writing here \
+                 (one may still be running, or was killed)",
                 dir.display()
             ))
         } else {
@@ -747,9 +891,60 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
         .map_err(|e| bad(format!("{}: not a drape summary: {e}", path.display())))?;
     print_summary(&summary, dir);
     let frames = std::fs::read_dir(dir.join("frames"))
-        .map(|d| d.count())
+        .map(|d| {
+            d.filter_map(|e| e.ok())
+                .filter(|e| e.file_name().to_string_lossy().starts_with("frame_"))
+                .count()
+        })
         .unwrap_or(0);
     println!("frames            {frames}");
+    if let Some(setup) = &summary.setup {
+        println!(
+            "model             {} nodes, {} membrane elements, {} trusses ({} fibres)",
+            setup.nodes, setup.membrane_elements, setup.trusses, setup.fibres
+        );
+        println!(
+            "time step         stable {:.3e} s, started at {:.3e} s, added mass {:.1} %",
+            setup.stable_time_step_s,
+            setup.time_step_s,
+            100.0 * setup.added_mass_fraction
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A sweep's table, aligned in columns, and where its runs are.
+fn inspect_sweep(dir: &Path, table: &Path) -> Result<ExitCode> {
+    let text =
+        std::fs::read_to_string(table).map_err(|e| bad(format!("{}: {e}", table.display())))?;
+    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+    let columns = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let width: Vec<usize> = (0..columns)
+        .map(|c| {
+            rows.iter()
+                .filter_map(|r| r.get(c))
+                .map(|v| v.chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    println!(
+        "sweep             {} ({} runs)",
+        dir.display(),
+        rows.len().saturating_sub(1)
+    );
+    for row in &rows {
+        let line: Vec<String> = row
+            .iter()
+            .enumerate()
+            .map(|(c, v)| format!("{v:>w$}", w = width[c]))
+            .collect();
+        println!("{}", line.join("  ").trim_end());
+    }
+    if dir.join("sweep.png").is_file() {
+        println!("picture           {}", dir.join("sweep.png").display());
+    }
+    println!("each run's folder {}", dir.join("run_NNN").display());
     Ok(ExitCode::SUCCESS)
 }
 
@@ -777,6 +972,13 @@ fn kinematic(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<
 }
 
 fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
+    if scene_path.is_dir() {
+        return Err(bad(format!(
+            "{}: a folder: `drape compare SCENE` takes one scene file; to compare two runs' \
+             results folders give both: `drape compare RUN_A RUN_B`",
+            scene_path.display()
+        )));
+    }
     let scene = load(scene_path, &parse_sets(set)?)?;
     if let Err(e) = &scene.kinematic {
         return Err(bad(e.to_string()));
@@ -829,4 +1031,121 @@ fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Ex
     } else {
         ExitCode::SUCCESS
     })
+}
+
+fn compare_error(e: drape::CompareError) -> anyhow::Error {
+    match e {
+        drape::CompareError::Input(message) => bad(message),
+        drape::CompareError::Results(e) => anyhow!(e).context("writing the comparison"),
+    }
+}
+
+/// The last part of a folder's path, for default names.
+fn folder_name(p: &Path) -> String {
+    std::path::absolute(p)
+        .ok()
+        .and_then(|a| a.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .unwrap_or_else(|| "run".to_owned())
+}
+
+fn compare_folders(a: &Path, b: &Path, out: Option<PathBuf>) -> Result<ExitCode> {
+    for dir in [a, b] {
+        if !dir.is_dir() {
+            return Err(bad(format!(
+                "{}: {}: `drape compare RUN_A RUN_B` takes two results folders (or one scene \
+                 file: `drape compare SCENE`)",
+                dir.display(),
+                if dir.exists() {
+                    "not a folder"
+                } else {
+                    "no such folder"
+                }
+            )));
+        }
+    }
+    let out = out.unwrap_or_else(|| {
+        Path::new("results").join(format!("{}-vs-{}", folder_name(a), folder_name(b)))
+    });
+    let c = drape::compare_runs(a, b, &out).map_err(compare_error)?;
+    let s = &c.summary;
+    println!("{:<34} {:>14} {:>14} {:>14}", "", "A", "B", "B − A");
+    println!(
+        "{:<34} {:>14} {:>14}",
+        "folder",
+        folder_name(a),
+        folder_name(b)
+    );
+    println!("{:<34} {:>14} {:>14}", "status", s.status_a, s.status_b);
+    let show = |v: Option<f64>| v.map_or_else(|| "—".to_owned(), |v| format!("{v:.5}"));
+    for m in &s.measures {
+        let name = if m.unit.is_empty() {
+            m.name.clone()
+        } else {
+            format!("{} ({})", m.name, m.unit)
+        };
+        let difference = match (m.a, m.b) {
+            (Some(a), Some(b)) => format!("{:.5}", b - a),
+            _ => "—".to_owned(),
+        };
+        println!(
+            "{name:<34} {:>14} {:>14} {difference:>14}",
+            show(m.a),
+            show(m.b)
+        );
+    }
+    println!(
+        "shear, element by element: {} of {} elements compared ({}); |γB − γA| largest {:.3}° \
+         at ({:.1}, {:.1}, {:.1}) mm (A's flat blank), rms {:.3}°, mean {:+.3}°",
+        s.compared,
+        s.elements,
+        if s.same_mesh {
+            "the same mesh"
+        } else {
+            "B carried onto A's mesh by closest point"
+        },
+        s.max_abs_difference_deg,
+        s.max_difference_at[0],
+        s.max_difference_at[1],
+        s.max_difference_at[2],
+        s.rms_difference_deg,
+        s.mean_difference_deg
+    );
+    println!("comparison        {}", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+fn export(run: &Path, mesh: &Path, out: Option<PathBuf>) -> Result<ExitCode> {
+    if !run.is_dir() {
+        return Err(bad(format!(
+            "{}: {}: export takes a run's results folder",
+            run.display(),
+            if run.exists() {
+                "not a folder"
+            } else {
+                "no such folder"
+            }
+        )));
+    }
+    let out = out.unwrap_or_else(|| run.to_owned());
+    let r = drape::map_orientations(run, mesh, &out).map_err(compare_error)?;
+    println!(
+        "mapped            {} elements of {} onto the formed part of {}",
+        r.mapped.len(),
+        mesh.display(),
+        run.display()
+    );
+    println!(
+        "distance          largest {:.4} mm (element {}), mean {:.4} mm",
+        r.max_distance.0, r.max_distance.1, r.mean_distance
+    );
+    if r.beyond_thickness > 0 {
+        eprintln!(
+            "warning: {} elements lie farther from the formed part than its thickness \
+             ({} mm): is the mesh the same part, placed as the formed one?",
+            r.beyond_thickness, r.thickness
+        );
+    }
+    println!("written           {}", r.inp.display());
+    println!("                  {}", r.csv.display());
+    Ok(ExitCode::SUCCESS)
 }

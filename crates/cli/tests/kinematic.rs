@@ -2,39 +2,8 @@
 //! a kinematic drape, the defaults of the `[kinematic]` table, bad input
 //! (exit 2, nothing written), and a small comparison.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn drape(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_drape"))
-        .args(args)
-        .current_dir(workspace())
-        .output()
-        .expect("the drape binary runs")
-}
-
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("drape-kin-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
+mod common;
+use common::*;
 
 #[test]
 fn a_forming_scene_drapes_kinematically_into_the_same_results_folder() {

@@ -10,6 +10,9 @@
 //! - [`ResinLaw`]: isotropic plane-stress hypo-elasticity updated in the
 //!   Green–Naghdi frame, with an optional Prony relaxation of the in-plane
 //!   shear (exact recursive update for piecewise-linear strain histories).
+//! - [`ShearLocking`] (optional, beyond the paper): a non-linear in-plane
+//!   shear law τ_s(γ) that stiffens past the locking angle, and its fit
+//!   from a picture-frame curve.
 //! - [`Material`]: a fabric (fibres + resin + thickness, fibre volume
 //!   fraction, density), its validation with errors that name the field,
 //!   serde (de)serialisation for scene files, and the paper's presets
@@ -40,9 +43,11 @@
 //! ```
 
 mod fibre;
+mod locking;
 mod material;
 mod resin;
 
 pub use fibre::FibreLaw;
+pub use locking::{FitError, ShearLocking};
 pub use material::{Material, MaterialError, PRESET_NAMES};
 pub use resin::{PronyTerm, ResinLaw};

@@ -65,7 +65,18 @@ pub struct Material {
     pub fibre_volume_fraction: f64,
     /// ρ, the fabric's density (t/mm³).
     pub density: f64,
+    /// Bending rigidity of [warp, weft] (N·mm: bending moment per unit
+    /// width per unit curvature, B = w·c³ from a cantilever test's bending
+    /// length c and areal weight w). Used only when a scene switches yarn
+    /// bending on; absent from a card that has no measured value.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bending_rigidity: Option<[f64; 2]>,
 }
+
+/// Assumed bending rigidity of `glass-serge-4x3` (N·mm), see [`Material::preset`].
+const GLASS_BENDING: f64 = 1.3e-9 * 0.57 * 9810.0 * 40.0 * 40.0 * 40.0;
+/// Assumed bending rigidity of `carbon-prepreg-2x2` (N·mm), see [`Material::preset`].
+const CARBON_BENDING: f64 = 1.5e-9 * 0.3 * 9810.0 * 80.0 * 80.0 * 80.0;
 
 /// The names [`Material::preset`] knows.
 pub const PRESET_NAMES: [&str; 2] = ["carbon-prepreg-2x2", "glass-serge-4x3"];
@@ -85,6 +96,21 @@ impl Material {
     ///   a user builds, not of the material.
     ///
     /// Both have no compression stiffness in the yarns.
+    ///
+    /// Bending rigidities (used only when a scene switches bending on) are
+    /// **\[assumptions\]**: the paper gives none and no measurement of these
+    /// two fabrics was at hand. Each is B = w·c³ (Peirce's cantilever
+    /// relation) from the preset's own areal weight w = ρ·h·g and an
+    /// assumed bending length c, the same for warp and weft (balanced
+    /// weaves): c = 40 mm for the heavy glass serge (w = 7.27e-6 N/mm²,
+    /// B = 0.465 N·mm), in the 30–60 mm range cantilever tests (ASTM D1388)
+    /// give for woven glass reinforcements of 500–800 g/m²; c = 80 mm for
+    /// the uncured carbon prepreg (w = 4.41e-6 N/mm², B = 2.26 N·mm), the
+    /// tack of the resin making a prepreg several times stiffer in bending
+    /// than its dry fabric. Replace them by a cantilever test of the actual
+    /// material (and note that Peirce's formula overestimates B by up to
+    /// ~20 % for heavy fabrics: Lammens et al., Textile Res. J. 84(12),
+    /// 2014, 1307–1314; drape's own cantilever case gives the elastica).
     pub fn preset(name: &str) -> Option<Self> {
         match name {
             "carbon-prepreg-2x2" => {
@@ -105,10 +131,12 @@ impl Material {
                             .zip(taus)
                             .map(|(&g, tau)| PronyTerm { g, tau })
                             .collect(),
+                        shear_locking: None,
                     },
                     thickness: 0.3,
                     fibre_volume_fraction: 0.5,
                     density: 1.5e-9,
+                    bending_rigidity: Some([CARBON_BENDING; 2]),
                 })
             }
             "glass-serge-4x3" => Some(Self {
@@ -122,10 +150,12 @@ impl Material {
                     young: 30.0,
                     poisson: 0.41,
                     prony: Vec::new(),
+                    shear_locking: None,
                 },
                 thickness: 0.57,
                 fibre_volume_fraction: 0.5,
                 density: 1.3e-9,
+                bending_rigidity: Some([GLASS_BENDING; 2]),
             }),
             _ => None,
         }
@@ -143,7 +173,13 @@ impl Material {
             self.fibre_volume_fraction > 0.0 && self.fibre_volume_fraction < 1.0,
             "a volume fraction in the open interval (0, 1)",
         )?;
-        MaterialError::check_positive("", "density", self.density)
+        MaterialError::check_positive("", "density", self.density)?;
+        if let Some(b) = self.bending_rigidity {
+            for (k, value) in b.iter().enumerate() {
+                MaterialError::check_positive("", &format!("bending_rigidity[{k}]"), *value)?;
+            }
+        }
+        Ok(())
     }
 
     /// h_m = (1 − V_f)·h, the resin membrane's thickness.

@@ -4,7 +4,7 @@
 use nalgebra::{Matrix2, Matrix3};
 use serde::{Deserialize, Serialize};
 
-use crate::MaterialError;
+use crate::{MaterialError, ShearLocking};
 
 /// One term of the Prony series G(t) = G₀·(1 − Σ g_k·(1 − e^(−t/τ_k)))
 /// (Abaqus convention).
@@ -34,6 +34,10 @@ pub struct ResinLaw {
     /// Prony terms of the in-plane shear; empty for an elastic resin.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub prony: Vec<PronyTerm>,
+    /// An optional non-linear shear law of the fabric (shear locking),
+    /// superposed on the membrane: see [`ShearLocking`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shear_locking: Option<ShearLocking>,
 }
 
 /// φ(x) = (1 − e^(−x))/x, the exact weight of a linear ramp over one step
@@ -54,6 +58,7 @@ impl ResinLaw {
             young,
             poisson,
             prony: Vec::new(),
+            shear_locking: None,
         };
         law.validate("resin")?;
         Ok(law)
@@ -93,7 +98,15 @@ impl ResinLaw {
             sum,
             sum < 1.0,
             "Prony weights g_k summing to less than 1 (the long-term modulus must stay positive)",
-        )
+        )?;
+        match &self.shear_locking {
+            Some(law) => law.validate(&if path.is_empty() {
+                "shear_locking".to_owned()
+            } else {
+                format!("{path}.shear_locking")
+            }),
+            None => Ok(()),
+        }
     }
 
     /// Whether the shear relaxes (any Prony term).
@@ -350,6 +363,7 @@ mod tests {
                 PronyTerm { g: 0.3, tau: 1.0 },
                 PronyTerm { g: 0.1, tau: 100.0 },
             ],
+            shear_locking: None,
         }
     }
 

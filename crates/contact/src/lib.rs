@@ -49,6 +49,8 @@ mod explicit;
 mod implicit;
 mod mesh;
 mod mesh_file;
+mod mesh_repair;
+mod phases;
 mod surface;
 mod tool;
 mod view;
@@ -63,6 +65,8 @@ pub use implicit::{
 };
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
+pub use mesh_repair::{RepairError, RepairOptions, RepairReport, repair};
+pub use phases::ContactPhase;
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};
 pub use tool::{Amplitude, Tool, ToolMotion, ToolState};
 pub use view::ContactView;

@@ -175,7 +175,7 @@ impl Rim {
 /// Relative area below which a triangle counts as degenerate: the sine of
 /// its smallest angle, roughly. Far below any meshing tolerance, far above
 /// the rounding of a cross product.
-const DEGENERATE_SINE: f64 = 1e-12;
+pub(crate) const DEGENERATE_SINE: f64 = 1e-12;
 
 /// Relative distance (to the mesh's size) below which a query point is on
 /// the surface.

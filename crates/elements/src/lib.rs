@@ -11,6 +11,8 @@
 //!   both yarn families *embedded* (their stress added at each point).
 //! - [`SpringBatch`]: node-to-anchor holding springs with a force–extension
 //!   table (the paper's nonlinear springs).
+//! - [`BendingBatch`] (optional, beyond the paper): yarn bending as a
+//!   discrete elastica along the mesh's yarn lines, three nodes per triplet.
 //!
 //! Every batch gives the internal force, the tangent stiffness (material +
 //! geometric), the stable time step, the strain energy and output fields.
@@ -52,10 +54,13 @@
 //! assert!(slots[1].x > 0.0 && slots[0].x < 0.0);
 //! ```
 
+mod bending;
 mod membrane;
+mod quad_lanes;
 mod spring;
 mod truss;
 
+pub use bending::{BendingBatch, YarnTriplet, yarn_triplets};
 pub use drape_kinematics::{Degeneracy, KinematicsError, Matrix2, Matrix3x2, Vector2, Vector3};
 pub use membrane::{FabricSection, MembraneBatch, MembraneOutput, MembraneShape};
 pub use spring::{ForceTable, ForceTableError, SpringBatch};

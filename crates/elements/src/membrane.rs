@@ -10,7 +10,11 @@ use drape_kinematics::{
 use nalgebra::{DMatrix, Matrix2, Matrix3x2, Vector2, Vector3};
 use rayon::prelude::*;
 
+use crate::quad_lanes::{LANES, QuadLanes, ResinStep};
 use crate::{ElementError, MIN_CHUNK, lowest_error};
+
+mod locking;
+use locking::LockingPoint;
 
 /// Values per integration point before the resin's own history:
 /// U (11, 22, 12) and τ̄ (11, 22, 12).
@@ -87,7 +91,11 @@ pub struct MembraneOutput {
     /// Current fabric thickness h₀·λ₃ (mm).
     pub thickness: f64,
     /// Current unit directions of [warp, weft]: the area-weighted mean of
-    /// the integration points' directions, normalised.
+    /// the integration points' directions, normalised, then turned
+    /// symmetrically about their bisector so that the angle between them is
+    /// 90° − `shear_angle` (the mean of the points' shear; the plain means
+    /// differ from that by a second-order amount when the shear varies
+    /// over a quad).
     pub fibre_direction: [Vector3<f64>; 2],
 }
 
@@ -110,6 +118,9 @@ pub struct MembraneBatch {
     area: Vec<f64>,
     nodal_area: Vec<f64>,
     stride: usize,
+    /// The struct-of-arrays lanes of resin-only quads (none otherwise), see
+    /// [`crate::quad_lanes`].
+    lanes: Option<QuadLanes>,
 }
 
 /// A step's Δt and its Prony factors (e^(−Δt/τₖ), gₖ·φ): computed once
@@ -129,8 +140,11 @@ struct PointResponse {
     fibres: [FibreKinematics; 2],
     /// (τ, E_t) of each family, zero when the fibres are not embedded.
     fibre_law: [(f64, f64); 2],
-    /// Thickness-weighted first Piola stress h_m·P_resin + t_f·Σ P_fibre.
+    /// Thickness-weighted first Piola stress h_m·P_resin + t_f·Σ P_fibre
+    /// (+ the shear-locking law's, if any).
     p: Matrix3x2<f64>,
+    /// The shear-locking law's state, when the resin has one.
+    locking: Option<LockingPoint>,
 }
 
 #[inline]
@@ -244,6 +258,12 @@ impl MembraneBatch {
             }
         }
         let stride = KINEMATIC_HISTORY + section.material.resin.history_len();
+        // The lanes carry the paper's resin only: a shear-locking law (an
+        // option beyond the paper) keeps its quads on the scalar path.
+        let lanes = (shape == MembraneShape::Quad
+            && !section.embedded_fibres
+            && section.material.resin.shear_locking.is_none())
+        .then(|| QuadLanes::new(&grad_n, &area, count));
         Ok(Self {
             section,
             shape,
@@ -252,6 +272,7 @@ impl MembraneBatch {
             area,
             nodal_area,
             stride,
+            lanes,
         })
     }
 
@@ -389,6 +410,14 @@ impl MembraneBatch {
                 column += fib.direction * (t_f * s / fib.stretch);
             }
         }
+        let locking = match &m.resin.shear_locking {
+            Some(law) => {
+                let point = LockingPoint::new(law, m.thickness, &f)?;
+                point.add_stress(&mut p_eff);
+                Some(point)
+            }
+            None => None,
+        };
         Ok(PointResponse {
             f,
             polar,
@@ -397,6 +426,7 @@ impl MembraneBatch {
             fibres,
             fibre_law,
             p: p_eff,
+            locking,
         })
     }
 
@@ -524,6 +554,14 @@ impl MembraneBatch {
         } else {
             &[]
         };
+        let step = Step { dt, prony: factors };
+        if let Some(lanes) = &self.lanes {
+            if factors.len() == resin.prony.len() {
+                return self
+                    .forces_into_lanes(lanes, x, h_in, h_out, step, slots)
+                    .map_err(|error| self.diagnose(error, x));
+            }
+        }
         lowest_error(
             slots
                 .par_chunks_mut(nn)
@@ -531,17 +569,79 @@ impl MembraneBatch {
                 .with_min_len(MIN_CHUNK)
                 .enumerate()
                 .map(|(e, (f, out))| {
-                    self.element_force_with(
-                        e,
-                        x,
-                        &h_in[e * eh..(e + 1) * eh],
-                        out,
-                        Step { dt, prony: factors },
-                        f,
-                    )
+                    self.element_force_with(e, x, &h_in[e * eh..(e + 1) * eh], out, step, f)
                 }),
         )
         .map_err(|error| self.diagnose(error, x))
+    }
+
+    /// [`Self::forces_into`] of a resin-only quad batch: whole blocks of
+    /// [`LANES`] elements on the lanes (a block with a failing point again
+    /// on the scalar path, which names it), the rest on the scalar path.
+    fn forces_into_lanes(
+        &self,
+        lanes: &QuadLanes,
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_out: &mut [f64],
+        step: Step<'_>,
+        slots: &mut [Vector3<f64>],
+    ) -> Result<(), ElementError> {
+        let (nn, eh) = (self.shape.nodes(), self.element_history_len());
+        let m = &self.section.material;
+        let mut long_term = 1.0;
+        for p in &m.resin.prony {
+            long_term -= p.g;
+        }
+        let resin = ResinStep {
+            wave_modulus: m.resin.wave_modulus(),
+            poisson: m.resin.poisson,
+            shear_modulus: m.resin.shear_modulus(),
+            long_term,
+            thickness: m.resin_thickness(),
+            prony: step.prony,
+        };
+        let split = lanes.blocks() * LANES;
+        let (block_slots, tail_slots) = slots.split_at_mut(split * nn);
+        let (block_h, tail_h) = h_out.split_at_mut(split * eh);
+        lowest_error(
+            block_slots
+                .par_chunks_mut(LANES * nn)
+                .zip(block_h.par_chunks_mut(LANES * eh))
+                .with_min_len(MIN_CHUNK / LANES)
+                .enumerate()
+                .map(|(b, (f, out))| {
+                    let e0 = b * LANES;
+                    let (nodes, h) = (
+                        &self.nodes[e0 * nn..(e0 + LANES) * nn],
+                        &h_in[e0 * eh..(e0 + LANES) * eh],
+                    );
+                    if lanes.block_forces(b, nodes, x, h, out, self.stride, &resin, f) {
+                        return Ok(());
+                    }
+                    for k in 0..LANES {
+                        let e = e0 + k;
+                        self.element_force_with(
+                            e,
+                            x,
+                            &h_in[e * eh..(e + 1) * eh],
+                            &mut out[k * eh..(k + 1) * eh],
+                            step,
+                            &mut f[k * nn..(k + 1) * nn],
+                        )?;
+                    }
+                    Ok(())
+                }),
+        )?;
+        for (k, (f, out)) in tail_slots
+            .chunks_mut(nn)
+            .zip(tail_h.chunks_mut(eh))
+            .enumerate()
+        {
+            let e = split + k;
+            self.element_force_with(e, x, &h_in[e * eh..(e + 1) * eh], out, step, f)?;
+        }
+        Ok(())
     }
 
     /// The tangent ∂f/∂x of element `e` (3n × 3n, node-major) at positions
@@ -610,6 +710,9 @@ impl MembraneBatch {
                             d_p += d_dir * n_ref.transpose() * t_f;
                         }
                     }
+                    if let Some(point) = &r.locking {
+                        point.add_stress_derivative(&d_f, &mut d_p);
+                    }
                     for (a, ga) in grads.iter().enumerate() {
                         let col = d_p * ga * self.area[ip];
                         for j in 0..3 {
@@ -650,6 +753,15 @@ impl MembraneBatch {
                     })?;
                     w += m.family_thickness() * m.fibre.energy(fib.log_strain);
                 }
+            }
+            if let Some(law) = &m.resin.shear_locking {
+                let f = deformation_gradient(&xe[..nn], self.point_grad(e, p));
+                let gamma = locking::shear_angle(&f).map_err(|cause| ElementError {
+                    element: e,
+                    point: p,
+                    cause,
+                })?;
+                w += m.thickness * law.energy(gamma);
             }
             energy += w * self.area[ip];
         }
@@ -708,6 +820,19 @@ impl MembraneBatch {
                 }
             }
         }
+        let mut kappa = self.stiffness_bound();
+        if let Some(law) = &self.section.material.resin.shear_locking {
+            // ½·h·τ_s'·δγ² ≤ ½·(2h·τ_s')·|∇u|² at the element's current
+            // shear angle (δγ² ≤ 2|∇u|²); a stiffening law's stress term
+            // τ_s is below τ_s'·γ and inside the safety factor.
+            let worst = (0..self.shape.points())
+                .map(|p| {
+                    let f = deformation_gradient(&xe[..nn], self.point_grad(e, p));
+                    locking::shear_angle(&f).map_or(f64::INFINITY, |g| law.tangent(g.abs()))
+                })
+                .fold(0.0, f64::max);
+            kappa += 2.0 * self.section.material.thickness * worst;
+        }
         let rho_h = self.section.material.areal_density();
         let mass = self.nodal_areas(e);
         let lambda = (0..nn)
@@ -717,7 +842,7 @@ impl MembraneBatch {
                     .sum::<f64>()
             })
             .fold(0.0, f64::max);
-        2.0 / (self.stiffness_bound() * lambda).sqrt()
+        2.0 / (kappa * lambda).sqrt()
     }
 
     /// The smallest stable time step of the batch (∞ when empty).
@@ -778,6 +903,20 @@ impl MembraneBatch {
             // A mean of unit vectors within one element: never near zero
             // unless the element is folded, where any unit vector will do.
             *d = d.try_normalize(0.0).unwrap_or_else(Vector3::x);
+        }
+        // The angle between the mean directions is not 90° − (the mean
+        // shear) when the shear varies over a quad (by a second-order
+        // amount: up to 0.5° on the hemisphere's corner elements pulled by
+        // springs). Turn both symmetrically about their bisector, in their
+        // plane, to the angle 90° − γ: the directions written with the
+        // element then show the shear written with it.
+        let [w, f] = out.fibre_direction;
+        if let (Some(bisector), Some(across)) =
+            ((w + f).try_normalize(1e-12), (w - f).try_normalize(1e-12))
+        {
+            let half = 0.5 * (std::f64::consts::FRAC_PI_2 - out.shear_angle);
+            let (s, c) = half.sin_cos();
+            out.fibre_direction = [bisector * c + across * s, bisector * c - across * s];
         }
         Ok(out)
     }

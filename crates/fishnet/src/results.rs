@@ -101,6 +101,7 @@ impl Net {
             fields.centroid.push(cell.centroid + shift);
             fields.area.push(flat_area);
         }
+        fields.waviness = model.waviness(&state.x);
 
         let frame = self.spec().outline;
         let mut m = Measures::default();

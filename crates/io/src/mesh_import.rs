@@ -216,6 +216,24 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<ImportedMesh, ImportError> {
     }
 }
 
+/// [`read_mesh`], turning inverted elements over instead of refusing
+/// them: each element whose node order runs against its neighbours' (by
+/// the majority rule of the module's "Checks") gets the order of the rest.
+/// Returns the mesh and how many elements were turned.
+pub fn read_mesh_reoriented(path: impl AsRef<Path>) -> Result<(ImportedMesh, usize), ImportError> {
+    let path = path.as_ref();
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let (raw, hint) = match extension.as_deref() {
+        Some("msh") => parse_gmsh_raw(&read_bytes(path)?, path)?,
+        Some("inp") => parse_abaqus_raw(&String::from_utf8_lossy(&read_bytes(path)?), path)?,
+        _ => return read_mesh(path).map(|m| (m, 0)),
+    };
+    finish(raw, hint, true)
+}
+
 fn read_bytes(path: &Path) -> Result<Vec<u8>, ImportError> {
     std::fs::read(path).map_err(|e| {
         error(
@@ -295,8 +313,13 @@ fn normal(x: &[Vector3<f64>], nodes: &[u32]) -> Vector3<f64> {
 }
 
 /// Checks the elements and builds the mesh: geometry, orientation, unused
-/// nodes dropped, `all` and `boundary` added.
-fn finish(raw: RawMesh, empty_hint: &str) -> Result<ImportedMesh, ImportError> {
+/// nodes dropped, `all` and `boundary` added. With `reorient`, inverted
+/// elements are turned over (and counted) instead of refused.
+fn finish(
+    raw: RawMesh,
+    empty_hint: &str,
+    reorient: bool,
+) -> Result<(ImportedMesh, usize), ImportError> {
     let main = raw.files.first().cloned().unwrap_or_default();
     if raw.elements.is_empty() {
         return Err(error(
@@ -322,13 +345,18 @@ fn finish(raw: RawMesh, empty_hint: &str) -> Result<ImportedMesh, ImportError> {
             x0.push(raw.x0[i]);
         }
     }
-    let elements: Vec<Vec<u32>> = raw
+    let mut elements: Vec<Vec<u32>> = raw
         .elements
         .iter()
         .map(|e| e.nodes().iter().map(|&n| new_index[n as usize]).collect())
         .collect();
 
-    let boundary = check_orientation(&raw, &elements, &normals)?;
+    let (boundary, inverted) = check_orientation(&raw, &elements, &normals, reorient)?;
+    // Turned over: the same first node, the others in reverse order.
+    for (nodes, _) in elements.iter_mut().zip(&inverted).filter(|(_, i)| **i) {
+        nodes[1..].reverse();
+    }
+    let turned = inverted.iter().filter(|&&i| i).count();
 
     let mut node_sets = BTreeMap::new();
     for (name, set) in &raw.node_sets {
@@ -366,7 +394,7 @@ fn finish(raw: RawMesh, empty_hint: &str) -> Result<ImportedMesh, ImportError> {
             _ => {}
         }
     }
-    Ok(mesh)
+    Ok((mesh, turned))
 }
 
 /// Each element's normal (twice its area vector), or the first element
@@ -440,12 +468,14 @@ struct EdgeUse {
 
 /// Checks that every element's node order agrees with its neighbours' and
 /// each piece's with the whole mesh; returns the boundary nodes (on edges
-/// that only one element uses).
+/// that only one element uses) and, with `reorient`, which elements are
+/// inverted (none without: an inverted element is an error then).
 fn check_orientation(
     raw: &RawMesh,
     elements: &[Vec<u32>],
     normals: &[Vector3<f64>],
-) -> Result<Vec<u32>, ImportError> {
+    reorient: bool,
+) -> Result<(Vec<u32>, Vec<bool>), ImportError> {
     let mut edges: HashMap<(u32, u32), Vec<EdgeUse>> = HashMap::new();
     for (i, nodes) in elements.iter().enumerate() {
         for k in 0..nodes.len() {
@@ -545,6 +575,9 @@ fn check_orientation(
         }
     }
 
+    if reorient {
+        return Ok((boundary, inverted));
+    }
     let how_many = inverted.iter().filter(|&&i| i).count();
     if let Some(first) = inverted.iter().position(|&i| i) {
         let e = &raw.elements[first];
@@ -560,12 +593,12 @@ fn check_orientation(
                  rest of the blank's (its normal points against theirs, a clockwise element \
                  among counter-clockwise ones); flipped elements are reported rather than fixed \
                  because they usually mean a broken mesh — reverse their node order in the \
-                 mesher",
+                 mesher, or give `reorient = true` in [fabric.blank] to have drape turn them",
                 e.label
             ),
         ));
     }
-    Ok(boundary)
+    Ok((boundary, inverted))
 }
 
 // ---------------------------------------------------------------------------
@@ -582,6 +615,13 @@ pub fn read_gmsh(path: impl AsRef<Path>) -> Result<ImportedMesh, ImportError> {
 /// Reads the bytes of a Gmsh `.msh` file of format 4.1; `path` names it in
 /// errors.
 pub fn parse_gmsh(bytes: &[u8], path: &Path) -> Result<ImportedMesh, ImportError> {
+    let (raw, hint) = parse_gmsh_raw(bytes, path)?;
+    finish(raw, hint, false).map(|(mesh, _)| mesh)
+}
+
+/// The mesh of a Gmsh file as read, before the checks, and the hint for
+/// an empty one.
+fn parse_gmsh_raw(bytes: &[u8], path: &Path) -> Result<(RawMesh, &'static str), ImportError> {
     let syntax =
         |line: Option<usize>, message: String| error(path, line, ImportErrorKind::Syntax, message);
     let binary = check_gmsh_header(bytes, path)?;
@@ -787,11 +827,11 @@ pub fn parse_gmsh(bytes: &[u8], path: &Path) -> Result<ImportedMesh, ImportError
             .unwrap_or_else(|| format!("physical:{dim}:{tag}"));
         raw.node_sets.entry(name).or_default().extend(nodes);
     }
-    finish(
+    Ok((
         raw,
         ": with physical groups, Gmsh saves only their elements — add the surface to a \
          physical group, or set Mesh.SaveAll = 1",
-    )
+    ))
 }
 
 /// Checks the `$MeshFormat` header before mshio sees it (it panics on some
@@ -1220,16 +1260,23 @@ pub fn read_abaqus(path: impl AsRef<Path>) -> Result<ImportedMesh, ImportError> 
 /// Reads the text of an Abaqus `.inp` file; `path` names it in errors and
 /// anchors `*INCLUDE` files.
 pub fn parse_abaqus(text: &str, path: &Path) -> Result<ImportedMesh, ImportError> {
+    let (raw, hint) = parse_abaqus_raw(text, path)?;
+    finish(raw, hint, false).map(|(mesh, _)| mesh)
+}
+
+/// The mesh of an Abaqus file as read, before the checks, and the hint for
+/// an empty one.
+fn parse_abaqus_raw(text: &str, path: &Path) -> Result<(RawMesh, &'static str), ImportError> {
     let mut reader = InpReader::default();
     reader.files.push(path.to_owned());
     reader.read(text, 0, 0)?;
     reader.end_block()?;
     let raw = reader.resolve()?;
-    finish(
+    Ok((
         raw,
         ": drape reads the element types M3D3, M3D4, M3D4R, S3, S3R, S4, S4R, CPS3, CPS4 and \
          CPS4R",
-    )
+    ))
 }
 
 /// How many `*INCLUDE` levels are followed (a cycle would never end).

@@ -10,6 +10,10 @@
 //! | `profiles.csv` | shear along the blank's diagonal and median | [`ResultsDir::write_profiles`] |
 //! | `summary.json` | derived measures and run statistics ([`Summary`]) | [`ResultsDir::write_summary`] |
 //! | `shear_map.png`, `profiles.png` | pictures | [`ResultsDir::write_pictures`] |
+//! | `shear_3d.png` | the formed part seen obliquely, with the tools' outline | [`ResultsDir::write_view`] |
+//! | `frames/trusses_NNNNN.vtu`, `trusses.pvd` | the fibre trusses as lines (models with trusses) | [`ResultsDir::write_frame`] |
+//! | `frames/tools_NNNNN.vtu`, `tools.pvd` | the tools' surfaces where they are at each frame | [`ResultsDir::write_tools`] |
+//! | `orientations.inp`, `orientations.csv` | draped fibre orientations for structural analysis | [`ResultsDir::write_orientations`] |
 //!
 //! Every file is written whole or not at all ([`crate::atomic::write`]), and
 //! `series.pvd` is rewritten after each frame, so a run that fails part way
@@ -30,7 +34,8 @@
 //! `fibre_stretch_warp`, `fibre_stretch_weft`, `fibre_direction_warp`,
 //! `fibre_direction_weft` (unit vectors), `fibre_tension_warp`,
 //! `fibre_tension_weft` (N/mm), `resin_stress` (3 components: 11, 22, 12 in
-//! fibre axes, MPa), `thickness` (mm). The encoding (inline base64 binary
+//! fibre axes, MPa), `thickness` (mm), `waviness` (degrees, the wrinkle
+//! indicator of `drape_model::measures::waviness`). The encoding (inline base64 binary
 //! with a `UInt64` header) and why are in the `vtk` submodule's docs.
 //!
 //! # Numbers in text files
@@ -47,12 +52,20 @@
 //! # Ok(()) }
 //! ```
 
+pub mod export;
 mod lock;
+pub mod mapping;
 mod pictures;
+pub mod read;
+mod summary;
+mod tools;
 mod vtk;
 
 pub use lock::{LOCK_FILE, OutputLock};
 pub use pictures::maps::MapPanel;
+pub use pictures::sweep::{SweepAxis, SweepRun};
+pub use summary::{Peaks, RunSetup, max_yarn_tension};
+pub use tools::{ToolMesh, ToolMeshes};
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -187,15 +200,35 @@ pub struct Summary {
     pub max_shear_at: [f64; 3],
     /// Draw-in.
     pub draw_in_mm: DrawInMm,
-    /// Largest truss tension (N).
+    /// Largest truss force (N) at the end; NaN (`null`) when the fibres
+    /// are embedded (there is no truss).
+    #[serde(deserialize_with = "nan_if_null")]
     pub max_fibre_tension_n: f64,
+    /// Largest yarn tension per unit width at the end (N/mm), for trusses
+    /// and embedded fibres alike ([`max_yarn_tension`]).
+    #[serde(default)]
+    pub max_fibre_tension_n_per_mm: f64,
     /// Reference area above the locking angle (mm²).
     pub area_above_locking_mm2: f64,
+    /// The largest values over the run's frames, and when.
+    #[serde(default)]
+    pub peak: Peaks,
+    /// Largest element waviness (degrees): the wrinkle indicator.
+    #[serde(default)]
+    pub max_waviness_deg: f64,
+    /// Reference area of the elements wavier than 5° (mm²).
+    #[serde(default)]
+    pub wrinkle_area_mm2: f64,
     /// Energy.
     pub energy: EnergySummary,
+    /// What the run started with (absent for a kinematic drape).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub setup: Option<RunSetup>,
     /// Run statistics.
     pub run: RunInfo,
-    /// What the run found doubtful but not wrong enough to stop it.
+    /// What the scene and the run found doubtful but not wrong enough to
+    /// stop it (an imported mesh's size or repairs, the driver's start-up
+    /// warnings).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
 }
@@ -205,18 +238,35 @@ pub struct ResultsDir {
     dir: PathBuf,
     /// Frames written so far: index → (time, file relative to `dir`).
     frames: BTreeMap<usize, (f64, String)>,
+    /// The trusses' frames (`trusses.pvd`), the same way.
+    truss_frames: BTreeMap<usize, (f64, String)>,
+    /// The tools' frames (`tools.pvd`), the same way.
+    tool_frames: BTreeMap<usize, (f64, String)>,
     /// The folder's lock, held while the run writes.
     _lock: OutputLock,
 }
 
 /// The files a [`ResultsDir`] writes at its top level.
-const OUTPUT_FILES: [&str; 6] = [
+const OUTPUT_FILES: [&str; 11] = [
     "series.pvd",
+    "trusses.pvd",
+    "tools.pvd",
     "energy.csv",
     "profiles.csv",
     "summary.json",
     "shear_map.png",
+    "shear_3d.png",
     "profiles.png",
+    "orientations.inp",
+    "orientations.csv",
+];
+
+/// The series a results folder holds: the `.pvd` file and the prefix of
+/// its frame files in `frames/`.
+const SERIES: [(&str, &str); 3] = [
+    ("series.pvd", "frame_"),
+    ("trusses.pvd", "trusses_"),
+    ("tools.pvd", "tools_"),
 ];
 
 /// The `energy.csv` header.
@@ -243,11 +293,20 @@ pub(crate) fn fmt_f64(v: f64) -> String {
     }
 }
 
-/// Whether `name` is `frame_` + digits + `.vtu`, a frame this module writes.
-fn is_frame_file(name: &str) -> bool {
-    name.strip_prefix("frame_")
+/// The frame index of `name` when it is a frame file this module writes:
+/// `frame_`, `trusses_` or `tools_`, then digits, then `.vtu`.
+fn frame_index(name: &str) -> Option<usize> {
+    SERIES
+        .iter()
+        .find_map(|(_, prefix)| name.strip_prefix(prefix))
         .and_then(|rest| rest.strip_suffix(".vtu"))
-        .is_some_and(|digits| !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
+        .filter(|digits| !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()))
+        .and_then(|digits| digits.parse().ok())
+}
+
+/// Whether `name` is a frame file this module writes.
+fn is_frame_file(name: &str) -> bool {
+    frame_index(name).is_some()
 }
 
 impl ResultsDir {
@@ -276,6 +335,8 @@ impl ResultsDir {
         Ok(Self {
             dir: dir.to_owned(),
             frames: BTreeMap::new(),
+            truss_frames: BTreeMap::new(),
+            tool_frames: BTreeMap::new(),
             _lock: lock,
         })
     }
@@ -287,29 +348,51 @@ impl ResultsDir {
     pub fn reopen(dir: &Path, frames: &[(usize, f64)]) -> Result<Self, ResultsError> {
         let lock = claim(dir)?;
         let folder = dir.join("frames");
-        let kept: BTreeMap<usize, (f64, String)> = frames
-            .iter()
-            .map(|&(i, t)| (i, (t, format!("frames/frame_{i:05}.vtu"))))
-            .collect();
+        let kept: BTreeMap<usize, f64> = frames.iter().copied().collect();
+        let mut series: [BTreeMap<usize, (f64, String)>; 3] = Default::default();
         for entry in std::fs::read_dir(&folder).map_err(at(&folder))? {
             let entry = entry.map_err(at(&folder))?;
             let name = entry.file_name();
-            let Some(name) = name.to_str().filter(|n| is_frame_file(n)) else {
+            let Some((name, index)) = name.to_str().and_then(|n| Some((n, frame_index(n)?))) else {
                 continue;
             };
-            if !kept.values().any(|(_, f)| f.ends_with(name)) {
-                remove_if_present(&entry.path())?;
+            match kept.get(&index) {
+                Some(&time) => {
+                    let k = SERIES
+                        .iter()
+                        .position(|(_, prefix)| name.starts_with(prefix))
+                        .unwrap_or(0);
+                    series[k].insert(index, (time, format!("frames/{name}")));
+                }
+                None => remove_if_present(&entry.path())?,
             }
         }
+        let [frames, truss_frames, tool_frames] = series;
         let reopened = Self {
             dir: dir.to_owned(),
-            frames: kept,
+            frames,
+            truss_frames,
+            tool_frames,
             _lock: lock,
         };
-        let pvd = dir.join("series.pvd");
-        crate::atomic::write(&pvd, vtk::series_pvd(&reopened.frames).as_bytes())
-            .map_err(at(&pvd))?;
+        for (k, (pvd, _)) in SERIES.iter().enumerate() {
+            let listed = reopened.series(k);
+            if k == 0 || !listed.is_empty() {
+                let path = dir.join(pvd);
+                crate::atomic::write(&path, vtk::series_pvd(listed).as_bytes())
+                    .map_err(at(&path))?;
+            }
+        }
         Ok(reopened)
+    }
+
+    /// The frames of series `k` of [`SERIES`].
+    fn series(&self, k: usize) -> &BTreeMap<usize, (f64, String)> {
+        match k {
+            0 => &self.frames,
+            1 => &self.truss_frames,
+            _ => &self.tool_frames,
+        }
     }
 
     /// The frames written so far: (index, time).
@@ -341,11 +424,51 @@ impl ResultsDir {
             source: std::io::Error::new(std::io::ErrorKind::InvalidInput, mismatch.to_string()),
         })?;
         crate::atomic::write(&path, xml.as_bytes()).map_err(at(&path))?;
+        if let Some(xml) = vtk::trusses_vtu(time, frame.model, &frame.state.x) {
+            let relative = format!("frames/trusses_{index:05}.vtu");
+            let path = self.dir.join(&relative);
+            crate::atomic::write(&path, xml.as_bytes()).map_err(at(&path))?;
+            self.truss_frames.insert(index, (time, relative));
+            let pvd = self.dir.join("trusses.pvd");
+            crate::atomic::write(&pvd, vtk::series_pvd(&self.truss_frames).as_bytes())
+                .map_err(at(&pvd))?;
+        }
         self.frames.insert(index, (time, relative));
         // The series only ever names frames already on disk: a crash
         // between the two writes loses at most the newest entry.
         let pvd = self.dir.join("series.pvd");
         crate::atomic::write(&pvd, vtk::series_pvd(&self.frames).as_bytes()).map_err(at(&pvd))
+    }
+
+    /// Writes the tools of frame `index` at `time` as
+    /// `frames/tools_NNNNN.vtu` (every tool's triangles, each moved by its
+    /// entry of `displacements` along its axis, with the cell data `tool`:
+    /// its index among the scene's tools) and rewrites `tools.pvd`.
+    /// Nothing is written without tools.
+    pub fn write_tools(
+        &mut self,
+        index: usize,
+        time: f64,
+        tools: &ToolMeshes,
+        displacements: &[f64],
+    ) -> Result<(), ResultsError> {
+        if tools.is_empty() {
+            return Ok(());
+        }
+        let (mut points, mut triangles, mut owner) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, tool) in tools.tools.iter().enumerate() {
+            let first = points.len() as u32;
+            points.extend(tool.vertices_at(displacements.get(k).copied().unwrap_or(0.0)));
+            triangles.extend(tool.triangles.iter().map(|t| t.map(|i| i + first)));
+            owner.extend(std::iter::repeat_n(k as u32, tool.triangles.len()));
+        }
+        let relative = format!("frames/tools_{index:05}.vtu");
+        let path = self.dir.join(&relative);
+        let xml = vtk::surfaces_vtu(time, &points, &triangles, &owner);
+        crate::atomic::write(&path, xml.as_bytes()).map_err(at(&path))?;
+        self.tool_frames.insert(index, (time, relative));
+        let pvd = self.dir.join("tools.pvd");
+        crate::atomic::write(&pvd, vtk::series_pvd(&self.tool_frames).as_bytes()).map_err(at(&pvd))
     }
 
     /// Writes `energy.csv`: one row per entry of `rows`, energies in mJ
@@ -449,6 +572,42 @@ impl ResultsDir {
         crate::atomic::write(&path, &png).map_err(at(&path))
     }
 
+    /// Writes `shear_3d.png`: the formed part seen obliquely (azimuth −60°,
+    /// elevation 35°), coloured by |γ| with a colour bar, over the outline
+    /// of the tools of `tools`, each displaced by its entry of
+    /// `displacements` along its axis.
+    pub fn write_view(
+        &self,
+        model: &Model,
+        state: &State,
+        fields: &ElementFields,
+        tools: &ToolMeshes,
+        displacements: &[f64],
+    ) -> Result<(), ResultsError> {
+        let path = self.dir.join("shear_3d.png");
+        let png = pictures::oblique::oblique_view(model, state, fields, tools, displacements)
+            .map_err(|e| ResultsError {
+                path: path.clone(),
+                source: std::io::Error::other(e),
+            })?;
+        crate::atomic::write(&path, &png).map_err(at(&path))
+    }
+
+    /// Writes `orientations.inp` and `orientations.csv` (see
+    /// [`export`]): the draped fibre orientation, shear angle and
+    /// thickness of every element of `model` at `state`.
+    pub fn write_orientations(
+        &self,
+        model: &Model,
+        state: &State,
+        fields: &ElementFields,
+        title: &str,
+    ) -> Result<(), ResultsError> {
+        let o = export::Orientations::of_frame(model, state, fields, title);
+        self.write_file("orientations.inp", o.to_inp().as_bytes())?;
+        self.write_file("orientations.csv", o.to_csv().as_bytes())
+    }
+
     /// Writes `bytes` whole to `name` in the directory.
     fn write_file(&self, name: &str, bytes: &[u8]) -> Result<(), ResultsError> {
         let path = self.dir.join(name);
@@ -465,6 +624,36 @@ pub fn write_flat_maps(
     panels: &[MapPanel<'_>],
 ) -> Result<(), ResultsError> {
     let png = pictures::maps::flat_maps(model, panels).map_err(|e| ResultsError {
+        path: path.to_owned(),
+        source: std::io::Error::other(e),
+    })?;
+    crate::atomic::write(path, &png).map_err(at(path))
+}
+
+/// Writes the PNG `path` like [`write_flat_maps`], for elements `cells`
+/// (node indices into `x0`) drawn at the (x, y) of `x0`: the picture of a
+/// comparison of two results folders.
+pub fn write_flat_maps_of(
+    path: &Path,
+    x0: &[Vector3<f64>],
+    cells: &[Vec<u32>],
+    panels: &[MapPanel<'_>],
+) -> Result<(), ResultsError> {
+    let png = pictures::maps::flat_maps_of(x0, cells, panels).map_err(|e| ResultsError {
+        path: path.to_owned(),
+        source: std::io::Error::other(e),
+    })?;
+    crate::atomic::write(path, &png).map_err(at(path))
+}
+
+/// Writes the PNG `path` of a sweep: each measure of `runs` against each
+/// swept key of `axes` (see `sweep.png` in the scene reference).
+pub fn write_sweep_picture(
+    path: &Path,
+    axes: &[SweepAxis],
+    runs: &[SweepRun],
+) -> Result<(), ResultsError> {
+    let png = pictures::sweep::sweep_png(axes, runs).map_err(|e| ResultsError {
         path: path.to_owned(),
         source: std::io::Error::other(e),
     })?;

@@ -40,8 +40,11 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 mod locate;
+mod placement;
 
 use locate::{Locator, Override, field_at, line_at, plain};
+pub use placement::LengthUnit;
+use placement::Placement;
 
 /// A scene that cannot be used: where and why.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -235,6 +238,23 @@ pub struct BlankSpec {
     /// scene file (see [`crate::mesh_import`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mesh: Option<String>,
+    /// With `mesh`: the unit of the file's coordinates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub units: Option<LengthUnit>,
+    /// With `mesh`: a factor on the file's coordinates (or `units`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    /// With `mesh`: rotations about x, then y, then z (degrees), after
+    /// the scale.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<[f64; 3]>,
+    /// With `mesh`: a translation (mm), applied last.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<[f64; 3]>,
+    /// With `mesh`: turn elements whose node order runs against their
+    /// neighbours' instead of refusing the mesh.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reorient: Option<bool>,
 }
 
 /// `[fabric]`.
@@ -250,6 +270,10 @@ pub struct FabricSpec {
     pub fibres: FibreRepresentation,
     /// The blank.
     pub blank: BlankSpec,
+    /// Yarn bending (beyond the paper): a discrete elastica along the
+    /// mesh's yarn lines with the material's `bending_rigidity`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub bending: bool,
 }
 
 /// A tool's shape.
@@ -327,9 +351,24 @@ pub enum GeometrySpec {
     Mesh {
         /// The file.
         file: String,
-        /// Translation applied to the mesh (mm).
+        /// Translation applied to the mesh (mm), last.
         #[serde(default)]
         offset: [f64; 3],
+        /// The unit of the file's coordinates.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        units: Option<LengthUnit>,
+        /// A factor on the file's coordinates (or `units`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        scale: Option<f64>,
+        /// Rotations about x, then y, then z (degrees), after the scale.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rotate: Option<[f64; 3]>,
+        /// Wind the triangles consistently (a warning counts those turned).
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        reorient: bool,
+        /// Drop degenerate triangles (a warning counts them).
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        drop_degenerate: bool,
     },
 }
 
@@ -649,6 +688,10 @@ pub struct Scene {
     /// without a `[kinematic]` table a default that cannot be found is not
     /// an error for the other commands.
     pub kinematic: Result<KinematicSetup, SceneError>,
+    /// What may not be what was meant, located like errors (a blank mesh
+    /// whose size suggests metres, degenerate triangles dropped from a tool
+    /// mesh, elements turned over): the command prints them.
+    pub warnings: Vec<String>,
 }
 
 fn vector(v: [f64; 3]) -> Vector3<f64> {
@@ -682,6 +725,7 @@ impl Scene {
             file: path,
             text: Some(text),
             overrides: &given,
+            warnings: Default::default(),
         };
         let syntax = |e: toml::de::Error| SceneError {
             file: path.to_owned(),
@@ -737,6 +781,7 @@ impl Scene {
             file,
             text: None,
             overrides: &[],
+            warnings: Default::default(),
         };
         Self::assemble(spec, file, &at)
     }
@@ -757,6 +802,7 @@ impl Scene {
             settings,
             implicit,
             kinematic,
+            warnings: at.warnings.take(),
         })
     }
 
@@ -992,6 +1038,22 @@ fn rectangle_blank(
     material: &Material,
 ) -> Result<(Model, Vector3<f64>), SceneError> {
     let b = &fabric.blank;
+    let mesh_keys = [
+        ("units", b.units.is_some()),
+        ("scale", b.scale.is_some()),
+        ("rotate", b.rotate.is_some()),
+        ("offset", b.offset.is_some()),
+        ("reorient", b.reorient.is_some()),
+    ];
+    if let Some((key, _)) = mesh_keys.iter().find(|(_, given)| *given) {
+        return Err(at.error(
+            &format!("fabric.blank.{key}"),
+            format!(
+                "`{key}` places a blank read from a mesh file (`mesh = \"file.msh\"`); a \
+                 rectangle is placed by `center`"
+            ),
+        ));
+    }
     let (Some(width), Some(height)) = (b.width, b.height) else {
         let missing = if b.width.is_none() { "width" } else { "height" };
         return Err(at.error(
@@ -1078,9 +1140,48 @@ fn mesh_blank(
     if !fabric.orientation_deg.is_finite() {
         return Err(at.error("fabric.orientation_deg", "must be a finite angle"));
     }
+    let placement = Placement::new(at, "fabric.blank", b.units, b.scale, b.rotate, b.offset)?;
     let path = at.file.parent().unwrap_or(Path::new(".")).join(file);
-    let mesh = crate::mesh_import::read_mesh(&path)
-        .map_err(|e| at.error("fabric.blank.mesh", e.to_string()))?;
+    let (mut mesh, turned) = if b.reorient == Some(true) {
+        crate::mesh_import::read_mesh_reoriented(&path)
+    } else {
+        crate::mesh_import::read_mesh(&path).map(|m| (m, 0))
+    }
+    .map_err(|e| at.error("fabric.blank.mesh", e.to_string()))?;
+    if turned > 0 {
+        at.warn(
+            "fabric.blank.reorient",
+            format!(
+                "{}: turned {turned} element{} over to the node order of their neighbours",
+                path.display(),
+                if turned == 1 { "" } else { "s" }
+            ),
+        );
+    }
+    for x in &mut mesh.x0 {
+        *x = placement.apply(x);
+    }
+    // drape works in mm: a blank of less than a millimetre or more than ten
+    // metres across is most likely a file in another unit.
+    let (low, high) = mesh.x0.iter().fold(
+        (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        ),
+        |(l, h), x| (l.inf(x), h.sup(x)),
+    );
+    let size = (high - low).norm();
+    if !(1.0..=10_000.0).contains(&size) {
+        at.warn(
+            "fabric.blank.mesh",
+            format!(
+                "{}: the blank is {size:.3e} mm across, after `units`/`scale`: drape's lengths \
+                 are in mm; if the file is in another unit, give `units = \"m\"` (or \"cm\", \
+                 \"in\") or `scale` in [fabric.blank]",
+                path.display()
+            ),
+        );
+    }
     let model = Model::from_mesh(
         &mesh.blank_mesh(fabric.orientation_deg),
         material,
@@ -1330,31 +1431,21 @@ fn build(
                 profile.clone(),
             )
             .map_err(surface_err)?,
-            GeometrySpec::Mesh { file, offset } => {
-                let path = at.file.parent().unwrap_or(Path::new(".")).join(file);
-                let offset = finite3(at, &format!("{g}.offset"), *offset)?;
-                let extension = path
-                    .extension()
-                    .and_then(|e| e.to_str())
-                    .map(str::to_ascii_lowercase);
-                let read = match extension.as_deref() {
-                    Some("stl") => drape_contact::read_stl(&path),
-                    Some("obj") => drape_contact::read_obj(&path),
-                    _ => {
-                        return Err(at.error(
-                            &format!("{g}.file"),
-                            format!("`{file}`: expected an .stl or .obj file"),
-                        ));
-                    }
+            GeometrySpec::Mesh {
+                file,
+                offset,
+                units,
+                scale,
+                rotate,
+                reorient,
+                drop_degenerate,
+            } => {
+                let placement = Placement::new(at, &g, *units, *scale, *rotate, Some(*offset))?;
+                let options = drape_contact::RepairOptions {
+                    drop_degenerate: *drop_degenerate,
+                    reorient: *reorient,
                 };
-                let (vertices, triangles) =
-                    read.map_err(|e| at.error(&format!("{g}.file"), e.to_string()))?;
-                let vertices = vertices.into_iter().map(|v| v + offset).collect();
-                // The file's geometry (a degenerate triangle, a winding
-                // that flips) is the file's fault: name it.
-                Surface::triangle_mesh(vertices, triangles).map_err(|e| {
-                    at.error(&format!("{g}.file"), format!("{}: {e}", path.display()))
-                })?
+                placement::tool_mesh(at, &g, file, &placement, options)?
             }
         };
         let m = format!("{here}.motion");
@@ -1520,6 +1611,21 @@ fn build(
     }
     if let Some(g) = spec.gravity {
         model.gravity = finite3(at, "gravity", g)?;
+    }
+    // After the boundary conditions: lines are clamped at the fixed nodes.
+    if fabric.bending {
+        let rigidity = material.bending_rigidity.ok_or_else(|| {
+            at.error(
+                "fabric.bending",
+                "yarn bending needs the material's `bending_rigidity = [warp, weft]` (N·mm); \
+                 this material has none",
+            )
+        })?;
+        let theta = fabric.orientation_deg.to_radians();
+        let warp = Vector3::new(theta.cos(), theta.sin(), 0.0);
+        model
+            .add_yarn_bending(warp, Vector3::z(), rigidity)
+            .map_err(|e| at.error("fabric.bending", e.to_string()))?;
     }
     if !(spec.output.locking_angle_deg.is_finite() && spec.output.locking_angle_deg > 0.0) {
         return Err(at.error("output.locking_angle_deg", "expected a positive angle"));

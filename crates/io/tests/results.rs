@@ -9,7 +9,7 @@ use std::process::Command;
 use drape_constitutive::Material;
 use drape_contact::ContactStatus;
 use drape_io::results::{
-    DrawInMm, EnergyRow, EnergySummary, FrameData, ResultsDir, RunInfo, Summary,
+    DrawInMm, EnergyRow, EnergySummary, FrameData, Peaks, ResultsDir, RunInfo, RunSetup, Summary,
 };
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{Model, State};
@@ -22,7 +22,7 @@ const POINT_ARRAYS: [&str; 4] = [
     "contact_force",
     "contact_status",
 ];
-const CELL_ARRAYS: [&str; 9] = [
+const CELL_ARRAYS: [&str; 10] = [
     "shear_angle_deg",
     "fibre_stretch_warp",
     "fibre_stretch_weft",
@@ -32,6 +32,7 @@ const CELL_ARRAYS: [&str; 9] = [
     "fibre_tension_weft",
     "resin_stress",
     "thickness",
+    "waviness",
 ];
 
 fn blank(element: ElementKind, cells: usize) -> RectangleBlank {
@@ -420,11 +421,25 @@ fn writes_a_complete_results_directory() {
             dd: draw_in.dd,
         },
         max_fibre_tension_n: measures.max_fibre_tension_n,
+        max_fibre_tension_n_per_mm: 0.25,
         area_above_locking_mm2: measures.area_above_locking,
+        peak: Peaks {
+            max_shear_deg: 31.25,
+            max_shear_time_s: 0.02,
+            ..Peaks::default()
+        },
+        max_waviness_deg: measures.max_waviness_deg,
+        wrinkle_area_mm2: measures.wrinkle_area,
         energy: EnergySummary {
             balance_error: 1e-4,
             kinetic_to_internal: 0.01,
         },
+        setup: Some(RunSetup {
+            nodes: model.node_count(),
+            fibres: "trusses".into(),
+            mass_scaling_dt_s: Some(2e-5),
+            ..RunSetup::default()
+        }),
         run: RunInfo {
             wall_s: 1.5,
             steps: 1000,

@@ -447,3 +447,42 @@ fn guard_keys_reach_the_settings() {
     .unwrap();
     assert_eq!(scene.settings.guard.max_energy_error, Some(0.2));
 }
+
+#[test]
+fn yarn_bending_is_an_option_of_the_fabric() {
+    let plain = Scene::parse(GOOD, Path::new("good.toml"), &[]).unwrap();
+    assert!(plain.model.bending.is_empty() && !plain.model.features().bending);
+    let on = [("fabric.bending".to_owned(), "true".to_owned())];
+    let scene = Scene::parse(GOOD, Path::new("good.toml"), &on).unwrap();
+    // 4 × 4 cells: 5 lines of 3 interior nodes per family.
+    assert_eq!(scene.model.bending[0].len(), 30);
+    assert!(scene.model.features().bending);
+    // Embedded fibres at 30° have no mesh line along the yarns.
+    let mut set = on.to_vec();
+    set.push(("fabric.fibres".to_owned(), "embedded".to_owned()));
+    set.push(("fabric.orientation_deg".to_owned(), "30".to_owned()));
+    let e = Scene::parse(GOOD, Path::new("good.toml"), &set).unwrap_err();
+    let text = e.to_string();
+    assert!(
+        text.contains("fabric.bending") && text.contains("mesh lines along the yarns"),
+        "{text}"
+    );
+    // A material table without a rigidity.
+    let inline = GOOD.replace(
+        r#"material = "glass-serge-4x3""#,
+        r#"bending = true
+material = { name = "m", thickness = 0.5, fibre_volume_fraction = 0.5, density = 1e-9, fibre = { modulus = 1000.0, crimp_strain = 0.0 }, resin = { young = 10.0, poisson = 0.3 } }"#,
+    );
+    let text = error_of(&inline).to_string();
+    assert!(
+        text.contains("fabric.bending") && text.contains("bending_rigidity"),
+        "{text}"
+    );
+    // A negative rigidity names its field.
+    let bad = inline.replace(
+        "density = 1e-9,",
+        "density = 1e-9, bending_rigidity = [0.5, -1.0],",
+    );
+    let text = error_of(&bad).to_string();
+    assert!(text.contains("bending_rigidity[1]"), "{text}");
+}

@@ -43,7 +43,10 @@ use std::fmt;
 use std::sync::Arc;
 
 use drape_constitutive::{Material, MaterialError};
-use drape_elements::{ElementError, FabricSection, MembraneBatch, SpringBatch, TrussBatch};
+use drape_elements::{
+    BendingBatch, ElementError, FabricSection, MembraneBatch, SpringBatch, TrussBatch,
+    yarn_triplets,
+};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -74,6 +77,13 @@ pub enum ModelError {
     /// A tool is invalid.
     #[error("{0}")]
     Tool(String),
+    /// Bending was asked for a mesh without lines along the yarns.
+    #[error(
+        "yarn bending needs mesh lines along the yarns (a rectangle blank with trusses, or \
+         embedded fibres at 0° or 90° on a grid); this mesh has no edge along the warp or weft \
+         that continues through a node"
+    )]
+    NoYarnLines,
     /// A node index is out of range.
     #[error("node {node} does not exist (the model has {count} nodes)")]
     NoSuchNode {
@@ -195,6 +205,8 @@ pub struct Features {
     pub friction: bool,
     /// A force-driven tool (couples the contact constraints).
     pub force_driven_tools: bool,
+    /// Yarn bending (beyond the paper).
+    pub bending: bool,
 }
 
 /// Where each element batch writes its nodal forces in the global slot
@@ -207,6 +219,9 @@ pub struct SlotLayout {
     pub membrane_offsets: Vec<usize>,
     /// First slot of each spring batch.
     pub spring_offsets: Vec<usize>,
+    /// First slot of each bending batch (after every other kind's, so a
+    /// model without bending has the slots it had before bending existed).
+    pub bending_offsets: Vec<usize>,
     /// Total number of slots.
     pub len: usize,
     node_ptr: Vec<usize>,
@@ -257,6 +272,8 @@ pub struct Model {
     pub membranes: Vec<MembraneBatch>,
     /// Holding spring batches.
     pub springs: Vec<SpringBatch>,
+    /// Yarn bending batches (empty unless a scene asks for bending).
+    pub bending: Vec<BendingBatch>,
     /// Boundary conditions, applied in order.
     pub boundary: Vec<BoundaryCondition>,
     /// Gravity acceleration (mm/s²), zero for none.
@@ -315,6 +332,9 @@ pub struct ElementFields {
     pub centroid: Vec<Vector3<f64>>,
     /// Reference area.
     pub area: Vec<f64>,
+    /// Out-of-plane waviness at the scale of the mesh (degrees), see
+    /// [`measures::waviness`].
+    pub waviness: Vec<f64>,
 }
 
 /// The derived measures of a state (SPEC §8).
@@ -334,6 +354,11 @@ pub struct Measures {
     pub area_above_locking: f64,
     /// Largest truss tension (N), 0 without trusses.
     pub max_fibre_tension_n: f64,
+    /// Largest element waviness (degrees), see [`measures::waviness`].
+    pub max_waviness_deg: f64,
+    /// Reference area of the elements whose waviness exceeds
+    /// [`measures::WRINKLE_THRESHOLD_DEG`] (mm²).
+    pub wrinkle_area: f64,
 }
 
 impl Model {
@@ -391,6 +416,7 @@ impl Model {
             trusses,
             membranes,
             springs: Vec::new(),
+            bending: Vec::new(),
             boundary: Vec::new(),
             gravity: Vector3::zeros(),
             loads: Vec::new(),
@@ -454,6 +480,73 @@ impl Model {
             }
         }
         mass
+    }
+
+    /// Adds yarn bending with rigidities `rigidity` = [warp, weft] (N·mm)
+    /// on the lines of the membranes' edges that run along the yarns: the
+    /// warp `warp` and the weft `normal × warp` of a blank whose plane has
+    /// the normal `normal` (see `drape_elements::BendingBatch`).
+    ///
+    /// Lines are clamped at the nodes the boundary conditions fix in place
+    /// already ([`Motion::Fixed`], all three components; see
+    /// `BendingBatch::clamp`): add bending after them.
+    ///
+    /// Fails when the mesh has no such line.
+    pub fn add_yarn_bending(
+        &mut self,
+        warp: Vector3<f64>,
+        normal: Vector3<f64>,
+        rigidity: [f64; 2],
+    ) -> Result<(), ModelError> {
+        let n = self.node_count();
+        let mut edges = Vec::new();
+        let mut area = vec![0.0; n];
+        for b in &self.membranes {
+            for e in 0..b.len() {
+                let nodes = b.element_nodes(e);
+                for (k, &a) in nodes.iter().enumerate() {
+                    edges.push([a, nodes[(k + 1) % nodes.len()]]);
+                }
+                for (&node, a) in nodes.iter().zip(b.nodal_areas(e)) {
+                    area[node as usize] += a;
+                }
+            }
+        }
+        // An edge between two elements appears twice; once is enough.
+        for e in &mut edges {
+            e.sort_unstable();
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        let warp = warp.normalize();
+        let weft = normal.cross(&warp).normalize();
+        let triplets = yarn_triplets(&self.x0, &edges, [warp, weft]);
+        if triplets.is_empty() {
+            return Err(ModelError::NoYarnLines);
+        }
+        let mut batch =
+            BendingBatch::new(&self.x0, &triplets, &area, rigidity).map_err(|error| {
+                ModelError::Element {
+                    kind: "bending",
+                    error,
+                }
+            })?;
+        let mut held = vec![false; n];
+        for bc in &self.boundary {
+            if matches!(bc.motion, Motion::Fixed) && bc.components == [true; 3] {
+                for &node in &bc.nodes {
+                    held[node as usize] = true;
+                }
+            }
+        }
+        batch.clamp(&held);
+        self.bending.push(batch);
+        Ok(())
+    }
+
+    /// Total yarn bending energy at positions `x`.
+    pub fn bending_energy(&self, x: &[Vector3<f64>]) -> Result<f64, ElementError> {
+        self.bending.iter().map(|b| b.energy(x)).sum()
     }
 
     /// Number of nodes.
@@ -521,6 +614,7 @@ impl Model {
             contact: !self.tools.is_empty(),
             friction: self.tools.iter().any(|t| t.friction > 0.0),
             force_driven_tools: self.tools.iter().any(|t| t.is_force_driven()),
+            bending: self.bending.iter().any(|b| !b.is_empty()),
         }
     }
 
@@ -541,6 +635,10 @@ impl Model {
         for b in &self.springs {
             layout.spring_offsets.push(owners.len());
             owners.extend(&b.nodes);
+        }
+        for b in &self.bending {
+            layout.bending_offsets.push(owners.len());
+            owners.extend(b.nodes.iter().flatten());
         }
         layout.len = owners.len();
         // Counting sort by node keeps each node's slots in ascending order.
@@ -611,7 +709,19 @@ impl Model {
                 out.area.push(b.element_area(e));
             }
         }
+        out.waviness = self.waviness(&state.x);
         Ok(out)
+    }
+
+    /// The waviness of every membrane element at positions `x` (degrees),
+    /// see [`measures::waviness`].
+    pub fn waviness(&self, x: &[Vector3<f64>]) -> Vec<f64> {
+        let elements: Vec<&[u32]> = self
+            .membranes
+            .iter()
+            .flat_map(|b| (0..b.len()).map(move |e| b.element_nodes(e)))
+            .collect();
+        measures::waviness(&elements, x)
     }
 
     /// The largest truss tension (N) at positions `x`.
@@ -642,6 +752,13 @@ impl Model {
         m.area_above_locking =
             measures::area_above(&fields.shear, &fields.area, locking_deg.to_radians());
         m.max_fibre_tension_n = self.max_truss_tension(&state.x)?;
+        m.max_waviness_deg = fields.waviness.iter().fold(0.0, |a: f64, &w| a.max(w));
+        m.wrinkle_area = fields
+            .waviness
+            .iter()
+            .zip(&fields.area)
+            .filter(|(w, _)| **w > measures::WRINKLE_THRESHOLD_DEG)
+            .fold(0.0, |total, (_, a)| total + a);
         if let Some(info) = &self.blank {
             m.draw_in = Some(measures::draw_in(
                 &info.frame,

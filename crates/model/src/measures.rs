@@ -172,6 +172,78 @@ pub fn area_above(shear_rad: &[f64], areas: &[f64], locking_rad: f64) -> f64 {
         .fold(0.0, |total, (_, a)| total + a)
 }
 
+/// Waviness above which an element counts as wrinkled (degrees) in
+/// [`crate::Measures::wrinkle_area`] **\[choice\]**: about the deviation a
+/// wrinkle of amplitude a and wavelength λ gives on elements of size h,
+/// 2π²·a·h²/λ², for a = h on λ = 6h; far above what a smooth tool
+/// curvature κ leaves (≈ (κh)² rad).
+pub const WRINKLE_THRESHOLD_DEG: f64 = 5.0;
+
+/// The waviness of each element (degrees): the angle between its normal and
+/// the mean of its edge neighbours' normals (a quad: of each pair of
+/// opposite neighbours, the larger; a triangle: of its three), a measure of
+/// out-of-plane waviness at the scale of the mesh. The mean of neighbours
+/// on both sides cancels the first-order change of the normal across a
+/// smoothly curved surface (a tool's curvature κ leaves O((κh)²)), while a
+/// wrinkle whose crests are a few elements apart tilts neighbours
+/// alternately and reads as its second difference. Directions with a free
+/// edge on one side are not measured (0 when none is left).
+///
+/// `elements` are the node lists of every membrane element, consistently
+/// oriented (a quad's normal is the cross product of its diagonals).
+pub fn waviness(elements: &[&[u32]], x: &[Vector3<f64>]) -> Vec<f64> {
+    let normal = |nodes: &[u32]| -> Vector3<f64> {
+        let p = |k: usize| x[nodes[k] as usize];
+        let n = match nodes.len() {
+            3 => (p(1) - p(0)).cross(&(p(2) - p(0))),
+            _ => (p(2) - p(0)).cross(&(p(3) - p(1))),
+        };
+        n.try_normalize(0.0).unwrap_or_else(Vector3::zeros)
+    };
+    let normals: Vec<Vector3<f64>> = elements.iter().map(|e| normal(e)).collect();
+    let mut by_edge: std::collections::HashMap<(u32, u32), Vec<usize>> =
+        std::collections::HashMap::new();
+    for (e, nodes) in elements.iter().enumerate() {
+        for k in 0..nodes.len() {
+            let (a, b) = (nodes[k], nodes[(k + 1) % nodes.len()]);
+            by_edge.entry((a.min(b), a.max(b))).or_default().push(e);
+        }
+    }
+    // The neighbour across each edge of each element (the first other owner).
+    let across = |e: usize, k: usize| -> Option<usize> {
+        let nodes = elements[e];
+        let (a, b) = (nodes[k], nodes[(k + 1) % nodes.len()]);
+        by_edge[&(a.min(b), a.max(b))]
+            .iter()
+            .copied()
+            .find(|&o| o != e)
+    };
+    let angle = |n: &Vector3<f64>, s: Vector3<f64>| match s.try_normalize(0.0) {
+        Some(mean) => n.dot(&mean).clamp(-1.0, 1.0).acos().to_degrees(),
+        None => 0.0,
+    };
+    (0..elements.len())
+        .map(|e| {
+            let n = &normals[e];
+            if elements[e].len() == 4 {
+                // Opposite neighbours in pairs: the mean of a pair cancels
+                // a smooth curvature's first-order tilt; a pair with a
+                // free edge on one side is not measured.
+                [(0, 2), (1, 3)]
+                    .iter()
+                    .filter_map(|&(k, l)| Some(normals[across(e, k)?] + normals[across(e, l)?]))
+                    .map(|s| angle(n, s))
+                    .fold(0.0, f64::max)
+            } else {
+                // A triangle's three neighbours surround it; one on a free
+                // edge is not measured.
+                let all: Option<Vec<usize>> = (0..3).map(|k| across(e, k)).collect();
+                all.map_or(0.0, |all| angle(n, all.iter().map(|&o| normals[o]).sum()))
+            }
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -206,6 +278,45 @@ mod tests {
 
     const MID: [u32; 4] = [0, 1, 2, 3];
     const CORNERS: [u32; 4] = [4, 5, 6, 7];
+
+    #[test]
+    fn waviness_ignores_a_smooth_cylinder_and_flags_mesh_scale_waves() {
+        let (nx, ny, h) = (40usize, 6usize, 2.0);
+        let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+        let quads: Vec<[u32; 4]> = (0..ny)
+            .flat_map(|j| {
+                (0..nx).map(move |i| [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)])
+            })
+            .collect();
+        let elements: Vec<&[u32]> = quads.iter().map(|q| &q[..]).collect();
+        let grid = |z: &dyn Fn(f64) -> Vector3<f64>| -> Vec<Vector3<f64>> {
+            (0..=ny)
+                .flat_map(|j| (0..=nx).map(move |i| (i, j)))
+                .map(|(i, j)| z(i as f64 * h) + Vector3::new(0.0, j as f64 * h, 0.0))
+                .collect()
+        };
+        // Rolled on R = 30 mm: κh = 0.067, neighbours differ by 3.8°, but
+        // the mean of two opposite neighbours is the element's own normal.
+        let r = 30.0;
+        let rolled = grid(&|s| Vector3::new(r * (s / r).sin(), 0.0, r * (1.0 - (s / r).cos())));
+        let smooth = waviness(&elements, &rolled);
+        assert!(
+            smooth.iter().all(|w| *w < 0.5),
+            "{:?}",
+            smooth.iter().fold(0.0f64, |a, b| a.max(*b))
+        );
+        // A wave of 8 mm (4 elements) and 1 mm amplitude: well above 5°.
+        let waves = grid(&|s| Vector3::new(s, 0.0, (s * std::f64::consts::TAU / 8.0).sin()));
+        let wavy = waviness(&elements, &waves);
+        let max = wavy.iter().fold(0.0f64, |a, b| a.max(*b));
+        assert!(max > 20.0, "{max}");
+        // Flat: zero.
+        assert!(
+            waviness(&elements, &grid(&|s| Vector3::new(s, 0.0, 0.0)))
+                .iter()
+                .all(|w| *w == 0.0)
+        );
+    }
 
     #[test]
     fn uniform_inward_translation_of_edges() {

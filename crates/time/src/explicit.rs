@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use crate::energy::{chunked_sum, chunked_sums_into};
 use crate::guard::{self, Guard, GuardSettings};
+use crate::profile::{Pass, ProfileClock, Profiler, StepProfile};
 use crate::shared::{self, Constraints, ForcePass};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
@@ -82,6 +83,8 @@ pub struct Explicit<'m> {
     /// Dashpot coefficient of each truss of a batch with a kinked fibre
     /// law (empty for the others), see [`ExplicitSettings::fibre_damping`].
     truss_damping: Vec<Vec<f64>>,
+    /// Each bending triplet's shares of its nodes' masses, as the trusses'.
+    bending_mass: Vec<Vec<[f64; 3]>>,
     /// √(mass scale) per element of each membrane batch.
     membrane_scale: Vec<Vec<f64>>,
     constraints: Constraints,
@@ -104,6 +107,8 @@ pub struct Explicit<'m> {
     warnings: Vec<String>,
     /// Which tools have touched the blank.
     tool_touched: Vec<bool>,
+    /// The per-pass profile, when asked for ([`Self::enable_profile`]).
+    profiler: Option<Profiler>,
 }
 
 impl<'m> Explicit<'m> {
@@ -156,9 +161,11 @@ impl<'m> Explicit<'m> {
             warnings: Vec::new(),
             tool_touched: vec![false; model.tools.len()],
             forces: ForcePass::new(model),
+            profiler: None,
             mass: model.mass.clone(),
             truss_mass: Vec::new(),
             truss_damping: Vec::new(),
+            bending_mass: Vec::new(),
             membrane_scale: model.membranes.iter().map(|b| vec![1.0; b.len()]).collect(),
             constraints,
             added_mass: 0.0,
@@ -213,6 +220,27 @@ impl<'m> Explicit<'m> {
         Ok(driver)
     }
 
+    /// Profiles the steps of every later [`Self::run`] by `clock` (see
+    /// [`crate::profile`]); the sums start from zero.
+    pub fn enable_profile(&mut self, clock: ProfileClock) {
+        self.profiler = Some(Profiler::new(clock));
+        if let Some(contact) = &mut self.contact {
+            contact.time_phases(Some(clock));
+        }
+    }
+
+    /// The per-pass profile of the steps run since [`Self::enable_profile`].
+    pub fn profile(&self) -> Option<&StepProfile> {
+        self.profiler.as_ref().map(|p| &p.profile)
+    }
+
+    #[inline]
+    fn lap(&mut self, pass: Pass) {
+        if let Some(p) = &mut self.profiler {
+            p.lap(pass);
+        }
+    }
+
     /// What the run found doubtful: start-up warnings (a blank closer to a
     /// tool than its half thickness, a force-driven tool with nothing in
     /// its path) and, after [`Self::run`], the run's own.
@@ -232,6 +260,16 @@ impl<'m> Explicit<'m> {
                 let degree = b.node_degree(n);
                 let share = |i: u32| self.mass[i as usize] / f64::from(degree[i as usize]);
                 b.nodes.iter().map(|&[i, j]| [share(i), share(j)]).collect()
+            })
+            .collect();
+        self.bending_mass = self
+            .model
+            .bending
+            .iter()
+            .map(|b| {
+                let degree = b.node_degree(n);
+                let share = |i: u32| self.mass[i as usize] / f64::from(degree[i as usize]);
+                b.nodes.iter().map(|t| t.map(share)).collect()
             })
             .collect();
         let ratio = self.settings.fibre_damping;
@@ -313,7 +351,7 @@ impl<'m> Explicit<'m> {
 
     /// The stable step (times the safety factor) at positions `x`.
     ///
-    /// Trusses, membranes and springs share the nodes' masses and add their
+    /// Trusses, membranes, springs and yarn bending share the nodes' masses and add their
     /// stiffnesses, so ω_max² ≤ Σ over kinds of each kind's ω_max²: the
     /// kinds' steps combine as 1/Δt² = Σ 1/Δt_kind², each kind's step the
     /// smallest of its elements' (SPEC §7: fibres at the full E_f). A truss
@@ -364,6 +402,12 @@ impl<'m> Explicit<'m> {
             .flat_map(|b| (0..b.len()).map(move |e| (b, e)))
             .map(|(b, e)| b.element_stable_time_step(e, x, self.mass[b.nodes[e] as usize]))
             .fold(f64::INFINITY, f64::min));
+        add(model
+            .bending
+            .iter()
+            .zip(&self.bending_mass)
+            .map(|(b, m)| smallest(b.len(), &|e| b.element_stable_time_step(e, x, m[e])))
+            .fold(f64::INFINITY, f64::min));
         self.settings.safety_factor / inverse_square.sqrt()
     }
 
@@ -380,6 +424,11 @@ impl<'m> Explicit<'m> {
     /// [`Self::run`] returns (a run stopped between frames) shows.
     pub fn contact(&self) -> Option<&ExplicitContact> {
         self.contact.as_ref()
+    }
+
+    /// Mass added by mass scaling (t), 0 without it: known before the run.
+    pub fn added_mass(&self) -> f64 {
+        self.added_mass
     }
 
     /// Runs from `state` to the end time. On error `state` holds the last
@@ -420,6 +469,7 @@ impl<'m> Explicit<'m> {
             0.0,
             state.step,
             state.time,
+            None,
         )?;
         let resume = self.resume.take();
         if resume.as_ref().is_some_and(|r| r.implicit.is_some()) {
@@ -471,6 +521,9 @@ impl<'m> Explicit<'m> {
         let mut steps = 0u64;
         let mut stopped = false;
         let mut last_progress = Instant::now();
+        if let Some(p) = &mut self.profiler {
+            p.begin();
+        }
         // A remainder below a millionth of a step is round-off of the sum of
         // steps, not time left to simulate.
         while end - state.time > 1e-6 * dt {
@@ -494,6 +547,7 @@ impl<'m> Explicit<'m> {
                     }
                 }
             }
+            self.lap(Pass::StableStep);
             if !(dt > 0.0 && dt.is_finite()) {
                 return Err(RunError::Setup(format!(
                     "stable time step {dt:e} at step {} is not positive",
@@ -538,6 +592,7 @@ impl<'m> Explicit<'m> {
                         *xn = x[i] + *vn * h;
                     });
             }
+            self.lap(Pass::Update);
             // Prescribed components.
             for (j, c) in self.constraints.list.iter().enumerate() {
                 let (i, k) = (c.node as usize, c.component as usize);
@@ -545,6 +600,7 @@ impl<'m> Explicit<'m> {
                 self.x_new[i][k] = self.prescribed[j];
                 self.v_new[i][k] = (self.x_new[i][k] - state.x[i][k]) / h;
             }
+            self.lap(Pass::BoundaryConditions);
             if let Some(contact) = &mut self.contact {
                 contact
                     .enforce_step(
@@ -567,6 +623,9 @@ impl<'m> Explicit<'m> {
                 for (touched, f) in self.tool_touched.iter_mut().zip(&contact.tool_force) {
                     *touched |= *f != 0.0;
                 }
+                if let Some(p) = &mut self.profiler {
+                    p.lap(Pass::Contact);
+                }
                 // A partly constrained node keeps its prescribed components;
                 // its constraint takes the contact force there.
                 for (j, c) in self.constraints.list.iter().enumerate() {
@@ -576,6 +635,7 @@ impl<'m> Explicit<'m> {
                         self.v_new[i][k] = (self.prescribed[j] - state.x[i][k]) / h;
                     }
                 }
+                self.lap(Pass::BoundaryConditions);
             }
             // Work of step n over the centred increment (x_{n+1} − x_{n−1})/2.
             {
@@ -615,8 +675,10 @@ impl<'m> Explicit<'m> {
                 energy.damping += w_damp;
                 energy.boundary_work += w_bc;
             }
+            self.lap(Pass::Works);
             if !model.loads.is_empty() {
                 shared::external_forces(model, t_new, &mut self.f_ext);
+                self.lap(Pass::Loads);
             }
             // Forces at n+1 from the committed history.
             self.forces.evaluate(
@@ -627,6 +689,7 @@ impl<'m> Explicit<'m> {
                 h,
                 state.step + 1,
                 t_new,
+                self.profiler.as_mut(),
             )?;
             if let Some(i) = (0..n).find(|&i| {
                 !(self.x_new[i].iter().all(|v| v.is_finite())
@@ -658,6 +721,7 @@ impl<'m> Explicit<'m> {
                 let travel = contact.tool_state.iter().map(|t| t.displacement);
                 self.guard.tools(model, travel).map_err(unstable)?;
             }
+            self.lap(Pass::Checks);
             dt_prev = h;
             dt_min = dt_min.min(h);
             dt_max = dt_max.max(h);
@@ -682,12 +746,14 @@ impl<'m> Explicit<'m> {
                     implicit: None,
                 };
                 observer.checkpoint(state, &driver);
+                self.lap(Pass::Output);
             }
             let at_end = end - state.time <= 1e-6 * dt;
             let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
             let at_check = state.time >= next_check * check_dt * (1.0 - 1e-12);
             if at_frame || at_end || at_check {
                 let report = self.energies_at(state, &energy, kinetic0, h);
+                self.lap(Pass::Energies);
                 self.guard
                     .energy(&report, state.time)
                     .map_err(|what| RunError::Unstable {
@@ -730,6 +796,15 @@ impl<'m> Explicit<'m> {
                     break;
                 }
             }
+            self.lap(Pass::Output);
+        }
+        let contact_phases = self.contact.as_ref().and_then(|c| c.phase_times());
+        if let Some(p) = &mut self.profiler {
+            p.end(steps, contact_phases);
+        }
+        if let (Some(p), Some(c)) = (&self.profiler, &mut self.contact) {
+            // The phases were added to the profile: count afresh.
+            c.time_phases(Some(p.clock()));
         }
         let energy = self.energies_at(state, &energy, kinetic0, dt_prev);
         if stopped {

@@ -463,6 +463,7 @@ impl<'m> Implicit<'m> {
             0.0,
             state.step,
             state.time,
+            None,
         )?;
         let resume = self.resume.take();
         if resume.as_ref().is_some_and(|r| r.implicit.is_none()) {
@@ -864,9 +865,16 @@ impl<'m> Implicit<'m> {
             Err(Failure(why))
         };
         loop {
-            let evaluated =
-                self.forces
-                    .evaluate(model, &self.x, None, &state.history, h, state.step + 1, t1);
+            let evaluated = self.forces.evaluate(
+                model,
+                &self.x,
+                None,
+                &state.history,
+                h,
+                state.step + 1,
+                t1,
+                None,
+            );
             let mut friction_changes = 0;
             let (res, node, scale) = match evaluated {
                 Ok(()) => {

@@ -55,6 +55,7 @@ mod explicit;
 pub mod guard;
 mod implicit;
 mod observer;
+pub mod profile;
 mod shared;
 pub mod tangent;
 
@@ -66,3 +67,4 @@ pub use implicit::{Implicit, ImplicitSettings, NewtonRecord};
 pub use observer::{
     Control, DriverState, Frame, ImplicitCarry, IncrementReport, NoObserver, Observer, Progress,
 };
+pub use profile::{Pass, ProfileClock, StepProfile};

@@ -10,6 +10,7 @@ use drape_model::{Model, Motion, SlotLayout, State};
 use nalgebra::Vector3;
 
 use crate::RunError;
+use crate::profile::{Pass, Profiler};
 
 /// A constrained component: node, component, which boundary condition.
 #[derive(Debug, Clone, Copy)]
@@ -132,7 +133,8 @@ impl ForcePass {
     /// `dashpots`: the velocities and, per truss batch, the coefficients of
     /// the dashpots along kinked yarns (an empty list for a batch without;
     /// the explicit driver's `fibre_damping`). `step` and `time` only name
-    /// the failure.
+    /// the failure; `profiler` (the explicit step's, when asked) times the
+    /// element kinds.
     #[allow(clippy::too_many_arguments)]
     pub fn evaluate(
         &mut self,
@@ -143,6 +145,7 @@ impl ForcePass {
         dt: f64,
         step: u64,
         time: f64,
+        mut profiler: Option<&mut Profiler>,
     ) -> Result<(), RunError> {
         let fail = |batch: String, error| RunError::Element {
             step,
@@ -150,13 +153,20 @@ impl ForcePass {
             batch,
             error,
         };
+        let mut lap = |pass: Pass| {
+            if let Some(p) = profiler.as_deref_mut() {
+                p.lap(pass);
+            }
+        };
         for (i, b) in model.trusses.iter().enumerate() {
             let start = self.layout.truss_offsets[i];
             let slots = &mut self.slots[start..start + 2 * b.len()];
             b.forces_into(x, slots)
                 .map_err(|e| fail(format!("truss batch {i}"), e))?;
+            lap(Pass::Trusses);
             if let Some((v, c)) = dashpots.filter(|(_, c)| !c[i].is_empty()) {
                 b.add_damping_into(x, v, &c[i], slots);
+                lap(Pass::TrussDashpots);
             }
         }
         for (i, b) in model.membranes.iter().enumerate() {
@@ -170,12 +180,21 @@ impl ForcePass {
                 &mut self.slots[start..start + n],
             )
             .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
+            lap(Pass::Membranes);
         }
         for (i, b) in model.springs.iter().enumerate() {
             let start = self.layout.spring_offsets[i];
             b.forces_into(x, &mut self.slots[start..start + b.len()]);
         }
+        lap(Pass::Springs);
+        for (i, b) in model.bending.iter().enumerate() {
+            let start = self.layout.bending_offsets[i];
+            b.forces_into(x, &mut self.slots[start..start + 3 * b.len()])
+                .map_err(|e| fail(format!("bending batch {i}"), e))?;
+        }
+        lap(Pass::Bending);
         self.layout.gather(&self.slots, &mut self.f_int);
+        lap(Pass::Gather);
         Ok(())
     }
 }
@@ -209,6 +228,9 @@ pub(crate) fn strain_energy(model: &Model, state: &State) -> f64 {
         e += (0..b.len())
             .map(|i| b.element_energy(i, &state.x))
             .sum::<f64>();
+    }
+    for b in &model.bending {
+        e += b.energy(&state.x).unwrap_or(f64::NAN);
     }
     e
 }

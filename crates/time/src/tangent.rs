@@ -88,9 +88,11 @@ pub struct SparseTangent {
     trusses: Vec<BatchSlots>,
     membranes: Vec<BatchSlots>,
     springs: Vec<BatchSlots>,
+    bending: Vec<BatchSlots>,
     /// Element-matrix buffers, one per assembly chunk of each batch.
     truss_scratch: Vec<Vec<DMatrix<f64>>>,
     membrane_scratch: Vec<Vec<DMatrix<f64>>>,
+    bending_scratch: Vec<Vec<DMatrix<f64>>>,
     symbolic: SymbolicCholesky<usize>,
     factor_values: Vec<f64>,
     kind: Factorisation,
@@ -111,6 +113,71 @@ fn local_pairs(dofs: usize) -> impl Iterator<Item = (usize, usize)> {
     (0..dofs).flat_map(move |q| (0..=q).map(move |p| (p, q)))
 }
 
+/// The slots of a batch of `len` elements.
+fn batch_slots<'s>(slots: &'s mut [f64], bs: &BatchSlots, len: usize) -> &'s mut [f64] {
+    let m = bs.dofs * (bs.dofs + 1) / 2;
+    &mut slots[bs.start..bs.start + m * len]
+}
+
+/// Fills a batch's slots in parallel chunks: `tangent(e, k)` writes element
+/// `e`'s matrix into `k`, whose symmetrised upper triangle goes to the
+/// element's slots. The failure of the lowest element is reported, whatever
+/// the thread count.
+fn assemble_batch(
+    slots: &mut [f64],
+    scratch: &mut [DMatrix<f64>],
+    tangent: impl Fn(usize, &mut DMatrix<f64>) -> Result<(), ElementError> + Sync,
+) -> Result<(), ElementError> {
+    fn write(k: &DMatrix<f64>, out: &mut [f64]) {
+        let d = k.nrows();
+        let mut s = 0;
+        for q in 0..d {
+            for p in 0..=q {
+                out[s] = if p == q {
+                    k[(p, p)]
+                } else {
+                    0.5 * (k[(p, q)] + k[(q, p)])
+                };
+                s += 1;
+            }
+        }
+    }
+    let lowest = |a: ElementError, acc: Option<ElementError>| match acc {
+        Some(b) if b.element < a.element => Some(b),
+        _ => Some(a),
+    };
+    let Some(d) = scratch.first().map(DMatrix::nrows) else {
+        return Ok(());
+    };
+    let m = d * (d + 1) / 2;
+    let failed = slots
+        .par_chunks_mut(m * CHUNK)
+        .zip(scratch.par_iter_mut())
+        .enumerate()
+        .map(|(c, (out, k))| {
+            for (j, o) in out.chunks_mut(m).enumerate() {
+                tangent(c * CHUNK + j, k)?;
+                write(k, o);
+            }
+            Ok(())
+        })
+        .fold(
+            || None,
+            |acc, r: Result<(), ElementError>| match r {
+                Err(e) => lowest(e, acc),
+                Ok(()) => acc,
+            },
+        )
+        .reduce(
+            || None,
+            |a, b| match b {
+                Some(b) => lowest(b, a),
+                None => a,
+            },
+        );
+    failed.map_or(Ok(()), Err)
+}
+
 impl SparseTangent {
     /// The pattern, maps and symbolic factorisation of `model`'s elements;
     /// `constrained[3·node + component]` marks the prescribed dofs.
@@ -128,6 +195,9 @@ impl SparseTangent {
         }
         for b in &model.springs {
             elements.extend(b.nodes.iter().map(|&i| vec![i]));
+        }
+        for b in &model.bending {
+            elements.extend(b.nodes.iter().map(|e| e.to_vec()));
         }
         // Node adjacency (upper: neighbour ≤ node), every node its own.
         let mut adjacent: Vec<Vec<u32>> = (0..nodes as u32).map(|i| vec![i]).collect();
@@ -191,6 +261,7 @@ impl SparseTangent {
         let mut trusses = Vec::new();
         let mut membranes = Vec::new();
         let mut springs = Vec::new();
+        let mut bending = Vec::new();
         let mut at = 0;
         for b in &model.trusses {
             add_batch(&mut trusses, &elements[at..at + b.len()]);
@@ -202,6 +273,10 @@ impl SparseTangent {
         }
         for b in &model.springs {
             add_batch(&mut springs, &elements[at..at + b.len()]);
+            at += b.len();
+        }
+        for b in &model.bending {
+            add_batch(&mut bending, &elements[at..at + b.len()]);
             at += b.len();
         }
         let nnz = row_idx.len();
@@ -255,9 +330,15 @@ impl SparseTangent {
                     vec![DMatrix::zeros(d, d); chunks(b.len())]
                 })
                 .collect(),
+            bending_scratch: model
+                .bending
+                .iter()
+                .map(|b| vec![DMatrix::zeros(9, 9); chunks(b.len())])
+                .collect(),
             trusses,
             membranes,
             springs,
+            bending,
             factor_values: vec![0.0; symbolic.len_val()],
             symbolic,
             symbolic_matrix,
@@ -292,81 +373,28 @@ impl SparseTangent {
         mass: &[f64],
         mass_factor: f64,
     ) -> Result<(), (String, ElementError)> {
-        // Each element writes the symmetrised upper triangle of its matrix.
-        fn write(k: &DMatrix<f64>, out: &mut [f64]) {
-            let d = k.nrows();
-            let mut s = 0;
-            for q in 0..d {
-                for p in 0..=q {
-                    out[s] = if p == q {
-                        k[(p, p)]
-                    } else {
-                        0.5 * (k[(p, q)] + k[(q, p)])
-                    };
-                    s += 1;
-                }
-            }
-        }
-        let lowest = |r: Result<(), ElementError>, acc: Option<ElementError>| match (r, acc) {
-            (Err(a), Some(b)) => Some(if a.element <= b.element { a } else { b }),
-            (Err(a), None) => Some(a),
-            (Ok(()), acc) => acc,
-        };
         for (i, b) in model.trusses.iter().enumerate() {
-            let bs = &self.trusses[i];
-            let m = bs.dofs * (bs.dofs + 1) / 2;
-            let slots = &mut self.slots[bs.start..bs.start + m * b.len()];
-            let failed = slots
-                .par_chunks_mut(m * CHUNK)
-                .zip(self.truss_scratch[i].par_iter_mut())
-                .enumerate()
-                .map(|(c, (out, k))| {
-                    let mut first = None;
-                    for (j, o) in out.chunks_mut(m).enumerate() {
-                        let e = c * CHUNK + j;
-                        match b.element_tangent(e, x, k) {
-                            Ok(()) => write(k, o),
-                            Err(err) => {
-                                first = lowest(Err(err), first);
-                                break;
-                            }
-                        }
-                    }
-                    first
-                })
-                .reduce(|| None, |a, b| b.map_or(a, |b| lowest(Err(b), a)));
-            if let Some(e) = failed {
-                return Err((format!("truss batch {i}"), e));
-            }
+            let slots = batch_slots(&mut self.slots, &self.trusses[i], b.len());
+            assemble_batch(slots, &mut self.truss_scratch[i], |e, k| {
+                b.element_tangent(e, x, k)
+            })
+            .map_err(|e| (format!("truss batch {i}"), e))?;
         }
         for (i, b) in model.membranes.iter().enumerate() {
-            let bs = &self.membranes[i];
-            let m = bs.dofs * (bs.dofs + 1) / 2;
             let eh = b.element_history_len();
             let h = &history[i];
-            let slots = &mut self.slots[bs.start..bs.start + m * b.len()];
-            let failed = slots
-                .par_chunks_mut(m * CHUNK)
-                .zip(self.membrane_scratch[i].par_iter_mut())
-                .enumerate()
-                .map(|(c, (out, k))| {
-                    let mut first = None;
-                    for (j, o) in out.chunks_mut(m).enumerate() {
-                        let e = c * CHUNK + j;
-                        match b.element_tangent(e, x, &h[e * eh..(e + 1) * eh], dt, k) {
-                            Ok(()) => write(k, o),
-                            Err(err) => {
-                                first = lowest(Err(err), first);
-                                break;
-                            }
-                        }
-                    }
-                    first
-                })
-                .reduce(|| None, |a, b| b.map_or(a, |b| lowest(Err(b), a)));
-            if let Some(e) = failed {
-                return Err((format!("membrane batch {i} ({:?})", b.shape()), e));
-            }
+            let slots = batch_slots(&mut self.slots, &self.membranes[i], b.len());
+            assemble_batch(slots, &mut self.membrane_scratch[i], |e, k| {
+                b.element_tangent(e, x, &h[e * eh..(e + 1) * eh], dt, k)
+            })
+            .map_err(|e| (format!("membrane batch {i} ({:?})", b.shape()), e))?;
+        }
+        for (i, b) in model.bending.iter().enumerate() {
+            let slots = batch_slots(&mut self.slots, &self.bending[i], b.len());
+            assemble_batch(slots, &mut self.bending_scratch[i], |e, k| {
+                b.element_tangent(e, x, k)
+            })
+            .map_err(|e| (format!("bending batch {i}"), e))?;
         }
         for (i, b) in model.springs.iter().enumerate() {
             let start = self.springs[i].start;
@@ -560,15 +588,39 @@ mod tests {
 
     #[test]
     fn the_assembled_matrix_is_the_symmetric_part_of_the_force_jacobian() {
-        for (fibres, element, resin_only) in [
-            (FibreRepresentation::Trusses, ElementKind::Quad, false),
-            (FibreRepresentation::Trusses, ElementKind::Quad, true),
-            (FibreRepresentation::Embedded, ElementKind::Quad, false),
-            (FibreRepresentation::Embedded, ElementKind::Triangle, false),
+        // (fibres, element, resin only, yarn bending)
+        for (fibres, element, resin_only, bending) in [
+            (
+                FibreRepresentation::Trusses,
+                ElementKind::Quad,
+                false,
+                false,
+            ),
+            (FibreRepresentation::Trusses, ElementKind::Quad, true, false),
+            (FibreRepresentation::Trusses, ElementKind::Quad, false, true),
+            (
+                FibreRepresentation::Embedded,
+                ElementKind::Quad,
+                false,
+                false,
+            ),
+            (
+                FibreRepresentation::Embedded,
+                ElementKind::Triangle,
+                false,
+                false,
+            ),
         ] {
             let (mut model, x) = model(fibres, element);
             if resin_only {
                 model.trusses.clear();
+            }
+            if bending {
+                // Rigidities large enough to weigh against the membranes.
+                model
+                    .add_yarn_bending(Vector3::x(), Vector3::z(), [2.0e3, 1.0e3])
+                    .unwrap();
+                assert!(!model.bending.is_empty());
             }
             let n = 3 * model.node_count();
             let dt = 0.01;
@@ -581,7 +633,7 @@ mod tests {
                 .map(|(a, b)| (a + b) * 0.5)
                 .collect();
             let initial = model.initial_state().history;
-            pass.evaluate(&model, &half, None, &initial, dt, 0, 0.0)
+            pass.evaluate(&model, &half, None, &initial, dt, 0, 0.0, None)
                 .unwrap();
             let history = pass.history_new.clone();
             let mut constrained = vec![false; n];
@@ -595,12 +647,12 @@ mod tests {
             for j in 0..n {
                 let mut xp = x.clone();
                 xp[j / 3][j % 3] += h;
-                pass.evaluate(&model, &xp, None, &history, dt, 0, 0.0)
+                pass.evaluate(&model, &xp, None, &history, dt, 0, 0.0, None)
                     .unwrap();
                 let fp = flat(&pass.f_int);
                 let mut xm = x.clone();
                 xm[j / 3][j % 3] -= h;
-                pass.evaluate(&model, &xm, None, &history, dt, 0, 0.0)
+                pass.evaluate(&model, &xm, None, &history, dt, 0, 0.0, None)
                     .unwrap();
                 let fm = flat(&pass.f_int);
                 for i in 0..n {
@@ -623,10 +675,10 @@ mod tests {
             }
             assert!(
                 worst <= 1e-6 * scale,
-                "{fibres:?} {element:?}: {worst:e} (scale {scale:e})"
+                "{fibres:?} {element:?} bending {bending}: {worst:e} (scale {scale:e})"
             );
             eprintln!(
-                "{fibres:?} {element:?} resin only {resin_only}: largest |K − Kᵀ| / max|K| = {:.2e}",
+                "{fibres:?} {element:?} resin only {resin_only} bending {bending}: largest |K − Kᵀ| / max|K| = {:.2e}",
                 skew / scale
             );
         }

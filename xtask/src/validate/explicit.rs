@@ -64,14 +64,18 @@ impl<F: FnMut(&Frame<'_>)> Observer for Frames<F> {
     }
 }
 
-/// Picture frame: a 100 mm square glass blank, 0/90 trusses along the
-/// arms, every boundary node carried by a pin-jointed frame sheared to 60°
-/// (the arms turn by γ/2 each about the pinned corner). The whole blank
-/// must shear with the frame, and the force on the frame's free corner
-/// must be the derivative of the resin's energy under that shear.
-fn picture_frame() -> Vec<Check> {
-    let (side, cells, gamma_max, duration) = (100.0, 10usize, 60f64.to_radians(), 0.05);
-    let material = glass();
+/// The picture frame's model: a `side` mm square blank of `material` on
+/// `cells` × `cells` quads with 0/90 trusses, every boundary node carried
+/// by a pin-jointed frame about the corner (−side/2, −side/2) whose arms
+/// turn by γ/2 each, γ rising to `gamma_max` by a smooth step over
+/// `duration`.
+pub(super) fn picture_frame_model(
+    material: &Material,
+    side: f64,
+    cells: usize,
+    gamma_max: f64,
+    duration: f64,
+) -> Model {
     let blank = RectangleBlank {
         width: side,
         height: side,
@@ -81,7 +85,7 @@ fn picture_frame() -> Vec<Check> {
         meshing: Meshing::Cells([cells, cells]),
         fibres: FibreRepresentation::Trusses,
     };
-    let mut model = Model::from_blank(&blank, &material).expect("model");
+    let mut model = Model::from_blank(&blank, material).expect("model");
     let pin = Vector3::new(-side / 2.0, -side / 2.0, 0.0);
     let gamma_at = move |t: f64| gamma_max * smooth_step(t / duration);
     let frame_map = move |x0: &Vector3<f64>, gamma: f64| {
@@ -94,6 +98,20 @@ fn picture_frame() -> Vec<Check> {
         components: [true; 3],
         motion: Motion::Trajectory(Arc::new(move |x0, t| frame_map(x0, gamma_at(t)) - x0)),
     });
+    model
+}
+
+/// Picture frame: a 100 mm square glass blank, 0/90 trusses along the
+/// arms, every boundary node carried by a pin-jointed frame sheared to 60°
+/// (the arms turn by γ/2 each about the pinned corner). The whole blank
+/// must shear with the frame, and the force on the frame's free corner
+/// must be the derivative of the resin's energy under that shear.
+fn picture_frame() -> Vec<Check> {
+    let (side, cells, gamma_max, duration) = (100.0, 10usize, 60f64.to_radians(), 0.05);
+    let material = glass();
+    let model = picture_frame_model(&material, side, cells, gamma_max, duration);
+    let pin = Vector3::new(-side / 2.0, -side / 2.0, 0.0);
+    let gamma_at = move |t: f64| gamma_max * smooth_step(t / duration);
     let mut state = model.initial_state();
     let settings = ExplicitSettings {
         end_time: duration,

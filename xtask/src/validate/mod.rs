@@ -20,12 +20,14 @@ use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod bending;
 mod constitutive;
 mod contact;
 mod explicit;
 mod fishnet;
 mod implicit;
 mod kinematics;
+mod locking;
 mod scenes;
 
 /// Every case of every crate, in the order they run and are reported.
@@ -38,6 +40,8 @@ pub fn registry() -> Vec<Case> {
         fishnet::CASES,
         implicit::CASES,
         scenes::CASES,
+        bending::CASES,
+        locking::CASES,
     ]
     .concat()
 }

@@ -539,3 +539,326 @@ fn output_fibre_directions_are_the_deformed_yarns() {
         }
     }
 }
+
+#[test]
+fn output_fibre_directions_show_the_output_shear_under_a_varying_deformation() {
+    // x = X + a bending, shearing field: the shear varies over each quad,
+    // so its four points' directions and shears differ.
+    let map = |p: &Vector3<f64>| {
+        Vector3::new(
+            p.x + 0.02 * p.x * p.y,
+            p.y + 0.3 * p.x + 0.015 * p.x * p.x,
+            0.01 * (p.x * p.x + p.y * p.y),
+        )
+    };
+    let (warp, weft) = (Vector3::new(0.6, 0.8, 0.0), Vector3::new(-0.8, 0.6, 0.0));
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        let (b, x0, _) = patch(shape, true);
+        let x: Vec<_> = x0.iter().map(map).collect();
+        let h = b.initial_history();
+        let eh = b.element_history_len();
+        for e in 0..b.len() {
+            let o = b.element_output(e, &x, &h[e * eh..(e + 1) * eh]).unwrap();
+            let [w, f] = o.fibre_direction;
+            assert!((w.norm() - 1.0).abs() < 1e-14 && (f.norm() - 1.0).abs() < 1e-14);
+            let angle = w.cross(&f).norm().atan2(w.dot(&f));
+            assert!(
+                (std::f64::consts::FRAC_PI_2 - angle - o.shear_angle).abs() < 1e-13,
+                "{shape:?} {e}: angle {angle}, shear {}",
+                o.shear_angle
+            );
+            // And they are the yarns of the element: the mapped yarn
+            // directions at its centroid, to the variation over it.
+            let nodes = b.element_nodes(e);
+            let c =
+                nodes.iter().map(|&n| x0[n as usize]).sum::<Vector3<f64>>() / nodes.len() as f64;
+            let yarn = |n: Vector3<f64>| (map(&(c + n * 1e-6)) - map(&(c - n * 1e-6))).normalize();
+            for (got, n) in [(w, warp), (f, weft)] {
+                let off = got.dot(&yarn(n)).clamp(-1.0, 1.0).acos().to_degrees();
+                assert!(
+                    off < 1.0,
+                    "{shape:?} {e}: {off}° from the yarn at the centroid"
+                );
+            }
+        }
+    }
+}
+/// A 4 × 3 grid of resin-only quads (11 elements: two blocks of lanes and a
+/// scalar tail of 3) on a wavy, distorted reference, with the warp at 20°.
+fn lane_grid(material: Material) -> (MembraneBatch, Vec<Vector3<f64>>) {
+    let (nx, ny) = (5usize, 4usize);
+    let x0: Vec<Vector3<f64>> = (0..ny)
+        .flat_map(|j| {
+            (0..nx).map(move |i| {
+                let (x, y) = (4.0 * i as f64, 3.5 * j as f64);
+                Vector3::new(
+                    x + 0.3 * (y * 0.7).sin(),
+                    y + 0.2 * (x * 0.5).cos(),
+                    0.1 * (x + y).sin(),
+                )
+            })
+        })
+        .collect();
+    let mut quads = Vec::new();
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            let n = (j * nx + i) as u32;
+            quads.push([n, n + 1, n + 1 + nx as u32, n + nx as u32]);
+        }
+    }
+    quads.pop();
+    let warp =
+        vec![Vector3::new(20f64.to_radians().cos(), 20f64.to_radians().sin(), 0.0); quads.len()];
+    let batch =
+        MembraneBatch::quads(FabricSection::new(material, false), &x0, quads, &warp).unwrap();
+    (batch, x0)
+}
+
+/// The scalar path of the whole batch, element by element, with the same
+/// step factors as `forces_into`.
+fn scalar_forces(
+    b: &MembraneBatch,
+    x: &[Vector3<f64>],
+    h_in: &[f64],
+    dt: f64,
+) -> Result<(Vec<Vector3<f64>>, Vec<f64>), ElementError> {
+    let (nn, eh) = (4, b.element_history_len());
+    let mut table = [(0.0, 0.0); 8];
+    let resin = &b.section.material.resin;
+    resin.prony_factors(dt, &mut table);
+    let step = Step {
+        dt,
+        prony: &table[..resin.prony.len()],
+    };
+    let mut slots = vec![Vector3::zeros(); nn * b.len()];
+    let mut h_out = h_in.to_vec();
+    for e in 0..b.len() {
+        b.element_force_with(
+            e,
+            x,
+            &h_in[e * eh..(e + 1) * eh],
+            &mut h_out[e * eh..(e + 1) * eh],
+            step,
+            &mut slots[e * nn..(e + 1) * nn],
+        )?;
+    }
+    Ok((slots, h_out))
+}
+
+#[test]
+fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
+    for material in [carbon(), glass()] {
+        let (b, x0) = lane_grid(material);
+        assert!(b.lanes.as_ref().is_some_and(|l| l.blocks() == 2));
+        let mut h = b.initial_history();
+        // Three steps of a growing, rotating, shearing motion, so that U,
+        // τ̄ and the Prony history are all non-trivial.
+        for step in 1..=3 {
+            let s = step as f64;
+            let a = nalgebra::Matrix3::new(
+                1.0 + 0.01 * s,
+                0.03 * s,
+                0.0,
+                -0.01 * s,
+                1.0 - 0.004 * s,
+                0.0,
+                0.002 * s,
+                0.001,
+                1.0,
+            );
+            let x = deform(&x0, &a, step);
+            let dt = 1e-3 * s;
+            let (expected, expected_h) = scalar_forces(&b, &x, &h, dt).unwrap();
+            let mut slots = vec![Vector3::zeros(); 4 * b.len()];
+            let mut h_out = vec![f64::NAN; h.len()];
+            b.forces_into(&x, &h, &mut h_out, dt, &mut slots).unwrap();
+            // The blocks really ran on the lanes (no fallback).
+            let (eh, lanes) = (b.element_history_len(), b.lanes.as_ref().unwrap());
+            let (mut f, mut out) = ([Vector3::zeros(); 16], vec![0.0; 4 * eh]);
+            let resin = ResinStep {
+                wave_modulus: b.section.material.resin.wave_modulus(),
+                poisson: b.section.material.resin.poisson,
+                shear_modulus: b.section.material.resin.shear_modulus(),
+                long_term: 1.0,
+                thickness: b.section.material.resin_thickness(),
+                prony: &[(0.5, 0.1); 6][..b.section.material.resin.prony.len()],
+            };
+            assert!(lanes.block_forces(
+                1,
+                &b.nodes[16..32],
+                &x,
+                &h[4 * eh..8 * eh],
+                &mut out,
+                b.stride,
+                &resin,
+                &mut f
+            ));
+            // Stated round-off: none. The lanes do the scalar operations in
+            // the scalar order, without fused multiply-adds.
+            for (e, (f, g)) in slots.iter().zip(&expected).enumerate() {
+                assert_eq!(f, g, "slot {e}, step {step}");
+                assert!(f.norm() > 0.0);
+            }
+            for (k, (v, w)) in h_out.iter().zip(&expected_h).enumerate() {
+                assert_eq!(v.to_bits(), w.to_bits(), "history value {k}, step {step}");
+            }
+            h = h_out;
+        }
+    }
+}
+
+#[test]
+fn a_degenerate_quad_in_a_block_is_named_and_diagnosed_as_on_the_scalar_path() {
+    let (b, x0) = lane_grid(carbon());
+    let h = b.initial_history();
+    // Collapse element 5 (in the second block) onto a line.
+    let mut x = x0.clone();
+    let nodes = b.element_nodes(5).to_vec();
+    let (p, q) = (x[nodes[0] as usize], x[nodes[1] as usize]);
+    for (k, &n) in nodes.iter().enumerate() {
+        x[n as usize] = p + (q - p) * (k as f64 * 0.3);
+    }
+    let expected = b.diagnose(scalar_forces(&b, &x, &h, 1e-3).unwrap_err(), &x);
+    let mut slots = vec![Vector3::zeros(); 4 * b.len()];
+    let mut h_out = h.clone();
+    let err = b
+        .forces_into(&x, &h, &mut h_out, 1e-3, &mut slots)
+        .unwrap_err();
+    assert_eq!(err, expected);
+    // A NaN in the scalar tail (element 9) is named too.
+    let mut x = x0;
+    x[b.element_nodes(9)[2] as usize].x = f64::NAN;
+    let err = b
+        .forces_into(&x, &h, &mut h_out, 1e-3, &mut slots)
+        .unwrap_err();
+    assert_eq!(
+        err,
+        b.diagnose(scalar_forces(&b, &x, &h, 1e-3).unwrap_err(), &x)
+    );
+    assert_eq!(err.element, 9);
+}
+
+/// Glass with a stiff shear-locking law (locking past ~40°).
+fn locking_glass() -> Material {
+    let mut m = glass();
+    m.resin.shear_locking = Some(drape_constitutive::ShearLocking {
+        coefficients: vec![0.05, 0.0, 3.0],
+    });
+    m.validate().unwrap();
+    m
+}
+
+/// In-plane stretches that shear the fibres by 15–50°.
+fn shearing() -> [nalgebra::Matrix3<f64>; 3] {
+    [
+        nalgebra::Matrix3::new(1.0, 0.25, 0.0, 0.05, 1.0, 0.0, 0.0, 0.0, 1.0),
+        nalgebra::Matrix3::new(1.02, 0.5, 0.0, 0.3, 0.99, 0.0, 0.0, 0.0, 1.0),
+        nalgebra::Matrix3::new(0.98, -0.6, 0.0, -0.4, 1.01, 0.0, 0.0, 0.0, 1.0),
+    ]
+}
+
+#[test]
+fn shear_locking_tangent_matches_finite_differences() {
+    let mut seed = 500;
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        for embedded in [false, true] {
+            let (b, x0) = single(shape, locking_glass(), embedded);
+            let nodes: Vec<usize> = (0..shape.nodes()).collect();
+            for a in &shearing() {
+                seed += 1;
+                let h1 = step_to(&b, &deform(&x0, &(a * 0.99), seed), 0.01);
+                let x2 = deform(&x0, a, seed + 100);
+                let mut k = DMatrix::zeros(3 * shape.nodes(), 3 * shape.nodes());
+                b.element_tangent(0, &x2, &h1, 0.2, &mut k).unwrap();
+                assert_tangent_matches(&k, &x2, |x| force(&b, x, &h1, 0.2), &nodes);
+            }
+        }
+    }
+}
+
+#[test]
+fn shear_locking_force_is_the_gradient_of_its_energy() {
+    // Same history with and without the law: the force difference is the
+    // law's, and must be ∂(h·w(γ)·A)/∂x; it rotates with a rigid motion.
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        // Fibres as trusses: their large energy would drown the law's in
+        // the finite difference.
+        let (with, x0) = single(shape, locking_glass(), false);
+        let (without, _) = single(shape, glass(), false);
+        let x = deform(&x0, &shearing()[1], 9);
+        let h = with.initial_history();
+        let law_force: Vec<_> = force(&with, &x, &h, 0.0)
+            .iter()
+            .zip(force(&without, &x, &h, 0.0))
+            .map(|(a, b)| a - b)
+            .collect();
+        let law_energy = |x: &[Vector3<f64>]| {
+            with.element_energy(0, x, &h).unwrap() - without.element_energy(0, x, &h).unwrap()
+        };
+        assert!(law_energy(&x) > 0.0);
+        let scale = law_force.iter().map(|f| f.amax()).fold(0.0, f64::max);
+        let step = 1e-6;
+        for n in 0..shape.nodes() {
+            for c in 0..3 {
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[n][c] += step;
+                xm[n][c] -= step;
+                let fd = (law_energy(&xp) - law_energy(&xm)) / (2.0 * step);
+                assert!(
+                    (fd - law_force[n][c]).abs() < 1e-6 * scale,
+                    "{shape:?} node {n}: {fd} vs {}",
+                    law_force[n][c]
+                );
+            }
+        }
+        let q = random_rotation(4);
+        let xr: Vec<_> = x.iter().map(|p| q * p).collect();
+        for (a, b) in force(&with, &x, &h, 0.0)
+            .iter()
+            .zip(force(&with, &xr, &h, 0.0))
+        {
+            assert!((q * a - b).norm() < 1e-10 * scale);
+        }
+    }
+}
+
+#[test]
+fn a_membrane_without_the_law_is_unchanged_and_with_it_stiffer() {
+    let (with, x0) = single(MembraneShape::Quad, locking_glass(), false);
+    let (without, _) = single(MembraneShape::Quad, glass(), false);
+    let x = deform(&x0, &shearing()[1], 2);
+    // Undeformed: no stress from the law beyond round-off.
+    let h = with.initial_history();
+    for (a, b) in force(&with, &x0, &h, 0.1)
+        .iter()
+        .zip(force(&without, &x0, &h, 0.1))
+    {
+        assert!((a - b).norm() < 1e-13, "{a} vs {b}");
+    }
+    // Sheared ~45°: the law stiffens and shortens the step.
+    assert!(with.element_stable_time_step(0, &x) < without.element_stable_time_step(0, &x));
+}
+
+#[test]
+fn a_batch_with_the_locking_law_feels_it_in_every_element() {
+    // Quads with the law stay off the lanes (which carry the paper's resin
+    // only): the batch's forces are the per-element ones, law included.
+    let (with, x0) = lane_grid(locking_glass());
+    let (without, _) = lane_grid(glass());
+    assert!(with.lanes.is_none() && without.lanes.is_some());
+    let x = deform(&x0, &shearing()[1], 3);
+    let h = with.initial_history();
+    let (expected, _) = scalar_forces(&with, &x, &h, 1e-3).unwrap();
+    let (plain, _) = scalar_forces(&without, &x, &h, 1e-3).unwrap();
+    let mut slots = vec![Vector3::zeros(); 4 * with.len()];
+    let mut h_out = h.clone();
+    with.forces_into(&x, &h, &mut h_out, 1e-3, &mut slots)
+        .unwrap();
+    for (e, ((f, g), p)) in slots.iter().zip(&expected).zip(&plain).enumerate() {
+        assert_eq!(f, g, "slot {e}");
+        assert!(
+            (f - p).norm() > 1e-6 * p.norm(),
+            "slot {e}: no law in the force"
+        );
+    }
+}

@@ -12,6 +12,8 @@
 //! by colour-blind readers), sampled from matplotlib's table (CC0).
 
 pub(super) mod maps;
+pub(super) mod oblique;
+pub(super) mod sweep;
 mod text;
 
 use std::collections::BTreeMap;
@@ -342,44 +344,8 @@ pub(super) fn shear_map(
         // The colour bar, as tall as the map's plotting area, in the column
         // to its right; under it, the key to the outline and the marker.
         let (_, rows) = chart.plotting_area().get_pixel_range();
-        // Pixel ranges are absolute, `shrink` offsets relative to `root`.
-        let (base_x, base_y) = root.get_base_pixel();
-        let bar_left = (w - 170) as i32 - base_x;
-        let bar_height = (rows.end - rows.start).max(1) as u32;
         let key_height = 110;
-        let bar_area = root.clone().shrink(
-            (bar_left, rows.start - base_y),
-            (150, bar_height.saturating_sub(key_height)),
-        );
-        let mut bar = ChartBuilder::on(&bar_area)
-            .margin_right(4)
-            .right_y_label_area_size(66)
-            .build_cartesian_2d(0.0..1.0, 0.0..scale_max)
-            .map_err(drawing)?;
-        bar.configure_mesh()
-            .disable_mesh()
-            .disable_x_axis()
-            .y_desc("|γ| (deg)")
-            .y_label_formatter(&tick)
-            .label_style((FAMILY, 16))
-            .axis_desc_style((FAMILY, 18))
-            .draw()
-            .map_err(drawing)?;
-        let steps = 256;
-        bar.draw_series((0..steps).map(|k| {
-            let (a, b) = (k as f64 / steps as f64, (k + 1) as f64 / steps as f64);
-            Rectangle::new(
-                [(0.0, a * scale_max), (1.0, b * scale_max)],
-                viridis(0.5 * (a + b)).filled(),
-            )
-        }))
-        .map_err(drawing)?;
-        bar.draw_series([Rectangle::new(
-            [(0.0, 0.0), (1.0, scale_max)],
-            BLACK.stroke_width(1),
-        )])
-        .map_err(drawing)?;
-
+        let (bar_left, base_y) = colour_bar(root, w, rows.clone(), key_height, scale_max)?;
         let key_top = rows.end - base_y - key_height as i32 + 40;
         let key = root.clone().shrink((bar_left, key_top), (170, 70));
         let text = (FAMILY, 15).into_font().color(&BLACK);
@@ -395,6 +361,56 @@ pub(super) fn shear_map(
             .map_err(drawing)?;
         Ok(())
     })
+}
+
+/// The viridis colour bar of |γ| from 0 to `scale_max` in the right-hand
+/// column (170 px) of a picture `w` pixels wide, over the absolute pixel
+/// rows `rows` less `key_height` at their foot (for a key). Returns the
+/// bar's left edge relative to `root` and `root`'s vertical offset.
+fn colour_bar(
+    root: &Canvas<'_>,
+    w: u32,
+    rows: std::ops::Range<i32>,
+    key_height: u32,
+    scale_max: f64,
+) -> Result<(i32, i32)> {
+    // Pixel ranges are absolute, `shrink` offsets relative to `root`.
+    let (base_x, base_y) = root.get_base_pixel();
+    let bar_left = (w - 170) as i32 - base_x;
+    let bar_height = (rows.end - rows.start).max(1) as u32;
+    let bar_area = root.clone().shrink(
+        (bar_left, rows.start - base_y),
+        (150, bar_height.saturating_sub(key_height)),
+    );
+    let mut bar = ChartBuilder::on(&bar_area)
+        .margin_right(4)
+        .right_y_label_area_size(66)
+        .build_cartesian_2d(0.0..1.0, 0.0..scale_max)
+        .map_err(drawing)?;
+    bar.configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_desc("|γ| (deg)")
+        .y_label_formatter(&tick)
+        .label_style((FAMILY, 16))
+        .axis_desc_style((FAMILY, 18))
+        .draw()
+        .map_err(drawing)?;
+    let steps = 256;
+    bar.draw_series((0..steps).map(|k| {
+        let (a, b) = (k as f64 / steps as f64, (k + 1) as f64 / steps as f64);
+        Rectangle::new(
+            [(0.0, a * scale_max), (1.0, b * scale_max)],
+            viridis(0.5 * (a + b)).filled(),
+        )
+    }))
+    .map_err(drawing)?;
+    bar.draw_series([Rectangle::new(
+        [(0.0, 0.0), (1.0, scale_max)],
+        BLACK.stroke_width(1),
+    )])
+    .map_err(drawing)?;
+    Ok((bar_left, base_y))
 }
 
 /// The finite points of a profile as (distance, |γ|).

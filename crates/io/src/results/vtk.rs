@@ -80,6 +80,7 @@ fn check_sizes(frame: &FrameData<'_>) -> Result<(), SizeMismatch> {
         ("fields.fibre_tension", f.fibre_tension.len(), cells),
         ("fields.resin_stress", f.resin_stress.len(), cells),
         ("fields.thickness", f.thickness.len(), cells),
+        ("fields.waviness", f.waviness.len(), cells),
     ];
     for (what, len, expected) in checks {
         if len != expected {
@@ -123,22 +124,7 @@ pub(super) fn frame_vtu(time: f64, frame: &FrameData<'_>) -> Result<String, Size
     // About 4/3 of the binary size (some 120 bytes a point and a cell)
     // plus the markup.
     let mut xml = String::with_capacity(170 * (n_points + n_cells) + 4096);
-    xml.push_str(concat!(
-        "<?xml version=\"1.0\"?>\n",
-        "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
-        "  <UnstructuredGrid>\n",
-        "    <FieldData>\n",
-    ));
-    let _ = writeln!(
-        xml,
-        "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{}</DataArray>",
-        fmt_f64(time)
-    );
-    xml.push_str("    </FieldData>\n");
-    let _ = writeln!(
-        xml,
-        "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">"
-    );
+    vtu_head(&mut xml, time, n_points, n_cells);
 
     xml.push_str("      <PointData Vectors=\"displacement\" Scalars=\"contact_status\">\n");
     let displacement = state.x.iter().zip(&model.x0).map(|(x, x0)| x - x0);
@@ -209,6 +195,7 @@ pub(super) fn frame_vtu(time: f64, frame: &FrameData<'_>) -> Result<String, Size
         push_f64,
     );
     scalars(&mut xml, "thickness", &fields.thickness);
+    scalars(&mut xml, "waviness", &fields.waviness);
     xml.push_str("      </CellData>\n");
 
     xml.push_str("      <Points>\n");
@@ -233,6 +220,135 @@ pub(super) fn frame_vtu(time: f64, frame: &FrameData<'_>) -> Result<String, Size
 
     xml.push_str("    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
     Ok(xml)
+}
+
+/// VTK cell type of a line.
+const VTK_LINE: u8 = 3;
+
+/// The opening of a `.vtu` file at `time` with one piece of `n_points`
+/// points and `n_cells` cells.
+fn vtu_head(xml: &mut String, time: f64, n_points: usize, n_cells: usize) {
+    xml.push_str(concat!(
+        "<?xml version=\"1.0\"?>\n",
+        "<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
+        "  <UnstructuredGrid>\n",
+        "    <FieldData>\n",
+    ));
+    let _ = writeln!(
+        xml,
+        "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">{}</DataArray>",
+        fmt_f64(time)
+    );
+    xml.push_str("    </FieldData>\n");
+    let _ = writeln!(
+        xml,
+        "    <Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">"
+    );
+}
+
+/// The points and cells of a piece whose cells all have `nodes_per_cell`
+/// nodes and VTK type `kind`, and the closing tags.
+fn vtu_tail(
+    xml: &mut String,
+    points: impl Iterator<Item = nalgebra::Vector3<f64>>,
+    connectivity: &[i64],
+    nodes_per_cell: usize,
+    kind: u8,
+) {
+    let n_cells = connectivity.len() / nodes_per_cell;
+    xml.push_str("      <Points>\n");
+    let points: Vec<f64> = points.flat_map(|p| [p.x, p.y, p.z]).collect();
+    data_array(xml, "Float64", "Points", XYZ, &points, push_f64);
+    xml.push_str("      </Points>\n      <Cells>\n");
+    data_array(xml, "Int64", "connectivity", ONE, connectivity, |b, v| {
+        b.extend(v.to_le_bytes())
+    });
+    let offsets: Vec<i64> = (1..=n_cells).map(|c| (c * nodes_per_cell) as i64).collect();
+    data_array(xml, "Int64", "offsets", ONE, &offsets, |b, v| {
+        b.extend(v.to_le_bytes())
+    });
+    data_array(xml, "UInt8", "types", ONE, &vec![kind; n_cells], |b, &t| {
+        b.push(t)
+    });
+    xml.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
+}
+
+/// The `.vtu` text of the trusses of `model` at positions `x` (every node
+/// of the model a point, every truss a line cell), or None without
+/// trusses. Cell data: `family` (0 warp, 1 weft: the model's truss
+/// batches in order), `tension` (axial force N = A₀·τ/λ, N),
+/// `tension_per_width` (N over the width of fabric the truss carries,
+/// N/mm: the membranes' `fibre_tension_*` measure), `stretch` (λ = l/L₀).
+/// A truss whose length vanished has NaN values.
+pub(super) fn trusses_vtu(
+    time: f64,
+    model: &drape_model::Model,
+    x: &[nalgebra::Vector3<f64>],
+) -> Option<String> {
+    let count: usize = model.trusses.iter().map(|b| b.len()).sum();
+    if count == 0 {
+        return None;
+    }
+    // t_f, the thickness of one yarn family: A₀ = t_f·(strip width).
+    let family_thickness = model
+        .membranes
+        .first()
+        .map_or(f64::NAN, |b| b.section.material.family_thickness());
+    let mut connectivity = Vec::with_capacity(2 * count);
+    let (mut family, mut tension, mut per_width, mut stretch) = (
+        Vec::with_capacity(count),
+        Vec::with_capacity(count),
+        Vec::with_capacity(count),
+        Vec::with_capacity(count),
+    );
+    for (k, batch) in model.trusses.iter().enumerate() {
+        for e in 0..batch.len() {
+            connectivity.extend(batch.nodes[e].map(i64::from));
+            family.push(k.min(255) as u8);
+            let out = batch.element_output(e, x).ok();
+            let n = out.map_or(f64::NAN, |o| o.tension);
+            tension.push(n);
+            per_width.push(n * family_thickness / batch.section[e]);
+            stretch.push(out.map_or(f64::NAN, |o| o.stretch));
+        }
+    }
+    let mut xml = String::with_capacity(80 * (x.len() + count) + 4096);
+    vtu_head(&mut xml, time, x.len(), count);
+    xml.push_str("      <CellData Scalars=\"tension\">\n");
+    data_array(&mut xml, "UInt8", "family", ONE, &family, |b, &f| b.push(f));
+    scalars(&mut xml, "tension", &tension);
+    scalars(&mut xml, "tension_per_width", &per_width);
+    scalars(&mut xml, "stretch", &stretch);
+    xml.push_str("      </CellData>\n");
+    vtu_tail(&mut xml, x.iter().copied(), &connectivity, 2, VTK_LINE);
+    Some(xml)
+}
+
+/// The `.vtu` text of triangle surfaces: `points` and `triangles` (indices
+/// into `points`), with the cell data `tool` (the index of each triangle's
+/// tool in the scene's `[[tools]]`).
+pub(super) fn surfaces_vtu(
+    time: f64,
+    points: &[nalgebra::Vector3<f64>],
+    triangles: &[[u32; 3]],
+    tool: &[u32],
+) -> String {
+    let connectivity: Vec<i64> = triangles.iter().flatten().map(|&i| i64::from(i)).collect();
+    let mut xml = String::with_capacity(80 * (points.len() + triangles.len()) + 4096);
+    vtu_head(&mut xml, time, points.len(), triangles.len());
+    xml.push_str("      <CellData Scalars=\"tool\">\n");
+    data_array(&mut xml, "UInt32", "tool", ONE, tool, |b, v| {
+        b.extend(v.to_le_bytes())
+    });
+    xml.push_str("      </CellData>\n");
+    vtu_tail(
+        &mut xml,
+        points.iter().copied(),
+        &connectivity,
+        3,
+        VTK_TRIANGLE,
+    );
+    xml
 }
 
 /// The `.pvd` text listing `frames` (index → (time, file relative to the

@@ -35,6 +35,9 @@ pub(super) struct Locator<'a> {
     pub(super) file: &'a Path,
     pub(super) text: Option<&'a str>,
     pub(super) overrides: &'a [Override],
+    /// Warnings found while building: a scene that runs but may not be
+    /// what was meant (a mesh in metres, triangles dropped).
+    pub(super) warnings: std::cell::RefCell<Vec<String>>,
 }
 
 /// Whether `field` is `key` or inside it (`tools[0].geometry.radius` is in
@@ -47,6 +50,12 @@ fn within(field: &str, key: &str) -> bool {
 }
 
 impl Locator<'_> {
+    /// A warning at `field`, located as an error would be.
+    pub(super) fn warn(&self, field: &str, message: impl Into<String>) {
+        let located = self.error(field, message).to_string();
+        self.warnings.borrow_mut().push(located);
+    }
+
     /// An error at `field`: located on its line in the file, or named as
     /// coming from the `--set` override that gave its value.
     pub(super) fn error(&self, field: &str, message: impl Into<String>) -> SceneError {

@@ -10,6 +10,7 @@
 //! their formed shapes would not overlap.
 
 use drape_model::Model;
+use nalgebra::Vector3;
 use plotters::prelude::*;
 
 use super::{FAMILY, Result, bounds, drawing, render, tick, viridis};
@@ -54,7 +55,23 @@ fn diverging(t: f64) -> RGBColor {
 /// A PNG of `panels` side by side, each drawing every element of `model`
 /// at its reference position.
 pub(in crate::results) fn flat_maps(model: &Model, panels: &[MapPanel<'_>]) -> Result<Vec<u8>> {
-    let elements = model.membrane_count();
+    let mut cells = Vec::with_capacity(model.membrane_count());
+    for batch in &model.membranes {
+        for e in 0..batch.len() {
+            cells.push(batch.element_nodes(e).to_vec());
+        }
+    }
+    flat_maps_of(&model.x0, &cells, panels)
+}
+
+/// A PNG of `panels` side by side, each drawing the elements `cells`
+/// (node indices into `x0`) at the (x, y) of `x0`.
+pub(in crate::results) fn flat_maps_of(
+    x0: &[Vector3<f64>],
+    cells: &[Vec<u32>],
+    panels: &[MapPanel<'_>],
+) -> Result<Vec<u8>> {
+    let elements = cells.len();
     if let Some(p) = panels.iter().find(|p| p.values.len() != elements) {
         return Err(format!(
             "panel `{}` has {} values for {elements} elements",
@@ -63,18 +80,14 @@ pub(in crate::results) fn flat_maps(model: &Model, panels: &[MapPanel<'_>]) -> R
         ));
     }
     let mut polygons = Vec::with_capacity(elements);
-    for batch in &model.membranes {
-        for e in 0..batch.len() {
-            polygons.push(
-                batch
-                    .element_nodes(e)
-                    .iter()
-                    .map(|&n| (model.x0[n as usize].x, model.x0[n as usize].y))
-                    .collect::<Vec<_>>(),
-            );
-        }
+    for nodes in cells {
+        let corners: Option<Vec<(f64, f64)>> = nodes
+            .iter()
+            .map(|&n| x0.get(n as usize).map(|p| (p.x, p.y)))
+            .collect();
+        polygons.push(corners.ok_or("an element names a node that does not exist")?);
     }
-    let Some((xr, yr)) = bounds(model.x0.iter().map(|p| (p.x, p.y))) else {
+    let Some((xr, yr)) = bounds(x0.iter().map(|p| (p.x, p.y))) else {
         return Err("the model has no nodes to draw".into());
     };
     let size = (PANEL.0 * panels.len().max(1) as u32, PANEL.1);

@@ -1,0 +1,249 @@
+//! Where the explicit step's time goes, and what a second thread buys.
+//!
+//! Two tables, printed by `cargo xtask bench` before the criterion benches
+//! (`cargo bench -p drape-benches --bench step_profile [-- --quick]`):
+//!
+//! 1. The per-pass profile of the explicit step ([`drape_time::profile`]):
+//!    element forces by kind, gather, the contact pass by phase, boundary
+//!    conditions, the works, checks, energies at outputs, output; µs per
+//!    step and share, on 1 and 2 threads, for the hemisphere scene
+//!    (scenes/hemisphere-0-90.toml, 40 × 40 cells) and the same scene with
+//!    a 200 × 200-cell blank. Each starts from a state advanced into the
+//!    stroke (so the punch is in contact), then profiles a window of steps.
+//! 2. ms per step on 1 and on 2 threads for every shipped scene
+//!    (scenes/*.toml), and their ratio, from a state a few hundred steps
+//!    into the run.
+//!
+//! Wall-clock figures mean something only on a quiet machine: the load
+//! average is printed next to them. With `DRAPE_BENCH_CLOCK=thread-cpu` the
+//! one-thread figures are the driver thread's CPU time instead (a
+//! per-core figure that survives a busy machine); two-thread figures are
+//! always wall time. `--quick` profiles shorter windows from earlier in
+//! the stroke.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use drape_benches::{Clock, Stopwatch};
+use drape_io::scene::Scene;
+use drape_model::State;
+use drape_time::{Explicit, ExplicitSettings, NoObserver, ProfileClock, StepProfile, profile};
+
+/// `--set key.path=value` pairs.
+type Overrides = Vec<(String, String)>;
+
+/// How far into a run a measurement starts and how many steps it takes.
+#[derive(Debug, Clone, Copy)]
+struct Window {
+    warm_steps: u64,
+    steps: u64,
+}
+
+fn main() {
+    // cargo bench passes `--bench`; criterion-style filters are ignored.
+    let quick = std::env::args().any(|a| a == "--quick");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("benches/ sits in the workspace")
+        .to_path_buf();
+    let clock = Clock::from_env();
+    println!(
+        "drape step profile ({} mode); load average {}; one-thread figures by {}",
+        if quick { "quick" } else { "full" },
+        load_average(),
+        match clock {
+            Clock::Wall => "wall clock",
+            Clock::ThreadCpu => "thread CPU time",
+        }
+    );
+    let hemisphere = root.join("scenes/hemisphere-0-90.toml");
+    let cases: [(&str, Overrides, Window); 2] = [
+        (
+            "hemisphere 40×40",
+            Vec::new(),
+            if quick {
+                Window {
+                    warm_steps: 1_000,
+                    steps: 300,
+                }
+            } else {
+                Window {
+                    warm_steps: 15_000,
+                    steps: 3_000,
+                }
+            },
+        ),
+        (
+            "hemisphere scene, 200×200 blank",
+            vec![("fabric.blank.cells".to_owned(), "[200, 200]".to_owned())],
+            if quick {
+                Window {
+                    warm_steps: 100,
+                    steps: 30,
+                }
+            } else {
+                Window {
+                    warm_steps: 1_500,
+                    steps: 200,
+                }
+            },
+        ),
+    ];
+    for (name, overrides, window) in &cases {
+        let scene = load(&hemisphere, overrides);
+        let warm = advance(&scene, window.warm_steps);
+        let m = &scene.model;
+        println!(
+            "\n== {name}: {} nodes, {} membranes, {} trusses, {} springs, {} tools; \
+             profile of steps {}..{} (load {})",
+            m.node_count(),
+            m.membrane_count(),
+            m.trusses.iter().map(|b| b.len()).sum::<usize>(),
+            m.springs.iter().map(|b| b.len()).sum::<usize>(),
+            m.tools.len(),
+            warm.step,
+            warm.step + window.steps,
+            load_average(),
+        );
+        for threads in [1, 2] {
+            let profile_clock: ProfileClock = match (clock, threads) {
+                (Clock::ThreadCpu, 1) => thread_cpu,
+                _ => profile::wall_clock,
+            };
+            let p = in_pool(threads, || {
+                profile_steps(&scene, &warm, window.steps, profile_clock)
+            });
+            println!(
+                "-- {threads} thread(s): {:.3} ms/step",
+                p.step_time().as_secs_f64() * 1e3
+            );
+            print!("{}", p.table());
+        }
+    }
+
+    println!(
+        "\n== ms per step, 1 vs 2 threads (wall clock), shipped scenes (load {})",
+        load_average()
+    );
+    let cpu = clock == Clock::ThreadCpu;
+    println!(
+        "  {:<28} {:>7} {:>9} {:>9} {:>7}{}",
+        "scene",
+        "nodes",
+        "1 thread",
+        "2 threads",
+        "2t/1t",
+        if cpu { "   1 thread (CPU)" } else { "" }
+    );
+    let window = if quick {
+        Window {
+            warm_steps: 200,
+            steps: 200,
+        }
+    } else {
+        Window {
+            warm_steps: 500,
+            steps: 2_000,
+        }
+    };
+    for path in shipped_scenes(&root) {
+        let scene = load(&path, &[]);
+        let warm = advance(&scene, window.warm_steps);
+        // Alternating 1 and 2 threads, best of three: a burst of other work
+        // on the machine hits one repeat, not the figure.
+        let mut best = [f64::INFINITY; 3];
+        let runs = [(1, Clock::Wall), (2, Clock::Wall), (1, clock)];
+        for _ in 0..3 {
+            for (k, &(threads, c)) in runs.iter().enumerate().take(if cpu { 3 } else { 2 }) {
+                let t = in_pool(threads, || time_steps(&scene, &warm, window.steps, c));
+                best[k] = best[k].min(t.as_secs_f64() * 1e3 / window.steps as f64);
+            }
+        }
+        let cpu_column = if cpu {
+            format!(" {:>17.3}", best[2])
+        } else {
+            String::new()
+        };
+        println!(
+            "  {:<28} {:>7} {:>9.3} {:>9.3} {:>7.2}{cpu_column}",
+            path.file_name().unwrap_or_default().to_string_lossy(),
+            scene.model.node_count(),
+            best[0],
+            best[1],
+            best[1] / best[0],
+        );
+    }
+}
+
+fn load(path: &Path, overrides: &[(String, String)]) -> Scene {
+    Scene::from_file(path, overrides).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn settings(scene: &Scene, steps: u64) -> ExplicitSettings {
+    ExplicitSettings {
+        max_steps: Some(steps),
+        ..scene.settings.clone()
+    }
+}
+
+/// The scene's state after `steps` steps on all threads.
+fn advance(scene: &Scene, steps: u64) -> State {
+    let mut state = scene.model.initial_state();
+    let mut driver = Explicit::new(&scene.model, settings(scene, steps)).expect("driver");
+    driver
+        .run(&mut state, &mut NoObserver)
+        .expect("warm-up run");
+    state
+}
+
+fn profile_steps(scene: &Scene, start: &State, steps: u64, clock: ProfileClock) -> StepProfile {
+    let mut driver = Explicit::new(&scene.model, settings(scene, steps)).expect("driver");
+    driver.enable_profile(clock);
+    let mut state = start.clone();
+    driver
+        .run(&mut state, &mut NoObserver)
+        .expect("profiled run");
+    *driver.profile().expect("profiled")
+}
+
+/// Time of `steps` steps from `start` (the driver's set-up and its first
+/// force pass not counted: they are a second run of one step, subtracted).
+fn time_steps(scene: &Scene, start: &State, steps: u64, clock: Clock) -> Duration {
+    let run = |n: u64| {
+        let mut driver = Explicit::new(&scene.model, settings(scene, n)).expect("driver");
+        let mut state = start.clone();
+        let watch = Stopwatch::start(clock);
+        driver.run(&mut state, &mut NoObserver).expect("timed run");
+        watch.elapsed()
+    };
+    let (one, many) = (run(1), run(steps + 1));
+    many.saturating_sub(one)
+}
+
+fn in_pool<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a rayon pool")
+        .install(f)
+}
+
+fn shipped_scenes(root: &Path) -> Vec<PathBuf> {
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(root.join("scenes"))
+        .expect("scenes/")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    scenes.sort();
+    scenes
+}
+
+fn thread_cpu() -> Duration {
+    drape_benches::thread_cpu_time()
+}
+
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|_| "unknown".to_owned())
+}

@@ -1,0 +1,350 @@
+//! Two results folders side by side: `drape compare RUN_A RUN_B`.
+//!
+//! [`compare_runs`] reads both folders' summaries and last frames, puts
+//! their measures side by side and compares their shear element by
+//! element on run A's mesh, drawn flat at A's reference positions:
+//!
+//! - when both runs have the same mesh (the same cells and reference
+//!   points), element by element;
+//! - otherwise B's shear is carried onto A's elements by closest point on
+//!   B's reference surface ([`drape_io::results::mapping::SurfaceField`]):
+//!   at each of A's reference centroids, B's shear interpolated between
+//!   its nodal means, or B's element value where A's centroid is the
+//!   centroid of one of B's elements (the same cells numbered otherwise,
+//!   such as a kinematic net drawn on the run's own grid). An element of A farther from B's blank than half B's
+//!   typical element size has no value (B's blank does not reach there).
+//!
+//! Any two folders compare: two forming runs of one scene with different
+//! settings (a sweep's runs), two meshes of one part, a forming run and a
+//! kinematic drape (`drape kinematic`), whose nets are drawn on the flat
+//! blank too.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use drape_io::results::mapping::SurfaceField;
+use drape_io::results::read::{VtuFrame, read_last_frame, read_summary};
+use drape_io::results::{MapPanel, ResultsError, Summary, write_flat_maps_of};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// What stops a comparison of two folders.
+#[derive(Debug, thiserror::Error)]
+pub enum CompareError {
+    /// A folder cannot be read as a run's results (bad input).
+    #[error("{0}")]
+    Input(String),
+    /// Writing the comparison failed.
+    #[error(transparent)]
+    Results(#[from] ResultsError),
+}
+
+/// One measure of both runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MeasureRow {
+    /// What it is.
+    pub name: String,
+    /// Its unit.
+    pub unit: String,
+    /// Run A's value (null when it has none).
+    pub a: Option<f64>,
+    /// Run B's value.
+    pub b: Option<f64>,
+}
+
+/// `comparison.json` of two results folders.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct RunComparisonSummary {
+    /// Run A's folder.
+    pub run_a: String,
+    /// Run B's folder.
+    pub run_b: String,
+    /// Run A's status.
+    pub status_a: String,
+    /// Run B's status.
+    pub status_b: String,
+    /// The measures side by side.
+    pub measures: Vec<MeasureRow>,
+    /// Whether both runs have the same mesh (compared element by element)
+    /// or B was carried onto A's mesh by closest point.
+    pub same_mesh: bool,
+    /// Elements of run A.
+    pub elements: usize,
+    /// Of those, elements with a value from both runs.
+    pub compared: usize,
+    /// Largest |γ_B − γ_A| (degrees).
+    pub max_abs_difference_deg: f64,
+    /// Where: run A's reference centroid of that element (mm).
+    pub max_difference_at: [f64; 3],
+    /// Root mean square of γ_B − γ_A (degrees).
+    pub rms_difference_deg: f64,
+    /// Mean of γ_B − γ_A (degrees).
+    pub mean_difference_deg: f64,
+}
+
+/// Two runs compared.
+#[derive(Debug, Clone)]
+pub struct RunComparison {
+    /// The summary written to `comparison.json`.
+    pub summary: RunComparisonSummary,
+    /// Run A's summary.
+    pub a: Summary,
+    /// Run B's summary.
+    pub b: Summary,
+    /// Per element of run A: γ of A (degrees).
+    pub a_deg: Vec<f64>,
+    /// γ of B at the same material point (degrees; NaN where B has none).
+    pub b_deg: Vec<f64>,
+    /// A's reference centroids.
+    pub centroid0: Vec<Vector3<f64>>,
+}
+
+/// A finite value, or None (JSON null).
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+/// The measures of both summaries, side by side.
+fn measures(a: &Summary, b: &Summary) -> Vec<MeasureRow> {
+    type Get = fn(&Summary) -> f64;
+    let rows: [(&str, &str, Get); 15] = [
+        ("time reached", "s", |s| s.time),
+        ("largest |shear| at the end", "deg", |s| s.max_shear_deg),
+        ("largest |shear| over the run", "deg", |s| {
+            s.peak.max_shear_deg
+        }),
+        ("time of that peak", "s", |s| s.peak.max_shear_time_s),
+        ("draw-in DX", "mm", |s| s.draw_in_mm.dx),
+        ("draw-in DY", "mm", |s| s.draw_in_mm.dy),
+        ("draw-in DD", "mm", |s| s.draw_in_mm.dd),
+        ("largest yarn tension at the end", "N/mm", |s| {
+            s.max_fibre_tension_n_per_mm
+        }),
+        ("largest yarn tension over the run", "N/mm", |s| {
+            s.peak.max_fibre_tension_n_per_mm
+        }),
+        ("largest truss force at the end", "N", |s| {
+            s.max_fibre_tension_n
+        }),
+        ("area above the locking angle", "mm²", |s| {
+            s.area_above_locking_mm2
+        }),
+        ("energy balance error", "", |s| s.energy.balance_error),
+        ("E_kin/E_int at the end", "", |s| {
+            s.energy.kinetic_to_internal
+        }),
+        ("steps", "", |s| s.run.steps as f64),
+        ("wall time", "s", |s| s.run.wall_s),
+    ];
+    rows.iter()
+        .map(|(name, unit, get)| MeasureRow {
+            name: (*name).to_owned(),
+            unit: (*unit).to_owned(),
+            a: finite(get(a)),
+            b: finite(get(b)),
+        })
+        .collect()
+}
+
+/// The reference mesh and shear (degrees) of a frame.
+fn shear_of(frame: &VtuFrame, dir: &Path) -> Result<Vec<f64>, CompareError> {
+    frame
+        .cell_scalars("shear_angle_deg")
+        .map(<[f64]>::to_vec)
+        .ok_or_else(|| {
+            CompareError::Input(format!(
+                "{}: its last frame has no shear_angle_deg",
+                dir.display()
+            ))
+        })
+}
+
+/// Whether two frames have the same reference mesh (cells and points to
+/// 1e-9 of the blank's size).
+fn same_mesh(a: &VtuFrame, a0: &[Vector3<f64>], b: &VtuFrame, b0: &[Vector3<f64>]) -> bool {
+    if a.cells != b.cells || a0.len() != b0.len() {
+        return false;
+    }
+    let size = a0.iter().map(|p| p.norm()).fold(1.0f64, f64::max);
+    a0.iter()
+        .zip(b0)
+        .all(|(p, q)| (p - q).norm() <= 1e-9 * size)
+}
+
+/// Compares the results folders `a` and `b` and writes into `out`
+/// (created if needed) `comparison.json` ([`RunComparisonSummary`]),
+/// `comparison.csv` (per element of A: reference centroid, γ_A, γ_B and
+/// γ_B − γ_A) and `comparison.png` (A's |γ|, B's |γ| on one colour scale
+/// and |γ|_B − |γ|_A, on A's flat blank).
+pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, CompareError> {
+    let input = CompareError::Input;
+    let (sa, sb) = (
+        read_summary(a).map_err(input)?,
+        read_summary(b).map_err(input)?,
+    );
+    let (fa, fb) = (
+        read_last_frame(a).map_err(input)?,
+        read_last_frame(b).map_err(input)?,
+    );
+    let (a0, b0) = (fa.reference_points(), fb.reference_points());
+    let (ga, gb) = (shear_of(&fa, a)?, shear_of(&fb, b)?);
+    if ga.len() != fa.cells.len() || gb.len() != fb.cells.len() {
+        return Err(input(format!(
+            "{} or {}: a shear array does not match its cells",
+            a.display(),
+            b.display()
+        )));
+    }
+    let centroid = |points: &[Vector3<f64>], cell: &[u32]| {
+        cell.iter()
+            .map(|&n| points[n as usize])
+            .sum::<Vector3<f64>>()
+            / cell.len() as f64
+    };
+    let centroid0: Vec<Vector3<f64>> = fa.cells.iter().map(|c| centroid(&a0, c)).collect();
+    let same = same_mesh(&fa, &a0, &fb, &b0);
+    let b_deg = if same {
+        gb.clone()
+    } else {
+        let field = SurfaceField::new(&b0, &fb.cells, std::slice::from_ref(&gb))
+            .map_err(|e| input(format!("{}: {e}", b.display())))?;
+        let area: f64 = fb
+            .cells
+            .iter()
+            .map(|c| {
+                let p = |k: usize| b0[c[k] as usize];
+                if c.len() == 4 {
+                    0.5 * (p(2) - p(0)).cross(&(p(3) - p(1))).norm()
+                } else {
+                    0.5 * (p(1) - p(0)).cross(&(p(2) - p(0))).norm()
+                }
+            })
+            .sum();
+        let reach = 0.5 * (area / fb.cells.len().max(1) as f64).sqrt();
+        centroid0
+            .iter()
+            .map(|c| {
+                let s = field.sample(c);
+                if s.distance <= reach {
+                    s.values[0]
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect()
+    };
+    let mut summary = RunComparisonSummary {
+        run_a: a.display().to_string(),
+        run_b: b.display().to_string(),
+        status_a: sa.status.clone(),
+        status_b: sb.status.clone(),
+        measures: measures(&sa, &sb),
+        same_mesh: same,
+        elements: ga.len(),
+        ..RunComparisonSummary::default()
+    };
+    let (mut sum, mut sum2) = (0.0, 0.0);
+    for (e, (x, y)) in ga.iter().zip(&b_deg).enumerate() {
+        let d = y - x;
+        if !d.is_finite() {
+            continue;
+        }
+        summary.compared += 1;
+        sum += d;
+        sum2 += d * d;
+        if d.abs() > summary.max_abs_difference_deg {
+            summary.max_abs_difference_deg = d.abs();
+            summary.max_difference_at = centroid0[e].into();
+        }
+    }
+    let n = summary.compared.max(1) as f64;
+    summary.mean_difference_deg = sum / n;
+    summary.rms_difference_deg = (sum2 / n).sqrt();
+
+    std::fs::create_dir_all(out).map_err(|source| ResultsError {
+        path: out.to_owned(),
+        source,
+    })?;
+    let at = |name: &str| {
+        let path = out.join(name);
+        move |source| ResultsError { path, source }
+    };
+    let number = |v: f64| {
+        if v.is_finite() {
+            v.to_string()
+        } else {
+            String::new()
+        }
+    };
+    let mut csv = String::from("element,x0_mm,y0_mm,z0_mm,a_deg,b_deg,difference_deg\n");
+    for (e, c) in centroid0.iter().enumerate() {
+        let _ = writeln!(
+            csv,
+            "{e},{},{},{},{},{},{}",
+            c.x,
+            c.y,
+            c.z,
+            number(ga[e]),
+            number(b_deg[e]),
+            number(b_deg[e] - ga[e])
+        );
+    }
+    drape_io::atomic::write(&out.join("comparison.csv"), csv.as_bytes())
+        .map_err(at("comparison.csv"))?;
+    let magnitude = |v: &[f64]| -> Vec<f64> { v.iter().map(|g| g.abs()).collect() };
+    let (ma, mb) = (magnitude(&ga), magnitude(&b_deg));
+    let difference: Vec<f64> = ma.iter().zip(&mb).map(|(x, y)| y - x).collect();
+    let shared = ma
+        .iter()
+        .chain(&mb)
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |m, &v| m.max(v));
+    let name = |p: &Path| {
+        p.file_name().map_or_else(
+            || p.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        )
+    };
+    write_flat_maps_of(
+        &out.join("comparison.png"),
+        &a0,
+        &fa.cells,
+        &[
+            MapPanel {
+                title: format!("A: {} ({}): |γ|", name(a), sa.status),
+                values: &ma,
+                label: "|γ| (deg)".into(),
+                signed: false,
+                scale: Some(shared),
+            },
+            MapPanel {
+                title: format!("B: {} ({}): |γ|", name(b), sb.status),
+                values: &mb,
+                label: "|γ| (deg)".into(),
+                signed: false,
+                scale: Some(shared),
+            },
+            MapPanel {
+                title: "Difference: |γ| B − |γ| A".into(),
+                values: &difference,
+                label: "difference (deg)".into(),
+                signed: true,
+                scale: None,
+            },
+        ],
+    )?;
+    let mut json = serde_json::to_vec_pretty(&summary).map_err(|e| ResultsError {
+        path: out.join("comparison.json"),
+        source: e.into(),
+    })?;
+    json.push(b'\n');
+    drape_io::atomic::write(&out.join("comparison.json"), &json).map_err(at("comparison.json"))?;
+    Ok(RunComparison {
+        summary,
+        a: sa,
+        b: sb,
+        a_deg: ga,
+        b_deg,
+        centroid0,
+    })
+}

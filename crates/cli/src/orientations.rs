@@ -1,0 +1,95 @@
+//! `drape export RUN --onto MESH`: a run's draped orientations carried onto
+//! a structural mesh of the user's.
+//!
+//! The run's `orientations.inp` (written by every run) gives the formed
+//! mesh and its values; the structural mesh is read like a blank mesh
+//! (Gmsh `.msh` 4.1 or Abaqus `.inp`: triangles and quads, shells or
+//! membranes); [`drape_io::results::mapping::map_onto`] carries the values
+//! onto it by closest point. The mesh must be in the formed part's
+//! coordinates (mm): the distance of each of its elements to the formed
+//! surface is reported, and a large one means the two do not describe the
+//! same part or are not placed alike.
+
+use std::path::{Path, PathBuf};
+
+use drape_io::mesh_import::read_mesh;
+use drape_io::results::ResultsError;
+use drape_io::results::export::Orientations;
+use drape_io::results::mapping::map_onto;
+
+use crate::compare::CompareError;
+
+/// What a mapping leaves.
+#[derive(Debug, Clone)]
+pub struct MappedReport {
+    /// The mapped orientations (the structural mesh's labels).
+    pub mapped: Orientations,
+    /// The Abaqus include written.
+    pub inp: PathBuf,
+    /// The CSV table written.
+    pub csv: PathBuf,
+    /// The largest distance of an element's centroid to the formed
+    /// surface (mm) and that element's label.
+    pub max_distance: (f64, i64),
+    /// The mean distance (mm).
+    pub mean_distance: f64,
+    /// Elements farther from the formed surface than its nominal thickness.
+    pub beyond_thickness: usize,
+    /// The nominal thickness (mm).
+    pub thickness: f64,
+}
+
+/// Maps the orientations of the results folder `run` onto the mesh file
+/// `mesh` and writes `orientations_<mesh name>.inp` and `.csv` into `out`.
+pub fn map_orientations(run: &Path, mesh: &Path, out: &Path) -> Result<MappedReport, CompareError> {
+    let input = CompareError::Input;
+    let source_path = run.join("orientations.inp");
+    if !source_path.is_file() {
+        return Err(input(format!(
+            "{}: no orientations.inp: not a run's results folder, or a run written before \
+             drape exported orientations (run it again)",
+            run.display()
+        )));
+    }
+    let source = Orientations::read_inp(&source_path).map_err(input)?;
+    let target = read_mesh(mesh).map_err(|e| input(e.to_string()))?;
+    let mapped =
+        map_onto(&source, &target).map_err(|e| input(format!("{}: {e}", source_path.display())))?;
+    let stem = mesh
+        .file_stem()
+        .map_or_else(|| "mesh".to_owned(), |s| s.to_string_lossy().into_owned());
+    std::fs::create_dir_all(out).map_err(|source| ResultsError {
+        path: out.to_owned(),
+        source,
+    })?;
+    let inp = out.join(format!("orientations_{stem}.inp"));
+    let csv = out.join(format!("orientations_{stem}.csv"));
+    for (path, text) in [(&inp, mapped.to_inp()), (&csv, mapped.to_csv())] {
+        drape_io::atomic::write(path, text.as_bytes()).map_err(|source| ResultsError {
+            path: path.clone(),
+            source,
+        })?;
+    }
+    let distance = mapped.distance.clone().unwrap_or_default();
+    let max_distance =
+        distance
+            .iter()
+            .zip(&mapped.labels)
+            .fold(
+                (0.0f64, 0i64),
+                |(m, l), (&d, &label)| {
+                    if d > m { (d, label) } else { (m, l) }
+                },
+            );
+    let mean_distance = distance.iter().sum::<f64>() / distance.len().max(1) as f64;
+    let thickness = source.nominal_thickness;
+    Ok(MappedReport {
+        beyond_thickness: distance.iter().filter(|&&d| d > thickness).count(),
+        mapped,
+        inp,
+        csv,
+        max_distance,
+        mean_distance,
+        thickness,
+    })
+}

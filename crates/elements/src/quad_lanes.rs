@@ -1,0 +1,353 @@
+//! Resin-only quad membranes four elements at a time: the same arithmetic
+//! as the scalar path ([`crate::MembraneBatch`]'s `point_response` and
+//! `add_nodal_forces`), operation for operation, on `wide::f64x4` lanes
+//! over struct-of-arrays reference data.
+//!
+//! What it is for: the explicit force pass of the paper's representation
+//! (yarns as trusses, the membrane carrying the resin only), the bulk of an
+//! explicit step. What it is not: a second element. Each lane does exactly
+//! the scalar path's operations in the scalar path's order, with no fused
+//! multiply-add, so it gives the scalar path's results bit for bit (tested
+//! on distorted, rotated and sheared elements with Prony history); anything
+//! the lanes do not cover (triangles, embedded fibres, a resin with more
+//! Prony terms than the batch's factor table) stays on the scalar path, and
+//! so does any block with a degenerate or non-finite point, which the
+//! scalar path then names.
+//!
+//! Instruction set: the lanes are plain `[f64; 4]` with element-wise
+//! operators that the compiler turns into vector instructions; the kernel
+//! is compiled twice, for the target's baseline (two SSE2 operations per
+//! lane operation on x86-64) and with AVX2 enabled (one), and
+//! [`QuadLanes::block_forces`] picks the second at run time when the
+//! processor has it. Neither contracts a multiply and an add into an FMA,
+//! so both give the same bits.
+
+use std::ops::{Add, AddAssign, Div, Mul, Sub};
+
+use drape_kinematics::Vector2;
+use nalgebra::Vector3;
+
+/// Four f64 lanes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
+#[allow(non_camel_case_types)]
+pub(crate) struct f64x4([f64; 4]);
+
+macro_rules! lane_op {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl $trait for f64x4 {
+            type Output = f64x4;
+            #[inline(always)]
+            fn $method(self, rhs: f64x4) -> f64x4 {
+                f64x4([
+                    self.0[0] $op rhs.0[0],
+                    self.0[1] $op rhs.0[1],
+                    self.0[2] $op rhs.0[2],
+                    self.0[3] $op rhs.0[3],
+                ])
+            }
+        }
+    };
+}
+lane_op!(Add, add, +);
+lane_op!(Sub, sub, -);
+lane_op!(Mul, mul, *);
+lane_op!(Div, div, /);
+
+impl AddAssign for f64x4 {
+    #[inline(always)]
+    fn add_assign(&mut self, rhs: f64x4) {
+        *self = *self + rhs;
+    }
+}
+
+impl f64x4 {
+    #[inline(always)]
+    fn new(v: [f64; 4]) -> Self {
+        Self(v)
+    }
+
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        Self([v; 4])
+    }
+
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Self(self.0.map(f64::sqrt))
+    }
+
+    #[inline(always)]
+    fn to_array(self) -> [f64; 4] {
+        self.0
+    }
+
+    /// Whether every lane is finite.
+    #[inline(always)]
+    fn all_finite(self) -> bool {
+        self.0.iter().fold(true, |ok, v| ok & v.is_finite())
+    }
+
+    /// Whether every lane is above `rhs`'s (false for a NaN).
+    #[inline(always)]
+    fn all_gt(self, rhs: f64x4) -> bool {
+        (0..4).fold(true, |ok, k| ok & (self.0[k] > rhs.0[k]))
+    }
+}
+
+/// Elements per block.
+pub(crate) const LANES: usize = 4;
+const NODES: usize = 4;
+const POINTS: usize = 4;
+/// As in `drape_kinematics::right_stretch`.
+const DEGENERATE_DET_C: f64 = 1e-14;
+
+/// ∂N/∂X and point areas of the batch's whole blocks of [`LANES`]
+/// elements, lane k holding element `LANES·b + k`.
+#[derive(Debug, Clone)]
+pub(crate) struct QuadLanes {
+    /// Per (block, point, node): ∂N/∂X₁ and ∂N/∂X₂.
+    grad: Vec<[f64x4; 2]>,
+    /// Per (block, point): the point's reference area (weight).
+    area: Vec<f64x4>,
+}
+
+/// The resin's constants and the step's Prony factors.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ResinStep<'a> {
+    /// Plane-stress wave modulus E/(1 − ν²).
+    pub wave_modulus: f64,
+    pub poisson: f64,
+    pub shear_modulus: f64,
+    /// 1 − Σ gₖ, summed as the scalar update sums it.
+    pub long_term: f64,
+    /// Resin thickness h_m.
+    pub thickness: f64,
+    /// (e^(−Δt/τₖ), gₖ·φₖ) per Prony term; empty for an elastic resin.
+    pub prony: &'a [(f64, f64)],
+}
+
+#[inline(always)]
+fn lanes(v: [f64; LANES]) -> f64x4 {
+    f64x4::new(v)
+}
+
+impl QuadLanes {
+    /// The lanes of `count` quads with ∂N/∂X `grad_n` (per element, point,
+    /// node) and point areas `area` (per element, point); a last partial
+    /// block is left to the scalar path.
+    pub(crate) fn new(grad_n: &[Vector2<f64>], area: &[f64], count: usize) -> Self {
+        let blocks = count / LANES;
+        let mut grad = Vec::with_capacity(blocks * POINTS * NODES);
+        let mut areas = Vec::with_capacity(blocks * POINTS);
+        for b in 0..blocks {
+            for p in 0..POINTS {
+                for a in 0..NODES {
+                    let g =
+                        |k: usize, c: usize| grad_n[((LANES * b + k) * POINTS + p) * NODES + a][c];
+                    grad.push([
+                        lanes([g(0, 0), g(1, 0), g(2, 0), g(3, 0)]),
+                        lanes([g(0, 1), g(1, 1), g(2, 1), g(3, 1)]),
+                    ]);
+                }
+                let w = |k: usize| area[(LANES * b + k) * POINTS + p];
+                areas.push(lanes([w(0), w(1), w(2), w(3)]));
+            }
+        }
+        Self { grad, area: areas }
+    }
+
+    /// Whole blocks.
+    pub(crate) fn blocks(&self) -> usize {
+        self.area.len() / POINTS
+    }
+
+    /// Forces and new history of block `b`: `nodes` its elements' nodes
+    /// (4 per element), `h_in`/`h_out` their histories (`stride` per point,
+    /// element after element), `slots` their nodal forces (4 per element).
+    /// Returns false, having written nothing meaningful, if a point of the
+    /// block is non-finite or degenerate: the caller then runs the block on
+    /// the scalar path, which names the element.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(crate) fn block_forces(
+        &self,
+        b: usize,
+        nodes: &[u32],
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_out: &mut [f64],
+        stride: usize,
+        resin: &ResinStep<'_>,
+        slots: &mut [Vector3<f64>],
+    ) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above).
+            return unsafe {
+                self.block_forces_avx2(b, nodes, x, h_in, h_out, stride, resin, slots)
+            };
+        }
+        self.block_forces_lanes(b, nodes, x, h_in, h_out, stride, resin, slots)
+    }
+
+    /// [`Self::block_forces`] compiled with AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[allow(clippy::too_many_arguments)]
+    fn block_forces_avx2(
+        &self,
+        b: usize,
+        nodes: &[u32],
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_out: &mut [f64],
+        stride: usize,
+        resin: &ResinStep<'_>,
+        slots: &mut [Vector3<f64>],
+    ) -> bool {
+        self.block_forces_lanes(b, nodes, x, h_in, h_out, stride, resin, slots)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn block_forces_lanes(
+        &self,
+        b: usize,
+        nodes: &[u32],
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_out: &mut [f64],
+        stride: usize,
+        resin: &ResinStep<'_>,
+        slots: &mut [Vector3<f64>],
+    ) -> bool {
+        debug_assert_eq!(nodes.len(), LANES * NODES);
+        debug_assert_eq!(slots.len(), LANES * NODES);
+        let eh = stride * POINTS;
+        // Nodal positions, [node][component] across the lanes.
+        let xe: [[f64x4; 3]; NODES] = std::array::from_fn(|a| {
+            let p = |k: usize| x[nodes[k * NODES + a] as usize];
+            let (p0, p1, p2, p3) = (p(0), p(1), p(2), p(3));
+            std::array::from_fn(|c| lanes([p0[c], p1[c], p2[c], p3[c]]))
+        });
+        let zero = f64x4::splat(0.0);
+        let half = f64x4::splat(0.5);
+        let mut force = [[zero; 3]; NODES];
+        let mut ok = true;
+        let history = |h: &[f64], k: usize, p: usize, i: usize| h[k * eh + p * stride + i];
+        for p in 0..POINTS {
+            let grad = &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES];
+            // F = Σₐ xₐ ⊗ ∇Nₐ (from zero, node by node).
+            let mut f = [[zero; 2]; 3];
+            for (xa, ga) in xe.iter().zip(grad) {
+                for i in 0..3 {
+                    for j in 0..2 {
+                        f[i][j] += xa[i] * ga[j];
+                    }
+                }
+            }
+            // Polar decomposition (closed form of right_stretch).
+            for row in &f {
+                for v in row {
+                    ok &= v.all_finite();
+                }
+            }
+            let c00 = f[0][0] * f[0][0] + f[1][0] * f[1][0] + f[2][0] * f[2][0];
+            let c01 = f[0][0] * f[0][1] + f[1][0] * f[1][1] + f[2][0] * f[2][1];
+            let c11 = f[0][1] * f[0][1] + f[1][1] * f[1][1] + f[2][1] * f[2][1];
+            let det_c = c00 * c11 - c01 * c01;
+            let tr_c = c00 + c11;
+            ok &= det_c.all_finite() & tr_c.all_finite();
+            ok &= det_c.all_gt(f64x4::splat(DEGENERATE_DET_C) * tr_c * tr_c);
+            let det_u = det_c.sqrt();
+            let s = (tr_c + f64x4::splat(2.0) * det_u).sqrt();
+            let (u00, u01, u11) = ((c00 + det_u) / s, (c01 + zero) / s, (c11 + det_u) / s);
+            let tr_u = u00 + u11;
+            let (ui00, ui01, ui11) = (
+                (tr_u - u00) / det_u,
+                (zero - u01) / det_u,
+                (tr_u - u11) / det_u,
+            );
+            // Rotated strain increment from the committed U.
+            let un = |i: usize| lanes(std::array::from_fn(|k| history(h_in, k, p, i)));
+            let (n00, n11, n01) = (un(0), un(1), un(2));
+            let (m00, m01, m11) = ((n00 + u00) * half, (n01 + u01) * half, (n11 + u11) * half);
+            let det_m = m00 * m11 - m01 * m01;
+            let tr_m = m00 + m11;
+            let (mi00, mi01, mi11) = (
+                (tr_m - m00) / det_m,
+                (zero - m01) / det_m,
+                (tr_m - m11) / det_m,
+            );
+            let (d00, d01, d11) = (u00 - n00, u01 - n01, u11 - n11);
+            let l00 = d00 * mi00 + d01 * mi01;
+            let l01 = d00 * mi01 + d01 * mi11;
+            let l10 = d01 * mi00 + d11 * mi01;
+            let l11 = d01 * mi01 + d11 * mi11;
+            let e00 = (l00 + l00) * half;
+            let e11 = (l11 + l11) * half;
+            let e01 = (l01 + l10) * half;
+            let e10 = (l10 + l01) * half;
+            // The resin: elastic normal stress, relaxing shear.
+            let k = f64x4::splat(resin.wave_modulus);
+            let nu = f64x4::splat(resin.poisson);
+            let t00 = un(3) + k * (e00 + nu * e11);
+            let t11 = un(4) + k * (nu * e00 + e11);
+            let d_s0 = f64x4::splat(resin.shear_modulus) * (e01 + e10);
+            let t01 = if resin.prony.is_empty() {
+                un(5) + d_s0
+            } else {
+                let s0 = un(6) + d_s0;
+                let mut relaxing = zero;
+                for (q, &(decay, weight)) in resin.prony.iter().enumerate() {
+                    let qk = f64x4::splat(decay) * un(7 + q) + f64x4::splat(weight) * d_s0;
+                    relaxing += qk;
+                    write_lanes(h_out, eh, stride, p, 7 + q, qk);
+                }
+                write_lanes(h_out, eh, stride, p, 6, s0);
+                f64x4::splat(resin.long_term) * s0 + relaxing
+            };
+            for (i, v) in [u00, u11, u01, t00, t11, t01].into_iter().enumerate() {
+                write_lanes(h_out, eh, stride, p, i, v);
+            }
+            // P = F·(U⁻¹·τ̄·U⁻¹)·h_m.
+            let a00 = ui00 * t00 + ui01 * t01;
+            let a01 = ui00 * t01 + ui01 * t11;
+            let a10 = ui01 * t00 + ui11 * t01;
+            let a11 = ui01 * t01 + ui11 * t11;
+            let b00 = a00 * ui00 + a01 * ui01;
+            let b01 = a00 * ui01 + a01 * ui11;
+            let b10 = a10 * ui00 + a11 * ui01;
+            let b11 = a10 * ui01 + a11 * ui11;
+            let h = f64x4::splat(resin.thickness);
+            let piola: [[f64x4; 2]; 3] = std::array::from_fn(|i| {
+                [
+                    (f[i][0] * b00 + f[i][1] * b10) * h,
+                    (f[i][0] * b01 + f[i][1] * b11) * h,
+                ]
+            });
+            // fₐ += (P·∇Nₐ)·A.
+            let area = self.area[b * POINTS + p];
+            for (fa, ga) in force.iter_mut().zip(grad) {
+                for i in 0..3 {
+                    fa[i] += (piola[i][0] * ga[0] + piola[i][1] * ga[1]) * area;
+                }
+            }
+        }
+        for (a, fa) in force.iter().enumerate() {
+            let [fx, fy, fz] = fa.map(|v| v.to_array());
+            for k in 0..LANES {
+                slots[k * NODES + a] = Vector3::new(fx[k], fy[k], fz[k]);
+            }
+        }
+        ok
+    }
+}
+
+#[inline(always)]
+fn write_lanes(h: &mut [f64], eh: usize, stride: usize, p: usize, i: usize, v: f64x4) {
+    for (k, value) in v.to_array().into_iter().enumerate() {
+        h[k * eh + p * stride + i] = value;
+    }
+}

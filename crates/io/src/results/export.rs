@@ -1,0 +1,453 @@
+//! The draped fibre orientations for the structural analysis that follows
+//! forming: per element of the formed mesh, the warp and weft directions,
+//! the shear angle and the thickness.
+//!
+//! Every run writes two files into its results folder (at its last frame):
+//!
+//! - `orientations.inp`, an Abaqus include: the formed mesh (`*NODE`,
+//!   `*ELEMENT` as S4R/S3 shells in the element sets `DRAPE_QUADS`,
+//!   `DRAPE_TRIANGLES` and `DRAPE_PLY`), element distributions and two
+//!   orientations (below);
+//! - `orientations.csv`: the same numbers as a table.
+//!
+//! [`crate::results::mapping::map_onto`] carries them onto a structural
+//! mesh of the user's by closest point.
+//!
+//! # Conventions
+//!
+//! - Units mm; directions are unit vectors in the global axes.
+//! - Element `k` (1-based label) is drape's element `k − 1`: cell `k − 1`
+//!   of the VTU frames. Node `k` is the VTU's point `k − 1`.
+//! - The warp and weft directions are the element's current yarn
+//!   directions (the VTU's `fibre_direction_*`; for a quad, the
+//!   area-weighted mean of its four integration points', normalised and
+//!   turned symmetrically about their bisector to the element's yarn
+//!   angle).
+//! - γ is the element's shear angle (the VTU's `shear_angle_deg`; a quad's
+//!   is the mean of its points'), positive when the angle between the
+//!   yarns closes: the yarn angle is 90° − γ, and it is the angle between
+//!   the two directions written, for every element.
+//! - The thickness is the element's current thickness (the VTU's
+//!   `thickness`).
+//!
+//! In `orientations.inp`:
+//!
+//! | name | what |
+//! |---|---|
+//! | `DRAPE_AXES` | `*DISTRIBUTION` (table `COORD3D, COORD3D`): point a = the warp, point b = the weft (origin at 0) |
+//! | `DRAPE_YARN_ANGLE` | `*DISTRIBUTION` (table `ANGLE`): 90° − γ, degrees |
+//! | `DRAPE_THICKNESS` | `*DISTRIBUTION` (table `LENGTH`): the thickness, mm, for a `*SHELL SECTION` or `*MEMBRANE SECTION` |
+//! | `DRAPE_WARP` | `*ORIENTATION` from `DRAPE_AXES`: local 1 along the warp, local 2 in the ply towards the weft, local 3 = warp × weft (the ply's normal) |
+//! | `DRAPE_WEFT` | `DRAPE_WARP` turned about local 3 by `DRAPE_YARN_ANGLE`: local 1 along the weft |
+//!
+//! A woven ply modelled as two unidirectional layers takes `DRAPE_WARP` for
+//! one and `DRAPE_WEFT` for the other. Each distribution's first data line
+//! (no element label) is its default, as Abaqus requires: the global axes,
+//! 90° and the blank's nominal thickness. The file follows the Abaqus 2024
+//! keyword reference; it has not been run through Abaqus here.
+//!
+//! Numbers are written as the shortest text that reads back as the same
+//! `f64` (the results module's `fmt_f64`), so re-reading reproduces every value.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use drape_model::{ElementFields, Model, State};
+use nalgebra::Vector3;
+
+use super::fmt_f64;
+
+/// Per element of a mesh: the draped fibre orientation, the shear angle
+/// and the thickness.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Orientations {
+    /// A comment line naming where the numbers come from.
+    pub title: String,
+    /// The mesh's nodes (mm); empty for orientations mapped onto a mesh of
+    /// the user's, which only names its elements.
+    pub nodes: Vec<Vector3<f64>>,
+    /// The mesh's elements (0-based node indices, 3 or 4); empty with
+    /// `nodes`.
+    pub elements: Vec<Vec<u32>>,
+    /// Element labels.
+    pub labels: Vec<i64>,
+    /// Element centroids (mm).
+    pub centroid: Vec<Vector3<f64>>,
+    /// Warp directions (unit).
+    pub warp: Vec<Vector3<f64>>,
+    /// Weft directions (unit).
+    pub weft: Vec<Vector3<f64>>,
+    /// Shear angle γ (degrees).
+    pub shear_deg: Vec<f64>,
+    /// Thickness (mm).
+    pub thickness: Vec<f64>,
+    /// The default thickness of the distributions (mm): the nominal one.
+    pub nominal_thickness: f64,
+    /// For mapped orientations: each element's distance to the surface the
+    /// values were taken from (mm).
+    pub distance: Option<Vec<f64>>,
+}
+
+/// The names the include defines.
+pub mod names {
+    /// The orientation along the warp.
+    pub const WARP: &str = "DRAPE_WARP";
+    /// The orientation along the weft.
+    pub const WEFT: &str = "DRAPE_WEFT";
+    /// The distribution of points a (warp) and b (weft).
+    pub const AXES: &str = "DRAPE_AXES";
+    /// The distribution of the yarn angle 90° − γ.
+    pub const YARN_ANGLE: &str = "DRAPE_YARN_ANGLE";
+    /// The distribution of the thickness.
+    pub const THICKNESS: &str = "DRAPE_THICKNESS";
+    /// The element set of every element.
+    pub const PLY: &str = "DRAPE_PLY";
+}
+
+impl Orientations {
+    /// The orientations of `model` at `state` from its element `fields`
+    /// (the formed mesh: current positions, labels = element index + 1).
+    pub fn of_frame(model: &Model, state: &State, fields: &ElementFields, title: &str) -> Self {
+        let mut elements = Vec::with_capacity(model.membrane_count());
+        for batch in &model.membranes {
+            for e in 0..batch.len() {
+                elements.push(batch.element_nodes(e).to_vec());
+            }
+        }
+        let nominal = model
+            .membranes
+            .first()
+            .map_or(f64::NAN, |b| b.section.material.thickness);
+        Self {
+            title: title.to_owned(),
+            nodes: state.x.clone(),
+            labels: (1..=elements.len() as i64).collect(),
+            elements,
+            centroid: fields.centroid.clone(),
+            warp: fields.fibre_direction.iter().map(|d| d[0]).collect(),
+            weft: fields.fibre_direction.iter().map(|d| d[1]).collect(),
+            shear_deg: fields.shear.iter().map(|g| g.to_degrees()).collect(),
+            thickness: fields.thickness.clone(),
+            nominal_thickness: nominal,
+            distance: None,
+        }
+    }
+
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        self.labels.len()
+    }
+
+    /// Whether there is no element.
+    pub fn is_empty(&self) -> bool {
+        self.labels.is_empty()
+    }
+
+    /// The text of the Abaqus include (see the module's docs).
+    pub fn to_inp(&self) -> String {
+        let mut s = String::with_capacity(200 * (self.nodes.len() + 3 * self.len()) + 4096);
+        let _ = writeln!(s, "** drape: draped fibre orientations, {}", self.title);
+        s.push_str(concat!(
+            "** Units mm. Conventions: docs/scene-reference.md, \"Orientations for structural analysis\".\n",
+            "**   DRAPE_WARP   local 1 = warp, local 2 in the ply towards the weft, local 3 = warp x weft\n",
+            "**   DRAPE_WEFT   DRAPE_WARP turned about local 3 by DRAPE_YARN_ANGLE (90 - shear): local 1 = weft\n",
+            "**   DRAPE_THICKNESS  the formed thickness (mm)\n",
+            "** For example:\n",
+            "** *SHELL SECTION, ELSET=DRAPE_PLY, MATERIAL=FABRIC, ORIENTATION=DRAPE_WARP\n",
+            "** DRAPE_THICKNESS, 5\n",
+        ));
+        if !self.nodes.is_empty() {
+            s.push_str("*NODE, NSET=DRAPE_NODES\n");
+            for (i, p) in self.nodes.iter().enumerate() {
+                let _ = writeln!(
+                    s,
+                    "{}, {}, {}, {}",
+                    i + 1,
+                    fmt_f64(p.x),
+                    fmt_f64(p.y),
+                    fmt_f64(p.z)
+                );
+            }
+            let mut sets = Vec::new();
+            for (kind, set, corners) in [("S4R", "DRAPE_QUADS", 4), ("S3", "DRAPE_TRIANGLES", 3)] {
+                let of_kind: Vec<usize> = (0..self.elements.len())
+                    .filter(|&e| self.elements[e].len() == corners)
+                    .collect();
+                if of_kind.is_empty() {
+                    continue;
+                }
+                sets.push(set);
+                let _ = writeln!(s, "*ELEMENT, TYPE={kind}, ELSET={set}");
+                for e in of_kind {
+                    let _ = write!(s, "{}", self.labels[e]);
+                    for &n in &self.elements[e] {
+                        let _ = write!(s, ", {}", n + 1);
+                    }
+                    s.push('\n');
+                }
+            }
+            let _ = writeln!(s, "*ELSET, ELSET={}\n{}", names::PLY, sets.join(", "));
+        }
+        let _ = writeln!(
+            s,
+            "*DISTRIBUTION TABLE, NAME={0}_TABLE\nCOORD3D, COORD3D\n\
+             *DISTRIBUTION, NAME={0}, LOCATION=ELEMENT, TABLE={0}_TABLE\n, 1, 0, 0, 0, 1, 0",
+            names::AXES
+        );
+        for e in 0..self.len() {
+            let (a, b) = (self.warp[e], self.weft[e]);
+            let _ = writeln!(
+                s,
+                "{}, {}, {}, {}, {}, {}, {}",
+                self.labels[e],
+                fmt_f64(a.x),
+                fmt_f64(a.y),
+                fmt_f64(a.z),
+                fmt_f64(b.x),
+                fmt_f64(b.y),
+                fmt_f64(b.z)
+            );
+        }
+        let _ = writeln!(
+            s,
+            "*DISTRIBUTION TABLE, NAME={0}_TABLE\nANGLE\n\
+             *DISTRIBUTION, NAME={0}, LOCATION=ELEMENT, TABLE={0}_TABLE\n, 90",
+            names::YARN_ANGLE
+        );
+        for e in 0..self.len() {
+            let _ = writeln!(
+                s,
+                "{}, {}",
+                self.labels[e],
+                fmt_f64(90.0 - self.shear_deg[e])
+            );
+        }
+        let _ = writeln!(
+            s,
+            "*DISTRIBUTION TABLE, NAME={0}_TABLE\nLENGTH\n\
+             *DISTRIBUTION, NAME={0}, LOCATION=ELEMENT, TABLE={0}_TABLE\n, {1}",
+            names::THICKNESS,
+            fmt_f64(self.nominal_thickness)
+        );
+        for e in 0..self.len() {
+            let _ = writeln!(s, "{}, {}", self.labels[e], fmt_f64(self.thickness[e]));
+        }
+        let _ = writeln!(
+            s,
+            "*ORIENTATION, NAME={}, DEFINITION=COORDINATES, SYSTEM=RECTANGULAR\n{}\n3, 0",
+            names::WARP,
+            names::AXES
+        );
+        let _ = writeln!(
+            s,
+            "*ORIENTATION, NAME={}, DEFINITION=COORDINATES, SYSTEM=RECTANGULAR\n{}\n3, {}",
+            names::WEFT,
+            names::AXES,
+            names::YARN_ANGLE
+        );
+        s
+    }
+
+    /// The text of the CSV table: header
+    /// `element,x_mm,y_mm,z_mm,warp_x,warp_y,warp_z,weft_x,weft_y,weft_z,shear_deg,yarn_angle_deg,thickness_mm`
+    /// (and `,distance_mm` for mapped orientations), one row per element;
+    /// x, y, z are the element's centroid.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::with_capacity(240 * (self.len() + 1));
+        s.push_str(
+            "element,x_mm,y_mm,z_mm,warp_x,warp_y,warp_z,weft_x,weft_y,weft_z,shear_deg,\
+             yarn_angle_deg,thickness_mm",
+        );
+        if self.distance.is_some() {
+            s.push_str(",distance_mm");
+        }
+        s.push('\n');
+        for e in 0..self.len() {
+            let _ = write!(s, "{}", self.labels[e]);
+            let c = self
+                .centroid
+                .get(e)
+                .copied()
+                .unwrap_or(Vector3::repeat(f64::NAN));
+            for v in [
+                c.x,
+                c.y,
+                c.z,
+                self.warp[e].x,
+                self.warp[e].y,
+                self.warp[e].z,
+                self.weft[e].x,
+                self.weft[e].y,
+                self.weft[e].z,
+                self.shear_deg[e],
+                90.0 - self.shear_deg[e],
+                self.thickness[e],
+            ]
+            .into_iter()
+            .chain(self.distance.as_ref().map(|d| d[e]))
+            {
+                s.push(',');
+                s.push_str(&fmt_f64(v));
+            }
+            s.push('\n');
+        }
+        s
+    }
+
+    /// Reads an include written by [`Self::to_inp`] (drape's own format:
+    /// `*NODE`, `*ELEMENT` and the `DRAPE_*` distributions; other keywords
+    /// are skipped). `path` names the file in errors.
+    pub fn parse_inp(text: &str, path: &Path) -> Result<Self, String> {
+        let err = |line: usize, what: &str| format!("{}:{line}: {what}", path.display());
+        let mut out = Self::default();
+        let mut node_index: BTreeMap<i64, u32> = BTreeMap::new();
+        let mut elements: Vec<(i64, Vec<i64>)> = Vec::new();
+        // Distribution name → (label → values).
+        let mut distributions: BTreeMap<String, BTreeMap<i64, Vec<f64>>> = BTreeMap::new();
+        let mut defaults: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+        enum Block {
+            None,
+            Node,
+            Element,
+            Distribution(String),
+        }
+        let mut block = Block::None;
+        for (i, raw) in text.lines().enumerate() {
+            let line_no = i + 1;
+            let line = raw.trim();
+            if line.is_empty() || line.starts_with("**") {
+                if let Some(title) = line.strip_prefix("** drape: draped fibre orientations, ") {
+                    title.clone_into(&mut out.title);
+                }
+                continue;
+            }
+            if let Some(keyword) = line.strip_prefix('*') {
+                let upper = keyword.to_ascii_uppercase();
+                let mut parts = upper.split(',').map(str::trim);
+                let name = parts.next().unwrap_or("");
+                block = match name {
+                    "NODE" => Block::Node,
+                    "ELEMENT" => Block::Element,
+                    "DISTRIBUTION" => {
+                        let name = parts
+                            .find_map(|p| p.strip_prefix("NAME="))
+                            .ok_or_else(|| err(line_no, "a *DISTRIBUTION without NAME="))?;
+                        Block::Distribution(name.trim().to_owned())
+                    }
+                    _ => Block::None,
+                };
+                continue;
+            }
+            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            let numbers = |from: usize| -> Result<Vec<f64>, String> {
+                fields[from..]
+                    .iter()
+                    .map(|f| {
+                        f.parse::<f64>()
+                            .map_err(|_| err(line_no, &format!("`{f}` is not a number")))
+                    })
+                    .collect()
+            };
+            let label = || -> Result<i64, String> {
+                fields[0]
+                    .parse::<i64>()
+                    .map_err(|_| err(line_no, &format!("`{}` is not a label", fields[0])))
+            };
+            match &block {
+                Block::None => {}
+                Block::Node => {
+                    let v = numbers(1)?;
+                    if v.len() != 3 {
+                        return Err(err(line_no, "a node needs x, y and z"));
+                    }
+                    node_index.insert(label()?, out.nodes.len() as u32);
+                    out.nodes.push(Vector3::new(v[0], v[1], v[2]));
+                }
+                Block::Element => {
+                    let nodes = fields[1..]
+                        .iter()
+                        .map(|f| f.parse::<i64>().map_err(|_| err(line_no, "a node label")))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    if !(3..=4).contains(&nodes.len()) {
+                        return Err(err(line_no, "an element needs 3 or 4 nodes"));
+                    }
+                    elements.push((label()?, nodes));
+                }
+                Block::Distribution(name) => {
+                    if fields[0].is_empty() {
+                        defaults.insert(name.clone(), numbers(1)?);
+                    } else {
+                        distributions
+                            .entry(name.clone())
+                            .or_default()
+                            .insert(label()?, numbers(1)?);
+                    }
+                }
+            }
+        }
+        let table = |name: &str, width: usize| -> Result<&BTreeMap<i64, Vec<f64>>, String> {
+            let t = distributions
+                .get(name)
+                .ok_or_else(|| format!("{}: no *DISTRIBUTION {name}", path.display()))?;
+            if let Some((label, v)) = t.iter().find(|(_, v)| v.len() != width) {
+                return Err(format!(
+                    "{}: {name}: element {label} has {} values, expected {width}",
+                    path.display(),
+                    v.len()
+                ));
+            }
+            Ok(t)
+        };
+        let axes = table(names::AXES, 6)?;
+        let angle = table(names::YARN_ANGLE, 1)?;
+        let thickness = table(names::THICKNESS, 1)?;
+        out.nominal_thickness = defaults
+            .get(names::THICKNESS)
+            .and_then(|v| v.first().copied())
+            .unwrap_or(f64::NAN);
+        let by_label: BTreeMap<i64, &Vec<i64>> = elements.iter().map(|(l, n)| (*l, n)).collect();
+        for (&label, v) in axes {
+            let missing = |what: &str| format!("{}: element {label} has no {what}", path.display());
+            out.labels.push(label);
+            out.warp.push(Vector3::new(v[0], v[1], v[2]));
+            out.weft.push(Vector3::new(v[3], v[4], v[5]));
+            out.shear_deg.push(
+                90.0 - angle
+                    .get(&label)
+                    .ok_or_else(|| missing(names::YARN_ANGLE))?[0],
+            );
+            out.thickness.push(
+                thickness
+                    .get(&label)
+                    .ok_or_else(|| missing(names::THICKNESS))?[0],
+            );
+            if !out.nodes.is_empty() {
+                let nodes = by_label
+                    .get(&label)
+                    .ok_or_else(|| missing("*ELEMENT line"))?
+                    .iter()
+                    .map(|n| {
+                        node_index.get(n).copied().ok_or_else(|| {
+                            format!("{}: element {label}: no node {n}", path.display())
+                        })
+                    })
+                    .collect::<Result<Vec<u32>, String>>()?;
+                let c = nodes
+                    .iter()
+                    .map(|&n| out.nodes[n as usize])
+                    .sum::<Vector3<f64>>()
+                    / nodes.len() as f64;
+                out.centroid.push(c);
+                out.elements.push(nodes);
+            }
+        }
+        Ok(out)
+    }
+
+    /// Reads `path` ([`Self::parse_inp`]).
+    pub fn read_inp(path: &Path) -> Result<Self, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        Self::parse_inp(&text, path)
+    }
+}

@@ -1,0 +1,331 @@
+//! `shear_3d.png`: the formed part seen obliquely, coloured by its shear,
+//! with the outline of the tools, beside the top view of `shear_map.png`.
+//!
+//! An orthographic view from azimuth −60° (measured from +x about z) and
+//! elevation 35°, z up on the screen: the usual isometric-like look of a
+//! part on a press table. Elements are painted far to near (painter's
+//! algorithm on their centroids' depth), each with the viridis colour of
+//! its |γ| on the scale of the colour bar; no shading, so that a colour
+//! reads as a shear angle anywhere. The tools are drawn under the part as
+//! their outline in grey: the silhouette (edges between a triangle facing
+//! the viewer and one facing away) and their open edges, clipped to the
+//! part's surroundings. A small triad shows the axes.
+//!
+//! What it is not: no hidden-line removal for the tools' outline (the part
+//! is painted over it, which is what hides what the part hides) and no
+//! perspective.
+
+use std::collections::HashMap;
+
+use drape_model::{ElementFields, Model, State};
+use nalgebra::Vector3;
+use plotters::prelude::*;
+
+use super::super::tools::ToolMeshes;
+use super::{FAMILY, MAP_SIZE, Result, colour_bar, drawing, human, render, viridis};
+
+/// The view's azimuth and elevation (degrees).
+pub(in crate::results) const VIEW_DEG: (f64, f64) = (-60.0, 35.0);
+
+/// The screen axes of the view: right, up, and towards the viewer.
+fn view_axes() -> [Vector3<f64>; 3] {
+    let (az, el) = (VIEW_DEG.0.to_radians(), VIEW_DEG.1.to_radians());
+    let towards = Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+    let right = Vector3::new(-az.sin(), az.cos(), 0.0);
+    let up = towards.cross(&right);
+    [right, up, towards]
+}
+
+/// The segment p–q clipped to the box [x0, x1] × [y0, y1] (Liang–Barsky).
+fn clip(p: (f64, f64), q: (f64, f64), x: [f64; 2], y: [f64; 2]) -> Option<[(f64, f64); 2]> {
+    let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (den, num) in [
+        (-dx, p.0 - x[0]),
+        (dx, x[1] - p.0),
+        (-dy, p.1 - y[0]),
+        (dy, y[1] - p.1),
+    ] {
+        if den == 0.0 {
+            if num < 0.0 {
+                return None;
+            }
+        } else {
+            let t = num / den;
+            if den < 0.0 {
+                t0 = t0.max(t);
+            } else {
+                t1 = t1.min(t);
+            }
+        }
+    }
+    (t0 <= t1).then_some([
+        (p.0 + t0 * dx, p.1 + t0 * dy),
+        (p.0 + t1 * dx, p.1 + t1 * dy),
+    ])
+}
+
+/// The outline of one tool seen along `towards`: its silhouette edges and
+/// open edges, as pairs of points.
+fn outline(
+    vertices: &[Vector3<f64>],
+    triangles: &[[u32; 3]],
+    towards: &Vector3<f64>,
+) -> Vec<[Vector3<f64>; 2]> {
+    // Per edge: how many triangles use it and how many of them face the
+    // viewer.
+    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+    for t in triangles {
+        let [a, b, c] = t.map(|i| vertices[i as usize]);
+        let facing = u32::from((b - a).cross(&(c - a)).dot(towards) > 0.0);
+        for k in 0..3 {
+            let (i, j) = (t[k], t[(k + 1) % 3]);
+            let e = edges.entry((i.min(j), i.max(j))).or_default();
+            e.0 += 1;
+            e.1 += facing;
+        }
+    }
+    let mut lines: Vec<_> = edges
+        .into_iter()
+        .filter(|&(_, (uses, facing))| uses == 1 || (uses == 2 && facing == 1))
+        .map(|((i, j), _)| (i, j))
+        .collect();
+    // Hash order is arbitrary: sort, so the picture is the same every run.
+    lines.sort_unstable();
+    lines
+        .into_iter()
+        .map(|(i, j)| [vertices[i as usize], vertices[j as usize]])
+        .collect()
+}
+
+/// `shear_3d.png` of `model` at `state`, the tools of `tools` displaced by
+/// `displacements` along their axes.
+pub(in crate::results) fn oblique_view(
+    model: &Model,
+    state: &State,
+    fields: &ElementFields,
+    tools: &ToolMeshes,
+    displacements: &[f64],
+) -> Result<Vec<u8>> {
+    let [right, up, towards] = view_axes();
+    let screen = |p: &Vector3<f64>| (p.dot(&right), p.dot(&up));
+    struct Patch {
+        corners: Vec<(f64, f64)>,
+        value: f64,
+        depth: f64,
+    }
+    let mut patches = Vec::with_capacity(fields.shear.len());
+    for batch in &model.membranes {
+        for e in 0..batch.len() {
+            let nodes = batch.element_nodes(e);
+            let mut corners = Vec::with_capacity(nodes.len());
+            let mut centroid = Vector3::zeros();
+            for &n in nodes {
+                let p = state.x.get(n as usize).ok_or_else(|| {
+                    format!(
+                        "element {} names a node beyond the state's {}",
+                        patches.len(),
+                        state.x.len()
+                    )
+                })?;
+                corners.push(screen(p));
+                centroid += p;
+            }
+            let value = fields
+                .shear
+                .get(patches.len())
+                .map_or(f64::NAN, |g| g.abs().to_degrees());
+            patches.push(Patch {
+                corners,
+                value,
+                depth: (centroid / nodes.len() as f64).dot(&towards),
+            });
+        }
+    }
+    // Far to near: the nearer element hides the farther.
+    patches.sort_by(|a, b| a.depth.total_cmp(&b.depth));
+    let vmax = patches
+        .iter()
+        .map(|p| p.value)
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let scale_max = if vmax > 0.0 { vmax } else { 1.0 };
+    let (mut u, mut v) = (
+        [f64::INFINITY, f64::NEG_INFINITY],
+        [f64::INFINITY, f64::NEG_INFINITY],
+    );
+    for &(a, b) in patches.iter().flat_map(|p| &p.corners) {
+        if a.is_finite() && b.is_finite() {
+            u = [u[0].min(a), u[1].max(a)];
+            v = [v[0].min(b), v[1].max(b)];
+        }
+    }
+    // The tools' surroundings: 25 % of the part's size around it.
+    let pad = 0.25 * (u[1] - u[0]).max(v[1] - v[0]).max(1.0);
+    let (ub, vb) = ([u[0] - pad, u[1] + pad], [v[0] - pad, v[1] + pad]);
+    let mut tool_lines = Vec::new();
+    for (k, tool) in tools.tools.iter().enumerate() {
+        let moved: Vec<Vector3<f64>> = tool
+            .vertices_at(displacements.get(k).copied().unwrap_or(0.0))
+            .collect();
+        for [p, q] in outline(&moved, &tool.triangles, &towards) {
+            if let Some(segment) = clip(screen(&p), screen(&q), ub, vb) {
+                tool_lines.push(segment);
+            }
+        }
+    }
+
+    let title = format!(
+        "Shear angle |γ|, oblique view   (time {} s, largest {}°)",
+        human(state.time),
+        human(vmax)
+    );
+    render(MAP_SIZE, |root| {
+        let (w, _) = MAP_SIZE;
+        let body = root.titled(&title, (FAMILY, 24)).map_err(drawing)?;
+        let (map_area, _) = body.split_horizontally(w - 190);
+        if u[0] > u[1] {
+            map_area
+                .draw(&Text::new("no element to draw", (40, 40), (FAMILY, 20)))
+                .map_err(drawing)?;
+            return Ok(());
+        }
+        let (pw, ph) = map_area.dim_in_pixel();
+        let margin = 30.0;
+        // Equal scales; the part (not the tools) fills the area.
+        let (du, dv) = ((u[1] - u[0]).max(1e-9), (v[1] - v[0]).max(1e-9));
+        let s = ((f64::from(pw) - 2.0 * margin) / du).min((f64::from(ph) - 2.0 * margin) / dv);
+        let (cu, cv) = (0.5 * (u[0] + u[1]), 0.5 * (v[0] + v[1]));
+        let to_px = |(a, b): (f64, f64)| {
+            (
+                (0.5 * f64::from(pw) + (a - cu) * s).round() as i32,
+                (0.5 * f64::from(ph) - (b - cv) * s).round() as i32,
+            )
+        };
+        let tool_style = RGBColor(150, 150, 150).stroke_width(1);
+        for [p, q] in &tool_lines {
+            map_area
+                .draw(&PathElement::new(vec![to_px(*p), to_px(*q)], tool_style))
+                .map_err(drawing)?;
+        }
+        let mean_area = fields.area.iter().sum::<f64>() / fields.area.len().max(1) as f64;
+        let show_mesh = mean_area.sqrt() * s > 14.0;
+        for p in &patches {
+            let colour = viridis(p.value / scale_max);
+            let corners: Vec<(i32, i32)> = p.corners.iter().map(|&c| to_px(c)).collect();
+            let mut ring = corners.clone();
+            ring.push(corners[0]);
+            let edge = if show_mesh {
+                BLACK.mix(0.25)
+            } else {
+                colour.to_rgba()
+            };
+            map_area
+                .draw(&Polygon::new(corners, colour.filled()))
+                .map_err(drawing)?;
+            map_area
+                .draw(&PathElement::new(ring, edge.stroke_width(1)))
+                .map_err(drawing)?;
+        }
+
+        // The axes' triad in the lower left corner.
+        let origin = (50, ph as i32 - 50);
+        for (axis, name) in [
+            (Vector3::x(), "x"),
+            (Vector3::y(), "y"),
+            (Vector3::z(), "z"),
+        ] {
+            let (a, b) = screen(&axis);
+            let tip = (
+                origin.0 + (34.0 * a).round() as i32,
+                origin.1 - (34.0 * b).round() as i32,
+            );
+            map_area
+                .draw(&PathElement::new(vec![origin, tip], BLACK.stroke_width(2)))
+                .map_err(drawing)?;
+            let label = (
+                origin.0 + (46.0 * a).round() as i32 - 4,
+                origin.1 - (46.0 * b).round() as i32 - 8,
+            );
+            map_area
+                .draw(&Text::new(name, label, (FAMILY, 16)))
+                .map_err(drawing)?;
+        }
+
+        let (_, base_y) = map_area.get_base_pixel();
+        let rows = base_y + margin as i32..base_y + ph as i32 - margin as i32;
+        let key_height = 80;
+        let (bar_left, root_y) = colour_bar(root, w, rows.clone(), key_height, scale_max)?;
+        if !tool_lines.is_empty() {
+            let key = root.clone().shrink(
+                (bar_left, rows.end - root_y - key_height as i32 + 40),
+                (170, 40),
+            );
+            key.draw(&PathElement::new(vec![(0, 8), (26, 8)], tool_style))
+                .map_err(drawing)?;
+            key.draw(&Text::new(
+                "tool outline",
+                (34, 0),
+                (FAMILY, 15).into_font().color(&BLACK),
+            ))
+            .map_err(drawing)?;
+        }
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_view_axes_are_orthonormal_and_z_is_up() {
+        let [r, u, t] = view_axes();
+        for (a, b) in [(r, u), (u, t), (t, r)] {
+            assert!(a.dot(&b).abs() < 1e-15);
+        }
+        for a in [r, u, t] {
+            assert!((a.norm() - 1.0).abs() < 1e-15);
+        }
+        assert!(r.cross(&u).dot(&t) > 0.999_999, "right-handed");
+        assert!(u.z > 0.0 && r.z == 0.0, "z up on the screen");
+    }
+
+    #[test]
+    fn clipping_keeps_the_part_inside_the_box() {
+        let b = [0.0, 1.0];
+        assert_eq!(
+            clip((-1.0, 0.5), (2.0, 0.5), b, b),
+            Some([(0.0, 0.5), (1.0, 0.5)])
+        );
+        assert_eq!(
+            clip((0.2, 0.2), (0.4, 0.6), b, b),
+            Some([(0.2, 0.2), (0.4, 0.6)])
+        );
+        assert_eq!(clip((-1.0, 2.0), (-0.5, 3.0), b, b), None);
+    }
+
+    #[test]
+    fn a_closed_surface_outlines_its_silhouette_only() {
+        // An octahedron seen from +z: its four equator edges are the
+        // silhouette; the eight edges to the poles face one way on both
+        // sides.
+        let v = vec![
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+            Vector3::new(-1.0, 0.0, 0.0),
+            Vector3::new(0.0, -1.0, 0.0),
+            Vector3::new(0.0, 0.0, 1.0),
+            Vector3::new(0.0, 0.0, -1.0),
+        ];
+        let mut t = Vec::new();
+        for k in 0..4u32 {
+            let (a, b) = (k, (k + 1) % 4);
+            t.push([a, b, 4]);
+            t.push([b, a, 5]);
+        }
+        let lines = outline(&v, &t, &Vector3::new(0.0, 0.0, 1.0));
+        assert_eq!(lines.len(), 4);
+        assert!(lines.iter().all(|[p, q]| p.z == 0.0 && q.z == 0.0));
+    }
+}

@@ -1,0 +1,193 @@
+//! Units and placement of the meshes a scene reads from files (a blank's
+//! `mesh`, a tool's `mesh` geometry), and the repairs a tool mesh may ask
+//! for.
+//!
+//! A file's coordinates x become `offset + R·(s·x)`: first the scale s
+//! (`scale`, or the factor of `units` to millimetres), then the rotation R
+//! (`rotate = [rx, ry, rz]`, degrees, about the global x, then y, then z
+//! axis through the origin), then the translation `offset` (mm). CAD files
+//! are often in metres or inches and placed for a press, not for drape's
+//! blank at the origin.
+
+use std::path::Path;
+
+use drape_contact::{RepairOptions, Surface};
+use nalgebra::{Rotation3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use super::SceneError;
+use super::locate::Locator;
+
+/// The length unit of a mesh file's coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LengthUnit {
+    /// Millimetres (drape's unit).
+    Mm,
+    /// Centimetres.
+    Cm,
+    /// Metres.
+    M,
+    /// Inches.
+    In,
+}
+
+impl LengthUnit {
+    /// Millimetres per unit.
+    pub fn millimetres(self) -> f64 {
+        match self {
+            Self::Mm => 1.0,
+            Self::Cm => 10.0,
+            Self::M => 1000.0,
+            Self::In => 25.4,
+        }
+    }
+}
+
+/// Scale, rotation and translation of a mesh read from a file.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Placement {
+    scale: f64,
+    rotation: Rotation3<f64>,
+    offset: Vector3<f64>,
+}
+
+impl Placement {
+    /// The placement of the keys `units`, `scale`, `rotate` and `offset`
+    /// of the table at `table` (for errors): `units` and `scale` exclude
+    /// each other.
+    pub(super) fn new(
+        at: &Locator<'_>,
+        table: &str,
+        units: Option<LengthUnit>,
+        scale: Option<f64>,
+        rotate: Option<[f64; 3]>,
+        offset: Option<[f64; 3]>,
+    ) -> Result<Self, SceneError> {
+        let scale = match (units, scale) {
+            (Some(_), Some(_)) => {
+                return Err(at.error(
+                    &format!("{table}.scale"),
+                    "give `units` or `scale`, not both (`units = \"m\"` is `scale = 1000`)",
+                ));
+            }
+            (Some(u), None) => u.millimetres(),
+            (None, Some(s)) if s.is_finite() && s > 0.0 => s,
+            (None, Some(s)) => {
+                return Err(at.error(
+                    &format!("{table}.scale"),
+                    format!("{s} is not allowed: expected a positive factor"),
+                ));
+            }
+            (None, None) => 1.0,
+        };
+        let finite = |key: &str, v: [f64; 3]| {
+            if v.iter().all(|c| c.is_finite()) {
+                Ok(Vector3::from(v))
+            } else {
+                Err(at.error(
+                    &format!("{table}.{key}"),
+                    "every component must be a finite number",
+                ))
+            }
+        };
+        let r = finite("rotate", rotate.unwrap_or_default())?.map(f64::to_radians);
+        Ok(Self {
+            scale,
+            // nalgebra's roll, pitch, yaw: about x, then y, then z (fixed axes).
+            rotation: Rotation3::from_euler_angles(r.x, r.y, r.z),
+            offset: finite("offset", offset.unwrap_or_default())?,
+        })
+    }
+
+    /// Where the file's point `x` goes.
+    pub(super) fn apply(&self, x: &Vector3<f64>) -> Vector3<f64> {
+        self.offset + self.rotation * (x * self.scale)
+    }
+}
+
+/// The surface of a tool's mesh file `file` (STL or OBJ, relative to the
+/// scene), placed by `placement` and repaired as `options` ask; `g` is the
+/// geometry's field path for errors and warnings.
+pub(super) fn tool_mesh(
+    at: &Locator<'_>,
+    g: &str,
+    file: &str,
+    placement: &Placement,
+    options: RepairOptions,
+) -> Result<Surface, SceneError> {
+    let path = at.file.parent().unwrap_or(Path::new(".")).join(file);
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let read = match extension.as_deref() {
+        Some("stl") => drape_contact::read_stl(&path),
+        Some("obj") => drape_contact::read_obj(&path),
+        _ => {
+            return Err(at.error(
+                &format!("{g}.file"),
+                format!("`{file}`: expected an .stl or .obj file"),
+            ));
+        }
+    };
+    let (vertices, triangles) = read.map_err(|e| at.error(&format!("{g}.file"), e.to_string()))?;
+    let vertices: Vec<Vector3<f64>> = vertices.iter().map(|v| placement.apply(v)).collect();
+    let file_error = |e: String| at.error(&format!("{g}.file"), format!("{}: {e}", path.display()));
+    let (triangles, report) = drape_contact::repair(&vertices, &triangles, options)
+        .map_err(|e| file_error(e.to_string()))?;
+    if !report.dropped.is_empty() {
+        let first: Vec<String> = report
+            .dropped
+            .iter()
+            .take(5)
+            .map(usize::to_string)
+            .collect();
+        at.warn(
+            &format!("{g}.drop_degenerate"),
+            format!(
+                "{}: dropped {} degenerate triangle{} (a repeated vertex, two vertices at one \
+                 place or three on a line): triangle {}{}",
+                path.display(),
+                report.dropped.len(),
+                if report.dropped.len() == 1 { "" } else { "s" },
+                first.join(", "),
+                if report.dropped.len() > 5 {
+                    ", …"
+                } else {
+                    ""
+                }
+            ),
+        );
+    }
+    if report.flipped > 0 {
+        let (closed, open) = report.pieces;
+        at.warn(
+            &format!("{g}.reorient"),
+            format!(
+                "{}: turned {} triangle{} over to wind the mesh consistently ({closed} closed \
+                 piece{} wound outward, {open} open piece{} kept on the side most of its area \
+                 faced)",
+                path.display(),
+                report.flipped,
+                if report.flipped == 1 { "" } else { "s" },
+                if closed == 1 { "" } else { "s" },
+                if open == 1 { "" } else { "s" },
+            ),
+        );
+    }
+    // The file's geometry (a degenerate triangle, a winding that flips) is
+    // the file's fault: name it, and the keys that would repair it.
+    Surface::triangle_mesh(vertices, triangles).map_err(|e| {
+        let hint = match &e {
+            drape_contact::SurfaceError::Mesh(drape_contact::MeshError::Degenerate { .. }) => {
+                " (give `drop_degenerate = true` to drop such triangles)"
+            }
+            drape_contact::SurfaceError::Mesh(drape_contact::MeshError::Winding { .. }) => {
+                " (give `reorient = true` to have drape wind the triangles consistently)"
+            }
+            _ => "",
+        };
+        file_error(format!("{e}{hint}"))
+    })
+}

@@ -549,7 +549,7 @@ fn print_summary(s: &Summary, out: &Path) {
 
 /// The model and the time step of a run, before it starts (on stderr, with
 /// the progress).
-fn print_setup(s: &drape_io::results::RunSetup) {
+fn print_setup(s: &drape_io::results::RunSetup, solver: drape_io::scene::Solver) {
     let fibres = if s.trusses > 0 {
         format!("{} trusses", s.trusses)
     } else {
@@ -567,6 +567,14 @@ fn print_setup(s: &drape_io::results::RunSetup) {
         ),
         None => String::new(),
     };
+    if solver == drape_io::scene::Solver::Implicit {
+        eprintln!(
+            "increments        implicit, physical mass; first {:.3e} s, then as Newton converges \
+             (explicit stable step {:.3e} s)",
+            s.time_step_s, s.stable_time_step_s
+        );
+        return;
+    }
     eprintln!(
         "time step         stable {:.3e} s{scaled}; starts at {:.3e} s, about {} steps",
         s.stable_time_step_s, s.time_step_s, s.expected_steps
@@ -682,7 +690,7 @@ fn finish_run(scene: &Scene, out: &Path, options: RunOptions) -> Result<ExitCode
         );
     }
     if let Some(setup) = drape::run_setup(scene) {
-        print_setup(&setup);
+        print_setup(&setup, scene.spec.simulation.solver);
     }
     let mut reporter = Reporter::new();
     let report = run_in(scene, results, options, &mut |p| reporter.update(p))

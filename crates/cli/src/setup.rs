@@ -1,9 +1,11 @@
 //! What a run starts with, for the user before it runs and for its
 //! summary: the model's size, the fibres, the stable and the mass-scaled
-//! time step, the added mass and the steps to expect.
+//! time step, the added mass and the steps to expect. An implicit run
+//! uses the physical mass and its own increments: its set-up has the first
+//! increment as its step, no mass scaling and no added mass.
 
 use drape_io::results::RunSetup;
-use drape_io::scene::Scene;
+use drape_io::scene::{Scene, Solver};
 use drape_time::{Explicit, ExplicitSettings};
 
 /// The set-up of `scene`'s explicit run, or None when its driver cannot be
@@ -35,7 +37,7 @@ pub fn run_setup(scene: &Scene) -> Option<RunSetup> {
     let added = explicit.added_mass();
     let trusses: usize = model.trusses.iter().map(|b| b.len()).sum();
     let embedded = model.features().embedded_fibres;
-    Some(RunSetup {
+    let mut setup = RunSetup {
         nodes: model.node_count(),
         membrane_elements: model.membrane_count(),
         trusses,
@@ -50,5 +52,16 @@ pub fn run_setup(scene: &Scene) -> Option<RunSetup> {
         } else {
             0
         },
-    })
+    };
+    if scene.spec.simulation.solver == Solver::Implicit {
+        let end = scene.implicit.end_time;
+        let first = scene.implicit.initial_increment.unwrap_or(end / 100.0);
+        setup.time_step_s = first;
+        setup.mass_scaling_dt_s = None;
+        setup.added_mass_t = 0.0;
+        setup.added_mass_fraction = 0.0;
+        // The increments grow and shrink as Newton converges.
+        setup.expected_steps = (end / first).ceil() as u64;
+    }
+    Some(setup)
 }

@@ -70,7 +70,9 @@ pub enum Driver {
     Implicit,
 }
 
-fn run(
+/// Runs `model` from its initial state with `driver` and returns the end
+/// state.
+pub(super) fn run(
     driver: Driver,
     model: &Model,
     settings: ExplicitSettings,

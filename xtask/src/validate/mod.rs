@@ -28,6 +28,7 @@ mod fishnet;
 mod kinematics;
 mod locking;
 mod scenes;
+mod wrinkling;
 
 /// Every case of every crate, in the order they run and are reported.
 pub fn registry() -> Vec<Case> {
@@ -40,6 +41,7 @@ pub fn registry() -> Vec<Case> {
         scenes::CASES,
         bending::CASES,
         locking::CASES,
+        wrinkling::CASES,
     ]
     .concat()
 }

@@ -287,7 +287,12 @@ fn mass_scaling_weighs_down_only_the_nodes_whose_bending_is_too_fast() {
     material.fibre.modulus = 20.0;
     material.resin.young = 2.0;
     let mut model = Model::from_blank(
-        &blank([20, 1], ElementKind::Quad, FibreRepresentation::Trusses, 0.0),
+        &blank(
+            [20, 1],
+            ElementKind::Quad,
+            FibreRepresentation::Trusses,
+            0.0,
+        ),
         &material,
     )
     .unwrap();

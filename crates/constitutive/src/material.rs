@@ -98,19 +98,27 @@ impl Material {
     /// Both have no compression stiffness in the yarns.
     ///
     /// Bending rigidities (used only when a scene switches bending on) are
-    /// **\[assumptions\]**: the paper gives none and no measurement of these
-    /// two fabrics was at hand. Each is B = w·c³ (Peirce's cantilever
+    /// **\[assumptions\]**, not measurements: the paper gives none, and no
+    /// published bending rigidity of these two fabrics, or of a comparable
+    /// woven glass fabric or uncured woven carbon prepreg, was found in
+    /// the sources searched while writing this (the textile and forming
+    /// literature reachable from the project; the papers found —
+    /// Lammens et al., Textile Res. J. 84(12), 2014, 1307–1314 on the
+    /// accuracy of Peirce's test, Yu et al., Composites A 143, 2021,
+    /// 106308 on bending and wrinkling — were available as abstracts
+    /// only, without their figures). Each is B = w·c³ (Peirce's cantilever
     /// relation) from the preset's own areal weight w = ρ·h·g and an
     /// assumed bending length c, the same for warp and weft (balanced
     /// weaves): c = 40 mm for the heavy glass serge (w = 7.27e-6 N/mm²,
-    /// B = 0.465 N·mm), in the 30–60 mm range cantilever tests (ASTM D1388)
-    /// give for woven glass reinforcements of 500–800 g/m²; c = 80 mm for
-    /// the uncured carbon prepreg (w = 4.41e-6 N/mm², B = 2.26 N·mm), the
-    /// tack of the resin making a prepreg several times stiffer in bending
-    /// than its dry fabric. Replace them by a cantilever test of the actual
-    /// material (and note that Peirce's formula overestimates B by up to
-    /// ~20 % for heavy fabrics: Lammens et al., Textile Res. J. 84(12),
-    /// 2014, 1307–1314; drape's own cantilever case gives the elastica).
+    /// B = 0.465 N·mm) and c = 80 mm for the uncured carbon prepreg
+    /// (w = 4.41e-6 N/mm², B = 2.26 N·mm), the resin's tack making a
+    /// prepreg stiffer in bending than its dry fabric. Nothing but that
+    /// reasoning supports either length, not even its order of magnitude
+    /// (B ∝ c³: c off by 2 puts B off by 8). Replace them by a
+    /// cantilever test of the actual material, read with the elastica
+    /// rather than Peirce's formula: on a foil of known modulus Lammens et
+    /// al. found Peirce's formula 18 % high and the ASTM D1388 procedure
+    /// 72 % high (drape's own cantilever case gives the elastica).
     pub fn preset(name: &str) -> Option<Self> {
         match name {
             "carbon-prepreg-2x2" => {

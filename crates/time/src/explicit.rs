@@ -306,7 +306,7 @@ impl<'m> Explicit<'m> {
     /// is below `target` asks for mass factor (target/Δt_e)² on its nodes;
     /// each node takes the largest factor asked. A membrane's step then grows
     /// with the square root of the smallest factor of its nodes; a truss's
-    /// follows from its nodes' new masses.
+    /// and a bending triplet's follow from their nodes' new masses.
     fn scale_mass(&mut self, target: f64) {
         let model = self.model;
         let x = &model.x0;
@@ -328,6 +328,14 @@ impl<'m> Explicit<'m> {
         for b in &model.membranes {
             for e in 0..b.len() {
                 ask(b.element_nodes(e), b.element_stable_time_step(e, x));
+            }
+        }
+        // A triplet's step goes as h², so on fine meshes bending can ask
+        // for more than the membranes; left to the last uniform factor it
+        // would weigh down every node.
+        for (b, shares) in model.bending.iter().zip(&self.bending_mass) {
+            for (e, share) in shares.iter().enumerate() {
+                ask(&b.nodes[e], b.element_stable_time_step(e, x, *share));
             }
         }
         let smallest = |nodes: &[u32]| {

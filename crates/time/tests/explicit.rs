@@ -4,6 +4,7 @@
 //! bias extension, uniaxial tension) live in `cargo xtask validate`.
 
 use drape_constitutive::Material;
+use drape_elements::{BendingBatch, yarn_triplets};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion, NodalLoad, State};
 use drape_time::{
@@ -272,6 +273,80 @@ fn mass_scaling_reaches_its_target_and_reports_the_added_mass() {
         (summary.added_mass - 15.0 * mass).abs() < 1e-9 * mass,
         "{}",
         summary.added_mass / mass
+    );
+}
+
+#[test]
+fn mass_scaling_weighs_down_only_the_nodes_whose_bending_is_too_fast() {
+    // A 20 × 1 strip of 10 mm cells with stiff yarn bending on the warp
+    // triplets around its first interior station only (3 stations, 12.5 %
+    // of the mass): those govern the step. The target is a tenth of every
+    // other element's step, so only the triplets ask for mass. Soft yarns
+    // and resin keep the other steps long.
+    let mut material = Material::preset("glass-serge-4x3").unwrap();
+    material.fibre.modulus = 20.0;
+    material.resin.young = 2.0;
+    let mut model = Model::from_blank(
+        &blank(
+            [20, 1],
+            ElementKind::Quad,
+            FibreRepresentation::Trusses,
+            0.0,
+        ),
+        &material,
+    )
+    .unwrap();
+    let others = Explicit::new(&model, ExplicitSettings::default())
+        .unwrap()
+        .stable_time_step(&model.x0);
+    let x_min = model.x0.iter().map(|p| p.x).fold(f64::INFINITY, f64::min);
+    let mut edges = Vec::new();
+    let mut area = vec![0.0; model.node_count()];
+    for b in &model.membranes {
+        for e in 0..b.len() {
+            let nodes = b.element_nodes(e);
+            for (k, &a) in nodes.iter().enumerate() {
+                edges.push([a, nodes[(k + 1) % nodes.len()]]);
+            }
+            for (&n, a) in nodes.iter().zip(b.nodal_areas(e)) {
+                area[n as usize] += a;
+            }
+        }
+    }
+    let triplets: Vec<_> = yarn_triplets(&model.x0, &edges, [Vector3::x(), Vector3::y()])
+        .into_iter()
+        .filter(|t| t.family == 0 && model.x0[t.nodes[1] as usize].x < x_min + 15.0)
+        .collect();
+    assert_eq!(triplets.len(), 2);
+    model
+        .bending
+        .push(BendingBatch::new(&model.x0, &triplets, &area, [1e7, 1e7]).unwrap());
+    let bent = Explicit::new(&model, ExplicitSettings::default())
+        .unwrap()
+        .stable_time_step(&model.x0);
+    let target = 0.1 * others;
+    // What scaling every node alike would need.
+    let uniform = (target / bent).powi(2);
+    assert!(uniform > 50.0, "bending does not govern: {uniform}");
+    let scaled = Explicit::new(
+        &model,
+        ExplicitSettings {
+            mass_scaling: Some(target),
+            ..ExplicitSettings::default()
+        },
+    )
+    .unwrap();
+    let dt = scaled.stable_time_step(&model.x0);
+    assert!(dt >= target * (1.0 - 1e-12), "{dt:e} vs {target:e}");
+    // The triplets' nodes take at most `uniform` each (a triplet's own
+    // step is above the combined one), the others at most the last
+    // uniform factor, 1 + 1 % here: ≤ 0.125·uniform + 0.01 of the mass,
+    // where scaling all nodes would add (uniform − 1) of it.
+    let mass: f64 = model.mass.iter().sum();
+    let added = scaled.added_mass() / mass;
+    assert!(
+        added < 0.13 * uniform && added > 0.05 * uniform,
+        "added {added} of the mass, uniform scaling needs ×{uniform}"
     );
 }
 

@@ -29,6 +29,7 @@ mod implicit;
 mod kinematics;
 mod locking;
 mod scenes;
+mod wrinkling;
 
 /// Every case of every crate, in the order they run and are reported.
 pub fn registry() -> Vec<Case> {
@@ -42,6 +43,7 @@ pub fn registry() -> Vec<Case> {
         scenes::CASES,
         bending::CASES,
         locking::CASES,
+        wrinkling::CASES,
     ]
     .concat()
 }

@@ -214,7 +214,16 @@ fn hemisphere_table_2() -> Vec<Check> {
     }
     text.push_str(
         "\nSource: El Hami, Radi, Cherouat (2009), Table 2; the experiment is one test per \
-         orientation (no friction given), so the table has no experimental trend with μ.\n\n",
+         orientation (no friction given), so the table has no experimental trend with μ.\n\n\
+         Why drape and the paper differ, by undocumented choice: the holding (the paper's 24 \
+         nonlinear springs are not described; drape's 8 linear ones are stretched about 200 mm \
+         by the 300 mm stroke, so their force, and the shear, follow their stiffness: the \
+         sensitivity rows are `paper/hemisphere-holding`); the mesh (the maximum is not converged \
+         at 40×40, see `paper/mesh-convergence`); the tool is documented (r = 120 mm) but its \
+         faceting (1600 rigid elements in the paper, an exact sphere here) is not a free choice; \
+         the shear law is the carbon preset's (Table 1) resin in both. With point springs the \
+         maximum anywhere sits beside a spring (anywhere > away), where Table 2 cannot tell \
+         whether the paper's did.\n\n",
     );
     for (orientation, line, file) in [
         (

@@ -477,7 +477,7 @@ pub(super) fn profile_comparison(
     title: &str,
     curves: &[(String, &[ProfilePoint])],
 ) -> Result<Vec<u8>> {
-    let lines: Vec<(String, Vec<(f64, f64)>, RGBColor)> = curves
+    let lines: Vec<ProfileLine> = curves
         .iter()
         .enumerate()
         .map(|(k, (name, points))| {
@@ -488,9 +488,13 @@ pub(super) fn profile_comparison(
     profile_lines(title, &lines)
 }
 
+/// One curve of a profile plot: its name, its (distance, |γ|) points and
+/// its colour.
+type ProfileLine = (String, Vec<(f64, f64)>, RGBColor);
+
 /// Draws `lines` (name, (distance, |γ|) points, colour): a dot per element
 /// and a line through the means at equal distances.
-fn profile_lines(title: &str, lines: &[(String, Vec<(f64, f64)>, RGBColor)]) -> Result<Vec<u8>> {
+fn profile_lines(title: &str, lines: &[ProfileLine]) -> Result<Vec<u8>> {
     let all: Vec<(f64, f64)> = lines.iter().flat_map(|l| l.1.iter().copied()).collect();
     let (mut x0, mut x1, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
     for &(d, g) in &all {

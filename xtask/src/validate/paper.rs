@@ -656,24 +656,29 @@ fn mesh_convergence() -> Vec<Check> {
             }
             None => text.push_str(" — | — |\n"),
         }
-        // Converging means the change from one mesh to the next shrinks:
-        // asked of the draw-ins (smooth, global measures) on the three
-        // finest meshes. The maxima are not asked: the largest shear sits
-        // in elements pulled by a point spring, a point load whose
-        // neighbourhood does not converge.
-        if values.len() >= 3 && m.name.starts_with('D') {
-            let [c, md, f] = values[values.len() - 3..] else {
-                unreachable!()
-            };
-            checks.push(Check::abs(
-                format!(
-                    "{}: |f_fine − f_medium| / |f_medium − f_coarse| < 1 (converging)",
-                    m.name
-                ),
-                0.0,
-                (f - md).abs() / (md - c).abs(),
-                1.0,
-            ));
+        // What the shipped mesh is worth: its draw-ins within 1 mm (the
+        // resolution of the paper's measured draw-ins, Table 4) of the
+        // finest mesh's. Asked of the draw-ins only (smooth, global
+        // measures); the maxima are reported, not asked: with point springs
+        // the largest shear sits beside a point load, whose neighbourhood
+        // does not converge. A ratio of successive changes is not asked
+        // either: the draw-in changes by hundredths of a millimetre from
+        // 20×20 on, where the state of the still-swinging skirt at the end
+        // (E_kin/E_int ≈ 1e-3), not the mesh, decides the ratio.
+        let shipped = meshes.iter().position(|&n| n == HEMISPHERE_CELLS);
+        if let (Some(k), true) = (shipped, m.name.starts_with('D')) {
+            let finest = values.len() - 1;
+            if finest > k {
+                checks.push(Check::abs(
+                    format!(
+                        "{}: {}×{} (shipped) vs {} (finest)",
+                        m.name, HEMISPHERE_CELLS, HEMISPHERE_CELLS, outcomes[finest].run.label
+                    ),
+                    values[finest],
+                    values[k],
+                    1.0,
+                ));
+            }
         }
     }
     text.push('\n');

@@ -56,6 +56,8 @@ pub mod export;
 mod lock;
 pub mod mapping;
 mod pictures;
+
+pub(crate) use pictures::boundary_edges;
 pub mod read;
 mod summary;
 mod tools;
@@ -640,6 +642,21 @@ pub fn write_flat_maps_of(
     panels: &[MapPanel<'_>],
 ) -> Result<(), ResultsError> {
     let png = pictures::maps::flat_maps_of(x0, cells, panels).map_err(|e| ResultsError {
+        path: path.to_owned(),
+        source: std::io::Error::other(e),
+    })?;
+    crate::atomic::write(path, &png).map_err(at(path))
+}
+
+/// Writes the PNG `path` with several shear profiles on one plot (for
+/// comparing runs, like the paper's Figs. 7 and 12): `curves` are (legend,
+/// profile) pairs, drawn as `profiles.png` draws one line.
+pub fn write_profile_comparison(
+    path: &Path,
+    title: &str,
+    curves: &[(String, &[drape_model::measures::ProfilePoint])],
+) -> Result<(), ResultsError> {
+    let png = pictures::profile_comparison(title, curves).map_err(|e| ResultsError {
         path: path.to_owned(),
         source: std::io::Error::other(e),
     })?;

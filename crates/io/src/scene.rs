@@ -541,6 +541,12 @@ pub struct SpringSpec {
     /// Rest length (mm).
     #[serde(default)]
     pub rest_length: f64,
+    /// The forces (`stiffness`, `preload`, the table's forces) are per mm
+    /// of the blank's edge: each node gets them times its share of the
+    /// outline's length (half of each outline edge it ends). A frame of
+    /// springs along the edge, the same for every mesh.
+    #[serde(default)]
+    pub per_length: bool,
 }
 
 /// A boundary condition's motion.
@@ -601,11 +607,15 @@ pub struct BoundarySpec {
 pub struct LoadSpec {
     /// The nodes.
     pub nodes: NodeSelection,
-    /// Force per node (N).
+    /// Force per node (N), or per mm of the blank's edge with `per_length`.
     pub force: [f64; 3],
     /// a(t).
     #[serde(default = "constant")]
     pub amplitude: Amplitude,
+    /// `force` is per mm of the blank's edge (N/mm): each node gets it
+    /// times its share of the outline's length, as for springs.
+    #[serde(default)]
+    pub per_length: bool,
 }
 
 fn default_locking() -> f64 {
@@ -966,6 +976,45 @@ fn unit(at: &Locator<'_>, field: &str, v: [f64; 3]) -> Result<Vector3<f64>, Scen
 fn amplitude(at: &Locator<'_>, field: &str, a: &Amplitude) -> Result<Amplitude, SceneError> {
     a.validate().map_err(|m| at.error(field, m))?;
     Ok(a.clone())
+}
+
+/// The nodes `held`, grouped by their share of the blank's outline (mm):
+/// half the reference length of each outline edge (an edge of one element
+/// only) they end. Groups in order of first appearance, nodes in the given
+/// order, so the model does not depend on anything but the scene. A node
+/// off the outline has no share: that is an error naming it, since a
+/// force "per mm of edge" means nothing there.
+fn edge_shares(
+    at: &Locator<'_>,
+    field: &str,
+    model: &Model,
+    held: &[u32],
+) -> Result<Vec<(f64, Vec<u32>)>, SceneError> {
+    let mut share = vec![0.0; model.x0.len()];
+    for [a, b] in crate::results::boundary_edges(model) {
+        let half = 0.5 * (model.x0[a as usize] - model.x0[b as usize]).norm();
+        share[a as usize] += half;
+        share[b as usize] += half;
+    }
+    let mut groups: Vec<(f64, Vec<u32>)> = Vec::new();
+    for &n in held {
+        let s = share[n as usize];
+        if s == 0.0 {
+            return Err(at.error(
+                field,
+                format!(
+                    "node {n} is not on the blank's edge, so `per_length` gives it no share of a \
+                     force per mm of edge: hold only edge nodes (the set `boundary`, an edge set)"
+                ),
+            ));
+        }
+        // Equal shares to the last bit (a uniform grid) share a batch.
+        match groups.iter_mut().find(|(g, _)| g.to_bits() == s.to_bits()) {
+            Some((_, nodes)) => nodes.push(n),
+            None => groups.push((s, vec![n])),
+        }
+    }
+    Ok(groups)
 }
 
 fn nodes(
@@ -1526,15 +1575,32 @@ fn build(
                 ),
             ));
         }
-        model.springs.push(SpringBatch {
-            table,
-            anchors: held
-                .iter()
-                .map(|&n| model.x0[n as usize] + offset)
-                .collect(),
-            rest_length: vec![s.rest_length; held.len()],
-            nodes: held,
-        });
+        // Per length: one batch per distinct edge share, its forces scaled
+        // by the share (a table's extensions stay as given).
+        let groups = if s.per_length {
+            edge_shares(at, &format!("{here}.nodes"), &model, &held)?
+        } else {
+            vec![(1.0, held)]
+        };
+        for (share, held) in groups {
+            let table = match (&s.table, s.stiffness) {
+                (Some(t), _) if share != 1.0 => {
+                    ForceTable::new(&t.iter().map(|&[d, f]| [d, share * f]).collect::<Vec<_>>())
+                        .map_err(|e| at.error(&format!("{here}.table"), e.to_string()))?
+                }
+                (None, Some(k)) if share != 1.0 => ForceTable::linear(share * k, share * s.preload),
+                _ => table.clone(),
+            };
+            model.springs.push(SpringBatch {
+                table,
+                anchors: held
+                    .iter()
+                    .map(|&n| model.x0[n as usize] + offset)
+                    .collect(),
+                rest_length: vec![s.rest_length; held.len()],
+                nodes: held,
+            });
+        }
     }
 
     for (i, bc) in spec.boundary.iter().enumerate() {
@@ -1603,11 +1669,21 @@ fn build(
 
     for (i, l) in spec.loads.iter().enumerate() {
         let here = format!("loads[{i}]");
-        model.loads.push(NodalLoad {
-            nodes: nodes(at, &format!("{here}.nodes"), &model, &l.nodes)?,
-            force: finite3(at, &format!("{here}.force"), l.force)?,
-            amplitude: amplitude(at, &format!("{here}.amplitude"), &l.amplitude)?,
-        });
+        let loaded = nodes(at, &format!("{here}.nodes"), &model, &l.nodes)?;
+        let force = finite3(at, &format!("{here}.force"), l.force)?;
+        let amplitude = amplitude(at, &format!("{here}.amplitude"), &l.amplitude)?;
+        let groups = if l.per_length {
+            edge_shares(at, &format!("{here}.nodes"), &model, &loaded)?
+        } else {
+            vec![(1.0, loaded)]
+        };
+        for (share, nodes) in groups {
+            model.loads.push(NodalLoad {
+                nodes,
+                force: share * force,
+                amplitude: amplitude.clone(),
+            });
+        }
     }
     if let Some(g) = spec.gravity {
         model.gravity = finite3(at, "gravity", g)?;

@@ -486,3 +486,60 @@ material = { name = "m", thickness = 0.5, fibre_volume_fraction = 0.5, density =
     let text = error_of(&bad).to_string();
     assert!(text.contains("bending_rigidity[1]"), "{text}");
 }
+
+/// `per_length`: springs and loads given per mm of the blank's edge reach
+/// each edge node times its share of the outline (half of each outline
+/// edge it ends), so the totals are the per-mm values times the perimeter
+/// whatever the mesh; a node off the edge is refused.
+#[test]
+fn springs_and_loads_per_length_follow_the_edge() {
+    // 100 × 100 mm in 4 × 2 cells: 25 mm along x, 50 mm along y, so the
+    // corners, the x-edge nodes and the y-edge midpoints have three shares.
+    let text = format!(
+        "{}\n[[springs]]\nnodes = \"boundary\"\nstiffness = 0.01\npreload = 0.002\n\
+         anchor_offset = [0, 0, -5]\nper_length = true\n\
+         [[loads]]\nnodes = \"boundary\"\nforce = [0, 0, -0.003]\nper_length = true\n",
+        GOOD.replace("cells = [4, 4]", "cells = [4, 2]")
+    );
+    let scene = Scene::parse(&text, Path::new("good.toml"), &[]).unwrap();
+    let model = &scene.model;
+    let perimeter = 400.0;
+    let mut shares: Vec<(u32, f64)> = Vec::new();
+    let (mut stiffness, mut preload) = (0.0, 0.0);
+    for batch in &model.springs {
+        let (f0, _) = batch.table.force_and_stiffness(0.0);
+        let (f1, k) = batch.table.force_and_stiffness(1.0);
+        assert!((f1 - f0 - k).abs() < 1e-15);
+        for &n in &batch.nodes {
+            shares.push((n, k / 0.01));
+            stiffness += k;
+            preload += f0;
+        }
+    }
+    assert!((stiffness - 0.01 * perimeter).abs() < 1e-12, "{stiffness}");
+    assert!((preload - 0.002 * perimeter).abs() < 1e-12, "{preload}");
+    let boundary = model.node_set("boundary").unwrap();
+    assert_eq!(shares.len(), boundary.len());
+    let mut seen: Vec<f64> = shares.iter().map(|s| s.1).collect();
+    seen.sort_by(f64::total_cmp);
+    seen.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    assert_eq!(seen.len(), 3, "{seen:?}");
+    for (want, got) in [25.0, 37.5, 50.0].iter().zip(&seen) {
+        assert!((want - got).abs() < 1e-9, "{seen:?}");
+    }
+    let load: f64 = model
+        .loads
+        .iter()
+        .map(|l| l.force.z * l.nodes.len() as f64)
+        .sum();
+    assert!((load + 0.003 * perimeter).abs() < 1e-12, "{load}");
+
+    // An interior node has no share of the edge.
+    let e = error_of(&format!(
+        "{GOOD}\n[[loads]]\nnodes = [12]\nforce = [0, 0, -1]\nper_length = true\n"
+    ));
+    assert!(
+        e.field.starts_with("loads[0].nodes") && e.message.contains("not on the blank's edge"),
+        "{e}"
+    );
+}

@@ -28,6 +28,7 @@ mod fishnet;
 mod implicit;
 mod kinematics;
 mod locking;
+mod paper;
 mod scenes;
 mod wrinkling;
 
@@ -44,6 +45,7 @@ pub fn registry() -> Vec<Case> {
         bending::CASES,
         locking::CASES,
         wrinkling::CASES,
+        paper::CASES,
     ]
     .concat()
 }
@@ -180,6 +182,16 @@ pub struct CaseResult {
     pub notes: Vec<String>,
 }
 
+/// Whether this is a `--quick` run: a case marked quick may run a coarse
+/// version of itself then (the paper's tables: coarse meshes in CI, the
+/// shipped meshes in full mode) under the same name.
+static QUICK: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// True while `cargo xtask validate --quick` runs.
+pub fn quick_mode() -> bool {
+    QUICK.load(std::sync::atomic::Ordering::Relaxed)
+}
+
 thread_local! {
     static NOTES: RefCell<Vec<String>> = const { RefCell::new(Vec::new()) };
 }
@@ -215,6 +227,7 @@ pub fn run_case(case: &Case) -> CaseResult {
 /// `cargo xtask validate`: runs the selected cases, prints and writes the
 /// report.
 pub fn main(options: &Options, workspace_root: &Path) -> ExitCode {
+    QUICK.store(options.quick, std::sync::atomic::Ordering::Relaxed);
     let selected: Vec<Case> = registry()
         .into_iter()
         .filter(|c| options.selects(c))
@@ -268,7 +281,7 @@ pub fn tally(results: &[CaseResult]) -> (usize, usize) {
 
 /// Cargo's target directory: `CARGO_TARGET_DIR` when set (relative to the
 /// current directory, as cargo reads it), else `<workspace>/target`.
-fn target_dir(workspace_root: &Path) -> PathBuf {
+pub(super) fn target_dir(workspace_root: &Path) -> PathBuf {
     match std::env::var_os("CARGO_TARGET_DIR") {
         Some(dir) if !dir.is_empty() => PathBuf::from(dir),
         _ => workspace_root.join("target"),

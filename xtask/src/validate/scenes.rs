@@ -9,8 +9,8 @@
 //! - the draw-in fixed by the tools: DX of 0/90 and DD of ±45 against the
 //!   taut-yarn estimate derived here from the scene's tool dimensions
 //!   ([`taut_yarn`]), independent of drape's crates;
-//! - Table 4: the draw-ins at μ = 0.01, 0.1, 0.2, 0.4 beside the
-//!   experiment and the paper's simulation (a report section);
+//! - (Table 4 beside the paper is `paper/deep-drawing-table4`, in
+//!   `paper.rs`, which runs through this module's [`Run`] and [`execute_all`]);
 //! - the sensitivity of the ±45 draw-ins to the holder force and the tool
 //!   radii (a report section).
 //!
@@ -24,7 +24,7 @@ use std::time::Instant;
 
 use drape_constitutive::Material;
 use drape_io::scene::{GeometrySpec, MaterialSpec, MotionSpec, Scene, SceneFile};
-use drape_model::measures::DrawIn;
+use drape_model::measures::{DrawIn, ProfilePoint};
 use drape_time::{Energies, Explicit, Frame, Observer};
 use rayon::prelude::*;
 
@@ -43,40 +43,41 @@ pub const CASES: &[Case] = &[
         run: stroke,
     },
     Case {
-        name: "scenes/deep-drawing-table-4",
-        quick: false,
-        run: table_4,
-    },
-    Case {
         name: "scenes/deep-drawing-sensitivity",
         quick: false,
         run: sensitivity,
     },
 ];
 
-/// The two shipped scenes.
+/// The two fibre orientations of the paper's experiments.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Orientation {
+pub(super) enum Orientation {
     ZeroNinety,
     PlusMinus45,
 }
 
 impl Orientation {
-    const BOTH: [Self; 2] = [Self::ZeroNinety, Self::PlusMinus45];
+    pub(super) const BOTH: [Self; 2] = [Self::ZeroNinety, Self::PlusMinus45];
 
+    /// The shipped deep-drawing scene.
     fn file(self) -> PathBuf {
-        let name = match self {
-            Self::ZeroNinety => "deep-drawing-0-90.toml",
-            Self::PlusMinus45 => "deep-drawing-45.toml",
+        self.scene("deep-drawing")
+    }
+
+    /// The shipped scene `scenes/{experiment}-0-90.toml` or `…-45.toml`.
+    pub(super) fn scene(self, experiment: &str) -> PathBuf {
+        let suffix = match self {
+            Self::ZeroNinety => "0-90",
+            Self::PlusMinus45 => "45",
         };
         Path::new(env!("CARGO_MANIFEST_DIR"))
             .parent()
             .expect("xtask lives in the workspace")
             .join("scenes")
-            .join(name)
+            .join(format!("{experiment}-{suffix}.toml"))
     }
 
-    fn label(self) -> &'static str {
+    pub(super) fn label(self) -> &'static str {
         match self {
             Self::ZeroNinety => "0/90",
             Self::PlusMinus45 => "±45",
@@ -86,21 +87,35 @@ impl Orientation {
 
 /// One run of a shipped scene with overrides.
 #[derive(Debug, Clone)]
-struct Run {
-    orientation: Orientation,
+pub(super) struct Run {
+    pub(super) orientation: Orientation,
+    /// The scene file.
+    pub(super) file: PathBuf,
     /// What it is, for the tables ("40×40 quads", "μ = 0.2", …).
-    label: String,
-    overrides: Vec<(String, String)>,
+    pub(super) label: String,
+    pub(super) overrides: Vec<(String, String)>,
 }
 
 impl Run {
-    fn new(
+    /// A run of the shipped deep-drawing scene of `orientation`.
+    pub(super) fn new(
+        orientation: Orientation,
+        label: impl Into<String>,
+        overrides: &[(&str, String)],
+    ) -> Self {
+        Self::of(orientation.file(), orientation, label, overrides)
+    }
+
+    /// A run of the scene `file`, whose fibres are `orientation`.
+    pub(super) fn of(
+        file: PathBuf,
         orientation: Orientation,
         label: impl Into<String>,
         overrides: &[(&str, String)],
     ) -> Self {
         Self {
             orientation,
+            file,
             label: label.into(),
             overrides: overrides
                 .iter()
@@ -109,28 +124,44 @@ impl Run {
         }
     }
 
-    fn name(&self) -> String {
+    pub(super) fn name(&self) -> String {
         format!("{} {}", self.orientation.label(), self.label)
     }
 }
 
 /// What a run gave.
 #[derive(Debug, Clone)]
-struct Outcome {
-    run: Run,
-    spec: SceneFile,
+pub(super) struct Outcome {
+    pub(super) run: Run,
+    pub(super) spec: SceneFile,
     /// None when it completed, else why it stopped.
-    error: Option<String>,
-    time: f64,
-    end_time: f64,
+    pub(super) error: Option<String>,
+    pub(super) time: f64,
+    pub(super) end_time: f64,
     /// The punch's travel at the last frame, and the prescribed one.
-    punch_travel: f64,
-    stroke: f64,
-    energy: Energies,
-    draw_in: DrawIn,
-    steps: u64,
-    wall_s: f64,
+    pub(super) punch_travel: f64,
+    pub(super) stroke: f64,
+    pub(super) energy: Energies,
+    pub(super) draw_in: DrawIn,
+    /// Largest |shear| anywhere (degrees).
+    pub(super) max_shear_deg: f64,
+    /// Largest |shear| over the elements whose reference centroid is more
+    /// than [`AWAY_FROM_HOLDING_MM`] from every node held by a spring or
+    /// loaded by a nodal load (degrees); the same as anywhere without
+    /// holding.
+    pub(super) max_shear_away_deg: f64,
+    /// The shear profiles along the diagonal and the median (x).
+    pub(super) profile_diagonal: Vec<ProfilePoint>,
+    pub(super) profile_median: Vec<ProfilePoint>,
+    pub(super) steps: u64,
+    pub(super) wall_s: f64,
 }
+
+/// The neighbourhood of a holding node left out of "the maximum shear away
+/// from the holding" (mm, in the flat blank): about three cells of the
+/// shipped 40×40 hemisphere mesh (8.75 mm), fixed in millimetres so that it
+/// is the same region on every mesh.
+pub(super) const AWAY_FROM_HOLDING_MM: f64 = 25.0;
 
 /// Keeps the last frame's energies and the punch's travel.
 struct Last {
@@ -149,9 +180,9 @@ impl Observer for Last {
 }
 
 fn execute(run: &Run) -> Outcome {
-    let path = run.orientation.file();
+    let path = &run.file;
     let scene =
-        Scene::from_file(&path, &run.overrides).unwrap_or_else(|e| panic!("{}: {e}", run.name()));
+        Scene::from_file(path, &run.overrides).unwrap_or_else(|e| panic!("{}: {e}", run.name()));
     let punch = scene
         .spec
         .tools
@@ -175,16 +206,31 @@ fn execute(run: &Run) -> Outcome {
         Ok(summary) => (None, summary.energy),
         Err(e) => (Some(e.to_string()), last.energy),
     };
-    let draw_in = scene
-        .model
-        .measures(&state, 50.0)
-        .ok()
-        .and_then(|m| m.draw_in)
-        .unwrap_or(DrawIn {
-            dx: f64::NAN,
-            dy: f64::NAN,
-            dd: f64::NAN,
-        });
+    let measures = scene.model.measures(&state, 50.0).ok();
+    let draw_in = measures.as_ref().and_then(|m| m.draw_in).unwrap_or(DrawIn {
+        dx: f64::NAN,
+        dy: f64::NAN,
+        dd: f64::NAN,
+    });
+    let (max_shear_deg, profile_diagonal, profile_median) = match measures {
+        Some(m) => (m.max_shear_deg, m.profile_diagonal, m.profile_median),
+        None => (f64::NAN, Vec::new(), Vec::new()),
+    };
+    let held: Vec<u32> = (scene.model.springs.iter().map(|s| &s.nodes))
+        .chain(scene.model.loads.iter().map(|l| &l.nodes))
+        .flatten()
+        .copied()
+        .collect();
+    let max_shear_away_deg = scene.model.element_fields(&state).map_or(f64::NAN, |f| {
+        f.shear
+            .iter()
+            .zip(&f.centroid0)
+            .filter(|(_, c)| {
+                held.iter()
+                    .all(|&n| (scene.model.x0[n as usize] - *c).xy().norm() > AWAY_FROM_HOLDING_MM)
+            })
+            .fold(0.0, |m: f64, (g, _)| m.max(g.abs().to_degrees()))
+    });
     Outcome {
         run: run.clone(),
         error,
@@ -194,6 +240,10 @@ fn execute(run: &Run) -> Outcome {
         stroke,
         energy,
         draw_in,
+        max_shear_deg,
+        max_shear_away_deg,
+        profile_diagonal,
+        profile_median,
         steps: state.step,
         wall_s: started.elapsed().as_secs_f64(),
         spec: scene.spec,
@@ -202,14 +252,14 @@ fn execute(run: &Run) -> Outcome {
 
 /// Runs them all, two at a time on a 2-core machine (each run is itself
 /// parallel, but small models leave cores idle), in the given order.
-fn execute_all(runs: &[Run]) -> Vec<Outcome> {
+pub(super) fn execute_all(runs: &[Run]) -> Vec<Outcome> {
     runs.par_iter().with_max_len(1).map(execute).collect()
 }
 
 /// The checks every run must pass: it ends at the end time with the punch
 /// at its full stroke, the energy balance closes to 1e-3 of the largest
 /// energy and the end is quasi-static (E_kin/E_int < 1e-3).
-fn stroke_checks(o: &Outcome) -> Vec<Check> {
+pub(super) fn stroke_checks(o: &Outcome) -> Vec<Check> {
     let name = o.run.name();
     let status = o.error.as_deref().unwrap_or("completed");
     vec![
@@ -386,7 +436,7 @@ fn taut_yarn_check(o: &Outcome) -> Check {
     }
 }
 
-fn mesh(cells: usize, element: &str) -> Vec<(&'static str, String)> {
+pub(super) fn mesh(cells: usize, element: &str) -> Vec<(&'static str, String)> {
     vec![
         ("fabric.blank.cells", format!("[{cells}, {cells}]")),
         ("fabric.blank.element", format!("\"{element}\"")),
@@ -446,84 +496,11 @@ fn stroke() -> Vec<Check> {
     checks
 }
 
-/// The paper's Table 4: (orientation, quantity, experiment, simulation at
-/// μ = 0.01, 0.1, 0.2, 0.4). DY equals DX in every entry.
-const TABLE_4: [(Orientation, &str, f64, [f64; 4]); 4] = [
-    (
-        Orientation::ZeroNinety,
-        "DX = DY",
-        44.0,
-        [43.8, 42.3, 41.0, 40.2],
-    ),
-    (Orientation::ZeroNinety, "DD", 10.0, [9.6, 8.7, 8.64, 8.33]),
-    (
-        Orientation::PlusMinus45,
-        "DX = DY",
-        10.0,
-        [8.3, 8.3, 8.3, 8.21],
-    ),
-    (
-        Orientation::PlusMinus45,
-        "DD",
-        42.0,
-        [38.3, 38.3, 38.3, 37.38],
-    ),
-];
-
-const FRICTIONS: [f64; 4] = [0.01, 0.1, 0.2, 0.4];
-
-fn friction(mu: f64) -> Vec<(&'static str, String)> {
+pub(super) fn friction(mu: f64) -> Vec<(&'static str, String)> {
     ["tools.0.friction", "tools.1.friction", "tools.2.friction"]
         .into_iter()
         .map(|k| (k, mu.to_string()))
         .collect()
-}
-
-/// Table 4 at the shipped mesh (40×40 quads): the runs must reach the full
-/// stroke as above; the comparison with the experiment and the paper is a
-/// report section, with drape's error beside the paper's.
-fn table_4() -> Vec<Check> {
-    let mut runs = Vec::new();
-    for orientation in Orientation::BOTH {
-        for mu in FRICTIONS {
-            runs.push(Run::new(orientation, format!("μ = {mu}"), &friction(mu)));
-        }
-    }
-    let outcomes = execute_all(&runs);
-    let mut checks = Vec::new();
-    for o in &outcomes {
-        checks.extend(stroke_checks(o));
-    }
-    let mut text = String::from(
-        "Table 4 (draw-in, mm), 40×40 quads, trusses. Errors are against the experiment.\n\n\
-         | fibres | draw-in | exp. | μ | paper | drape | paper − exp. | drape − exp. |\n\
-         |---|---|--:|--:|--:|--:|--:|--:|\n",
-    );
-    for (orientation, quantity, exp, paper) in TABLE_4 {
-        for (k, mu) in FRICTIONS.into_iter().enumerate() {
-            let o = outcomes
-                .iter()
-                .find(|o| o.run.orientation == orientation && o.run.label == format!("μ = {mu}"))
-                .expect("a run per entry");
-            let drape = if quantity == "DD" {
-                o.draw_in.dd
-            } else {
-                o.draw_in.dx
-            };
-            let _ = writeln!(
-                text,
-                "| {} | {quantity} | {exp} | {mu} | {} | {drape:.2} | {:+.2} | {:+.2} |",
-                orientation.label(),
-                paper[k],
-                paper[k] - exp,
-                drape - exp
-            );
-        }
-    }
-    text.push('\n');
-    text.push_str(&run_table(&outcomes));
-    note(text);
-    checks
 }
 
 /// The ±45 draw-ins against the holder force and the tool radii, one change
@@ -600,7 +577,7 @@ fn sensitivity() -> Vec<Check> {
 }
 
 /// One row per run: status, draw-ins, energy, steps and wall time.
-fn run_table(outcomes: &[Outcome]) -> String {
+pub(super) fn run_table(outcomes: &[Outcome]) -> String {
     let mut text = String::from(
         "| run | status | DX | DY | DD | balance error | E_kin/E_int | steps | wall (s) |\n\
          |---|---|--:|--:|--:|--:|--:|--:|--:|\n",

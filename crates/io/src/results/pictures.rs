@@ -172,7 +172,7 @@ struct Patch {
 
 /// Edges used by one element only (node pairs), in node order: the outline
 /// of a mesh, holes included.
-fn boundary_edges(model: &Model) -> Vec<[u32; 2]> {
+pub(crate) fn boundary_edges(model: &Model) -> Vec<[u32; 2]> {
     let mut count: BTreeMap<[u32; 2], u32> = BTreeMap::new();
     for batch in &model.membranes {
         for e in 0..batch.len() {
@@ -453,16 +453,48 @@ fn mean_curve(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
 pub(super) fn profiles(measures: &Measures, time: f64) -> Result<Vec<u8>> {
     let lines = [
         (
-            "diagonal",
+            "diagonal".to_owned(),
             magnitudes(&measures.profile_diagonal),
             DIAGONAL_COLOUR,
         ),
         (
-            "median (parallel to x)",
+            "median (parallel to x)".to_owned(),
             magnitudes(&measures.profile_median),
             MEDIAN_COLOUR,
         ),
     ];
+    let title = format!(
+        "Shear along the blank's diagonal and median   (time {} s)",
+        human(time)
+    );
+    profile_lines(&title, &lines)
+}
+
+/// Several shear profiles on one plot (runs side by side, like the paper's
+/// Figs. 7 and 12): |γ| against the signed initial distance from the
+/// blank's centre, each curve in the next of matplotlib's `tab10` colours.
+pub(super) fn profile_comparison(
+    title: &str,
+    curves: &[(String, &[ProfilePoint])],
+) -> Result<Vec<u8>> {
+    let lines: Vec<ProfileLine> = curves
+        .iter()
+        .enumerate()
+        .map(|(k, (name, points))| {
+            let palette = &sweep::PALETTE;
+            (name.clone(), magnitudes(points), palette[k % palette.len()])
+        })
+        .collect();
+    profile_lines(title, &lines)
+}
+
+/// One curve of a profile plot: its name, its (distance, |γ|) points and
+/// its colour.
+type ProfileLine = (String, Vec<(f64, f64)>, RGBColor);
+
+/// Draws `lines` (name, (distance, |γ|) points, colour): a dot per element
+/// and a line through the means at equal distances.
+fn profile_lines(title: &str, lines: &[ProfileLine]) -> Result<Vec<u8>> {
     let all: Vec<(f64, f64)> = lines.iter().flat_map(|l| l.1.iter().copied()).collect();
     let (mut x0, mut x1, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
     for &(d, g) in &all {
@@ -470,15 +502,11 @@ pub(super) fn profiles(measures: &Measures, time: f64) -> Result<Vec<u8>> {
     }
     let xpad = (0.03 * (x1 - x0)).max(0.5);
     let ytop = if y1 > 0.0 { 1.1 * y1 } else { 1.0 };
-    let title = format!(
-        "Shear along the blank's diagonal and median   (time {} s)",
-        human(time)
-    );
     render(PROFILE_SIZE, |root| {
         if all.is_empty() {
             // No axes: empty axes would suggest a profile of zeros.
             let (w, h) = PROFILE_SIZE;
-            let body = root.titled(&title, (FAMILY, 24)).map_err(drawing)?;
+            let body = root.titled(title, (FAMILY, 24)).map_err(drawing)?;
             let note = "No profile: the model was not meshed from a rectangular blank.";
             let style = (FAMILY, 20)
                 .into_font()
@@ -489,7 +517,7 @@ pub(super) fn profiles(measures: &Measures, time: f64) -> Result<Vec<u8>> {
             return Ok(());
         }
         let mut chart = ChartBuilder::on(root)
-            .caption(&title, (FAMILY, 24))
+            .caption(title, (FAMILY, 24))
             .margin(16)
             .x_label_area_size(56)
             .y_label_area_size(76)
@@ -508,7 +536,7 @@ pub(super) fn profiles(measures: &Measures, time: f64) -> Result<Vec<u8>> {
             .axis_desc_style((FAMILY, 18))
             .draw()
             .map_err(drawing)?;
-        for (name, points, colour) in &lines {
+        for (name, points, colour) in lines {
             let colour = *colour;
             chart
                 .draw_series(LineSeries::new(mean_curve(points), colour.stroke_width(2)))

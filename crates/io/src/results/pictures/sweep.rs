@@ -39,7 +39,7 @@ pub struct SweepRun {
 const PANEL: (u32, u32) = (560, 400);
 
 /// matplotlib's `tab10` colours.
-const PALETTE: [RGBColor; 10] = [
+pub(super) const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),

@@ -55,10 +55,12 @@
 //! ```
 
 mod bending;
+mod lanes;
 mod membrane;
 mod quad_lanes;
 mod spring;
 mod truss;
+mod truss_lanes;
 
 pub use bending::{BendingBatch, YarnTriplet, yarn_triplets};
 pub use drape_kinematics::{Degeneracy, KinematicsError, Matrix2, Matrix3x2, Vector2, Vector3};

@@ -1,7 +1,7 @@
 //! Resin-only quad membranes four elements at a time: the same arithmetic
 //! as the scalar path ([`crate::MembraneBatch`]'s `point_response` and
-//! `add_nodal_forces`), operation for operation, on `wide::f64x4` lanes
-//! over struct-of-arrays reference data.
+//! `add_nodal_forces`), operation for operation, on [`f64x4`] lanes over
+//! struct-of-arrays reference data.
 //!
 //! What it is for: the explicit force pass of the paper's representation
 //! (yarns as trusses, the membrane carrying the resin only), the bulk of an
@@ -14,90 +14,17 @@
 //! so does any block with a degenerate or non-finite point, which the
 //! scalar path then names.
 //!
-//! Instruction set: the lanes are plain `[f64; 4]` with element-wise
-//! operators that the compiler turns into vector instructions; the kernel
-//! is compiled twice, for the target's baseline (two SSE2 operations per
+//! Instruction set: see [`crate::lanes`]; the kernel is compiled twice, for the target's baseline (two SSE2 operations per
 //! lane operation on x86-64) and with AVX2 enabled (one), and
 //! [`QuadLanes::block_forces`] picks the second at run time when the
 //! processor has it. Neither contracts a multiply and an add into an FMA,
 //! so both give the same bits.
 
-use std::ops::{Add, AddAssign, Div, Mul, Sub};
-
 use drape_kinematics::Vector2;
+
+use crate::lanes::{LANES, f64x4};
 use nalgebra::Vector3;
 
-/// Four f64 lanes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[repr(C, align(32))]
-#[allow(non_camel_case_types)]
-pub(crate) struct f64x4([f64; 4]);
-
-macro_rules! lane_op {
-    ($trait:ident, $method:ident, $op:tt) => {
-        impl $trait for f64x4 {
-            type Output = f64x4;
-            #[inline(always)]
-            fn $method(self, rhs: f64x4) -> f64x4 {
-                f64x4([
-                    self.0[0] $op rhs.0[0],
-                    self.0[1] $op rhs.0[1],
-                    self.0[2] $op rhs.0[2],
-                    self.0[3] $op rhs.0[3],
-                ])
-            }
-        }
-    };
-}
-lane_op!(Add, add, +);
-lane_op!(Sub, sub, -);
-lane_op!(Mul, mul, *);
-lane_op!(Div, div, /);
-
-impl AddAssign for f64x4 {
-    #[inline(always)]
-    fn add_assign(&mut self, rhs: f64x4) {
-        *self = *self + rhs;
-    }
-}
-
-impl f64x4 {
-    #[inline(always)]
-    fn new(v: [f64; 4]) -> Self {
-        Self(v)
-    }
-
-    #[inline(always)]
-    fn splat(v: f64) -> Self {
-        Self([v; 4])
-    }
-
-    // Written lane by lane rather than with `array::map` or iterator
-    // folds: those are generic helpers compiled without the kernel's target
-    // features, which LLVM then may not inline into it.
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        let v = self.0;
-        Self([v[0].sqrt(), v[1].sqrt(), v[2].sqrt(), v[3].sqrt()])
-    }
-
-    /// Whether every lane is finite.
-    #[inline(always)]
-    fn all_finite(self) -> bool {
-        let v = self.0;
-        v[0].is_finite() & v[1].is_finite() & v[2].is_finite() & v[3].is_finite()
-    }
-
-    /// Whether every lane is above `rhs`'s (false for a NaN).
-    #[inline(always)]
-    fn all_gt(self, rhs: f64x4) -> bool {
-        let (v, w) = (self.0, rhs.0);
-        (v[0] > w[0]) & (v[1] > w[1]) & (v[2] > w[2]) & (v[3] > w[3])
-    }
-}
-
-/// Elements per block.
-pub(crate) const LANES: usize = 4;
 const NODES: usize = 4;
 const POINTS: usize = 4;
 /// As in `drape_kinematics::right_stretch`.

@@ -139,7 +139,7 @@ impl QuadLanes {
 
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn block_forces_lanes(
+    pub(crate) fn block_forces_lanes(
         &self,
         b: usize,
         nodes: &[u32],

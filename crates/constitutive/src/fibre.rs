@@ -33,6 +33,11 @@ pub struct FibreLaw {
 }
 
 impl FibreLaw {
+    /// Below this ε/ε_sh the stress is its Taylor series (see
+    /// [`Self::stress_and_tangent`]); public so that a batched evaluation
+    /// of the law can switch where the scalar one does.
+    pub const TENSION_SERIES_BELOW: f64 = SERIES_BELOW;
+
     /// A fibre with no compression stiffness, validated.
     pub fn new(modulus: f64, crimp_strain: f64) -> Result<Self, MaterialError> {
         let law = Self {

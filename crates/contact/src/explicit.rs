@@ -281,10 +281,17 @@ struct Scratch {
     projected: Vec<Vec<Projected>>,
     /// Each tool's displacement at the start of the step (for the guard).
     tool_before: Vec<f64>,
+    /// Per node, whether it is inside the tool's grown box (broad phase).
+    inside: Vec<bool>,
 }
 
 impl ExplicitContact {
     /// A pass over `node_count` nodes.
+    ///
+    /// The lists that grow with the number of contact pairs take room for
+    /// one pair per node from the start, so that a step in which more nodes
+    /// come into contact does not allocate (a node held by two tools at
+    /// once can still grow them, once).
     pub fn new(tools: Vec<Tool>, node_count: usize, settings: ContactSettings) -> Self {
         let n_tools = tools.len();
         Self {
@@ -299,11 +306,26 @@ impl ExplicitContact {
             candidates: vec![Vec::new(); n_tools],
             reference_x: Vec::new(),
             reference_tool: vec![f64::NAN; n_tools],
-            constraints: Vec::new(),
+            constraints: Vec::with_capacity(node_count),
             per_node: vec![0; node_count],
-            touched: Vec::new(),
+            touched: Vec::with_capacity(node_count),
             scratch: Scratch {
                 node_sum: vec![Vector3::zeros(); node_count],
+                r: Vec::with_capacity(node_count),
+                z: Vec::with_capacity(node_count),
+                p: Vec::with_capacity(node_count),
+                q: Vec::with_capacity(node_count),
+                diag: Vec::with_capacity(node_count),
+                free: Vec::with_capacity(node_count),
+                next: Vec::with_capacity(node_count),
+                applied: Vec::with_capacity(node_count),
+                mu: Vec::with_capacity(node_count),
+                added: Vec::with_capacity(node_count),
+                head: vec![u32::MAX; node_count],
+                tool_axis: Vec::with_capacity(n_tools),
+                tool_sum: Vec::with_capacity(n_tools),
+                tool_shift: Vec::with_capacity(n_tools),
+                tool_before: Vec::with_capacity(n_tools),
                 ..Scratch::default()
             },
             phases: None,
@@ -370,10 +392,26 @@ impl ExplicitContact {
                 // New candidates: all projected at the next narrow phase.
                 p.clear();
             }
-            self.candidates[t] = (0..x.len() as u32)
-                .into_par_iter()
-                .filter(|&i| aabb.contains(&x[i as usize]))
-                .collect();
+            // The box test in parallel into a mask, the list compacted from
+            // it in node order into the tool's own list: a rebuild (every
+            // few hundred steps) allocates nothing after the first, whose
+            // list takes room for every node.
+            let inside = &mut self.scratch.inside;
+            inside.resize(x.len(), false);
+            inside
+                .par_iter_mut()
+                .zip(x.par_iter())
+                .with_min_len(NODES_PER_TASK)
+                .for_each(|(m, p)| *m = aabb.contains(p));
+            let list = &mut self.candidates[t];
+            list.clear();
+            list.reserve(x.len());
+            if self.scratch.projected.len() < self.tools.len() {
+                self.scratch.projected.resize(self.tools.len(), Vec::new());
+            }
+            let projected = &mut self.scratch.projected[t];
+            projected.reserve(x.len().saturating_sub(projected.len()));
+            list.extend((0..x.len() as u32).filter(|&i| inside[i as usize]));
         }
         self.reference_x.clear();
         self.reference_x.extend_from_slice(x);

@@ -28,7 +28,10 @@
 //! are computed once in the constructors; history lives in flat `f64`
 //! arrays read from one buffer and written to another, so an evaluation
 //! never allocates and a trial state (a Newton iteration, a finite
-//! difference) never disturbs the committed one.
+//! difference) never disturbs the committed one. The explicit force
+//! passes of trusses and resin-only quads run four elements at a time on
+//! SIMD lanes (`truss_lanes`, `quad_lanes`), with the scalar element as
+//! the reference: same operations in the same order, equal bit for bit.
 //!
 //! ```
 //! use drape_constitutive::Material;
@@ -55,10 +58,12 @@
 //! ```
 
 mod bending;
+mod lanes;
 mod membrane;
 mod quad_lanes;
 mod spring;
 mod truss;
+mod truss_lanes;
 
 pub use bending::{BendingBatch, YarnTriplet, yarn_triplets};
 pub use drape_kinematics::{Degeneracy, KinematicsError, Matrix2, Matrix3x2, Vector2, Vector3};

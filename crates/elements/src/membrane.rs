@@ -10,7 +10,8 @@ use drape_kinematics::{
 use nalgebra::{DMatrix, Matrix2, Matrix3x2, Vector2, Vector3};
 use rayon::prelude::*;
 
-use crate::quad_lanes::{LANES, QuadLanes, ResinStep};
+use crate::lanes::LANES;
+use crate::quad_lanes::{QuadLanes, ResinStep};
 use crate::{ElementError, MIN_CHUNK, lowest_error};
 
 mod locking;

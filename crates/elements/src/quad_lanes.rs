@@ -1,7 +1,7 @@
 //! Resin-only quad membranes four elements at a time: the same arithmetic
 //! as the scalar path ([`crate::MembraneBatch`]'s `point_response` and
-//! `add_nodal_forces`), operation for operation, on `wide::f64x4` lanes
-//! over struct-of-arrays reference data.
+//! `add_nodal_forces`), operation for operation, on [`f64x4`] lanes over
+//! struct-of-arrays reference data.
 //!
 //! What it is for: the explicit force pass of the paper's representation
 //! (yarns as trusses, the membrane carrying the resin only), the bulk of an
@@ -14,89 +14,17 @@
 //! so does any block with a degenerate or non-finite point, which the
 //! scalar path then names.
 //!
-//! Instruction set: the lanes are plain `[f64; 4]` with element-wise
-//! operators that the compiler turns into vector instructions; the kernel
-//! is compiled twice, for the target's baseline (two SSE2 operations per
+//! Instruction set: see [`crate::lanes`]; the kernel is compiled twice, for the target's baseline (two SSE2 operations per
 //! lane operation on x86-64) and with AVX2 enabled (one), and
 //! [`QuadLanes::block_forces`] picks the second at run time when the
 //! processor has it. Neither contracts a multiply and an add into an FMA,
 //! so both give the same bits.
 
-use std::ops::{Add, AddAssign, Div, Mul, Sub};
-
 use drape_kinematics::Vector2;
+
+use crate::lanes::{LANES, f64x4};
 use nalgebra::Vector3;
 
-/// Four f64 lanes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[repr(C, align(32))]
-#[allow(non_camel_case_types)]
-pub(crate) struct f64x4([f64; 4]);
-
-macro_rules! lane_op {
-    ($trait:ident, $method:ident, $op:tt) => {
-        impl $trait for f64x4 {
-            type Output = f64x4;
-            #[inline(always)]
-            fn $method(self, rhs: f64x4) -> f64x4 {
-                f64x4([
-                    self.0[0] $op rhs.0[0],
-                    self.0[1] $op rhs.0[1],
-                    self.0[2] $op rhs.0[2],
-                    self.0[3] $op rhs.0[3],
-                ])
-            }
-        }
-    };
-}
-lane_op!(Add, add, +);
-lane_op!(Sub, sub, -);
-lane_op!(Mul, mul, *);
-lane_op!(Div, div, /);
-
-impl AddAssign for f64x4 {
-    #[inline(always)]
-    fn add_assign(&mut self, rhs: f64x4) {
-        *self = *self + rhs;
-    }
-}
-
-impl f64x4 {
-    #[inline(always)]
-    fn new(v: [f64; 4]) -> Self {
-        Self(v)
-    }
-
-    #[inline(always)]
-    fn splat(v: f64) -> Self {
-        Self([v; 4])
-    }
-
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        Self(self.0.map(f64::sqrt))
-    }
-
-    #[inline(always)]
-    fn to_array(self) -> [f64; 4] {
-        self.0
-    }
-
-    /// Whether every lane is finite.
-    #[inline(always)]
-    fn all_finite(self) -> bool {
-        self.0.iter().fold(true, |ok, v| ok & v.is_finite())
-    }
-
-    /// Whether every lane is above `rhs`'s (false for a NaN).
-    #[inline(always)]
-    fn all_gt(self, rhs: f64x4) -> bool {
-        (0..4).fold(true, |ok, k| ok & (self.0[k] > rhs.0[k]))
-    }
-}
-
-/// Elements per block.
-pub(crate) const LANES: usize = 4;
 const NODES: usize = 4;
 const POINTS: usize = 4;
 /// As in `drape_kinematics::right_stretch`.
@@ -211,7 +139,7 @@ impl QuadLanes {
 
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn block_forces_lanes(
+    pub(crate) fn block_forces_lanes(
         &self,
         b: usize,
         nodes: &[u32],
@@ -222,20 +150,34 @@ impl QuadLanes {
         resin: &ResinStep<'_>,
         slots: &mut [Vector3<f64>],
     ) -> bool {
-        debug_assert_eq!(nodes.len(), LANES * NODES);
-        debug_assert_eq!(slots.len(), LANES * NODES);
         let eh = stride * POINTS;
+        // Fixed-size views and explicit loops, no `array::from_fn`: its
+        // closures are generic code compiled without this function's target
+        // features, so they were not inlined and every lane crossed a call.
+        let nodes: &[u32; LANES * NODES] = nodes.try_into().expect("a block's nodes");
+        let slots: &mut [Vector3<f64>; LANES * NODES] =
+            slots.try_into().expect("a block's force slots");
+        assert!(h_in.len() == LANES * eh && h_out.len() == LANES * eh);
+        let used = if resin.prony.is_empty() {
+            6
+        } else {
+            7 + resin.prony.len()
+        };
+        assert!(stride >= used);
         // Nodal positions, [node][component] across the lanes.
-        let xe: [[f64x4; 3]; NODES] = std::array::from_fn(|a| {
-            let p = |k: usize| x[nodes[k * NODES + a] as usize];
-            let (p0, p1, p2, p3) = (p(0), p(1), p(2), p(3));
-            std::array::from_fn(|c| lanes([p0[c], p1[c], p2[c], p3[c]]))
-        });
+        let mut xe = [[f64x4::splat(0.0); 3]; NODES];
+        for (a, xa) in xe.iter_mut().enumerate() {
+            for k in 0..LANES {
+                let p = &x[nodes[k * NODES + a] as usize];
+                for (c, v) in xa.iter_mut().enumerate() {
+                    v.0[k] = p[c];
+                }
+            }
+        }
         let zero = f64x4::splat(0.0);
         let half = f64x4::splat(0.5);
         let mut force = [[zero; 3]; NODES];
         let mut ok = true;
-        let history = |h: &[f64], k: usize, p: usize, i: usize| h[k * eh + p * stride + i];
         for p in 0..POINTS {
             let grad = &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES];
             // F = Σₐ xₐ ⊗ ∇Nₐ (from zero, node by node).
@@ -270,7 +212,10 @@ impl QuadLanes {
                 (tr_u - u11) / det_u,
             );
             // Rotated strain increment from the committed U.
-            let un = |i: usize| lanes(std::array::from_fn(|k| history(h_in, k, p, i)));
+            let at = p * stride;
+            let hk = |k: usize| &h_in[k * eh + at..k * eh + at + stride];
+            let (h0, h1, h2, h3) = (hk(0), hk(1), hk(2), hk(3));
+            let un = |i: usize| lanes([h0[i], h1[i], h2[i], h3[i]]);
             let (n00, n11, n01) = (un(0), un(1), un(2));
             let (m00, m01, m11) = ((n00 + u00) * half, (n01 + u01) * half, (n11 + u11) * half);
             let det_m = m00 * m11 - m01 * m01;
@@ -321,12 +266,13 @@ impl QuadLanes {
             let b10 = a10 * ui00 + a11 * ui01;
             let b11 = a10 * ui01 + a11 * ui11;
             let h = f64x4::splat(resin.thickness);
-            let piola: [[f64x4; 2]; 3] = std::array::from_fn(|i| {
-                [
-                    (f[i][0] * b00 + f[i][1] * b10) * h,
-                    (f[i][0] * b01 + f[i][1] * b11) * h,
-                ]
-            });
+            let mut piola = [[zero; 2]; 3];
+            for (pi, fi) in piola.iter_mut().zip(&f) {
+                *pi = [
+                    (fi[0] * b00 + fi[1] * b10) * h,
+                    (fi[0] * b01 + fi[1] * b11) * h,
+                ];
+            }
             // fₐ += (P·∇Nₐ)·A.
             let area = self.area[b * POINTS + p];
             for (fa, ga) in force.iter_mut().zip(grad) {
@@ -336,9 +282,8 @@ impl QuadLanes {
             }
         }
         for (a, fa) in force.iter().enumerate() {
-            let [fx, fy, fz] = fa.map(|v| v.to_array());
             for k in 0..LANES {
-                slots[k * NODES + a] = Vector3::new(fx[k], fy[k], fz[k]);
+                slots[k * NODES + a] = Vector3::new(fa[0].0[k], fa[1].0[k], fa[2].0[k]);
             }
         }
         ok
@@ -347,7 +292,7 @@ impl QuadLanes {
 
 #[inline(always)]
 fn write_lanes(h: &mut [f64], eh: usize, stride: usize, p: usize, i: usize, v: f64x4) {
-    for (k, value) in v.to_array().into_iter().enumerate() {
-        h[k * eh + p * stride + i] = value;
+    for k in 0..LANES {
+        h[k * eh + p * stride + i] = v.0[k];
     }
 }

@@ -693,6 +693,25 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                 &resin,
                 &mut f
             ));
+            // The baseline build of the kernel gives the dispatched one's
+            // bits (on a processor with AVX2 the dispatch takes the other).
+            let (mut f_base, mut out_base) = ([Vector3::zeros(); 16], vec![0.0; 4 * eh]);
+            assert!(lanes.block_forces_lanes(
+                1,
+                &b.nodes[16..32],
+                &x,
+                &h[4 * eh..8 * eh],
+                &mut out_base,
+                b.stride,
+                &resin,
+                &mut f_base
+            ));
+            assert_eq!(f, f_base);
+            assert!(
+                out.iter()
+                    .zip(&out_base)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
             // Stated round-off: none. The lanes do the scalar operations in
             // the scalar order, without fused multiply-adds.
             for (e, (f, g)) in slots.iter().zip(&expected).enumerate() {

@@ -17,6 +17,9 @@ use super::ResultsError;
 /// The lock file's name in an output folder.
 pub const LOCK_FILE: &str = ".drape.lock";
 
+/// Retries, 10 ms apart, before a held lock is reported busy.
+const LOCK_RETRIES: usize = 50;
+
 /// A claim on an output folder, held until dropped.
 #[derive(Debug)]
 pub struct OutputLock {
@@ -42,7 +45,19 @@ impl OutputLock {
             .truncate(false)
             .open(&path)
             .map_err(at)?;
-        match file.try_lock() {
+        // A lock just released can still be held for a moment by a child
+        // process forked (by another thread of the same program) before it
+        // closed the inherited descriptor at exec: retry briefly before
+        // calling the folder busy.
+        let mut attempt = file.try_lock();
+        for _ in 0..LOCK_RETRIES {
+            if !matches!(attempt, Err(TryLockError::WouldBlock)) {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+            attempt = file.try_lock();
+        }
+        match attempt {
             Ok(()) => {}
             Err(TryLockError::WouldBlock) => {
                 let mut holder = String::new();

@@ -64,6 +64,7 @@ mod vtk;
 pub use lock::{LOCK_FILE, OutputLock};
 pub use pictures::maps::MapPanel;
 pub use pictures::sweep::{SweepAxis, SweepRun};
+pub use pictures::work_precision::{WorkPrecisionPanel, WorkPrecisionPoint, pareto_front};
 pub use summary::{Peaks, RunSetup, max_yarn_tension};
 pub use tools::{ToolMesh, ToolMeshes};
 
@@ -624,6 +625,24 @@ pub fn write_sweep_picture(
     let png = pictures::sweep::sweep_png(axes, runs).map_err(|e| ResultsError {
         path: path.to_owned(),
         source: std::io::Error::other(e),
+    })?;
+    crate::atomic::write(path, &png).map_err(at(path))
+}
+
+/// Writes the PNG `path` of a work-precision study: run time against each
+/// error of `panels` for every setting of `points`, with the Pareto front
+/// (see `cargo xtask bench work-precision`).
+pub fn write_work_precision_picture(
+    path: &Path,
+    title: &str,
+    panels: &[WorkPrecisionPanel],
+    points: &[WorkPrecisionPoint],
+) -> Result<(), ResultsError> {
+    let png = pictures::work_precision::work_precision_png(title, panels, points).map_err(|e| {
+        ResultsError {
+            path: path.to_owned(),
+            source: std::io::Error::other(e),
+        }
     })?;
     crate::atomic::write(path, &png).map_err(at(path))
 }

@@ -123,13 +123,8 @@ fn panel(
         .map(|p| (p.number, p.wall_s, p.errors[k].max(0.0)))
         .collect();
     let (x0, x1) = log_range(drawn.iter().map(|d| d.1)).unwrap_or((0.1, 10.0));
-    let (y0, y1) = log_range(
-        drawn
-            .iter()
-            .map(|d| d.2)
-            .chain(panel.target.into_iter()),
-    )
-    .unwrap_or((0.01, 1.0));
+    let (y0, y1) =
+        log_range(drawn.iter().map(|d| d.2).chain(panel.target.into_iter())).unwrap_or((0.01, 1.0));
     // A zero error sits on the bottom edge.
     let y_of = |e: f64| e.max(y0);
     let mut chart = ChartBuilder::on(area)
@@ -162,7 +157,10 @@ fn panel(
             .map_err(drawing)?
             .label(format!("target {}", short(t)))
             .legend(|(x, y)| {
-                PathElement::new(vec![(x - 10, y), (x + 10, y)], TARGET_COLOUR.stroke_width(1))
+                PathElement::new(
+                    vec![(x - 10, y), (x + 10, y)],
+                    TARGET_COLOUR.stroke_width(1),
+                )
             });
     }
     let xy: Vec<(f64, f64)> = drawn.iter().map(|d| (d.1, d.2)).collect();
@@ -207,7 +205,9 @@ fn panel(
                 )])
                 .map_err(drawing)?
                 .label(format!("{}: shipped setting", p.number))
-                .legend(|(x, y)| Rectangle::new([(x - 5, y - 5), (x + 5, y + 5)], DEFAULT_COLOUR.filled()));
+                .legend(|(x, y)| {
+                    Rectangle::new([(x - 5, y - 5), (x + 5, y + 5)], DEFAULT_COLOUR.filled())
+                });
         }
     }
     chart

@@ -13,7 +13,7 @@
 //!   profile and 1- vs 2-thread table (`benches/benches/step_profile.rs`),
 //!   then the criterion benches, `cargo bench -p drape-benches ARGS…`;
 //! - `bench work-precision [--quick] [--filter SUBSTR] [--fresh-reference]
-//!   [--timeout S] [--reference-cells N]`: run time against error for the hemisphere's ways to go
+//!   [--timeout S] [--reference-cells N] [--time wall|cpu]`: run time against error for the hemisphere's ways to go
 //!   faster (see [`work_precision`]);
 //! - `ci`: what CI runs, the script `.ci/run`.
 //!
@@ -60,7 +60,7 @@ tasks:
       measurement times; --profile-only stops after the tables.
       DRAPE_BENCH_CLOCK=thread-cpu times one-thread figures by CPU time.
   bench work-precision [--quick] [--filter SUBSTR] [--fresh-reference] [--timeout S]
-                       [--reference-cells N]
+                       [--reference-cells N] [--time wall|cpu]
       the hemisphere's run time against its error for each way to run it
       faster (mesh, mass scaling, process time, fibres, threads, implicit
       increments), against a cached reference solution; writes

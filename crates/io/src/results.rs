@@ -630,20 +630,21 @@ pub fn write_sweep_picture(
 }
 
 /// Writes the PNG `path` of a work-precision study: run time against each
-/// error of `panels` for every setting of `points`, with the Pareto front
+/// error of `panels` for every setting of `points` (time axis described by
+/// `time_label`), with the Pareto front
 /// (see `cargo xtask bench work-precision`).
 pub fn write_work_precision_picture(
     path: &Path,
     title: &str,
+    time_label: &str,
     panels: &[WorkPrecisionPanel],
     points: &[WorkPrecisionPoint],
 ) -> Result<(), ResultsError> {
-    let png = pictures::work_precision::work_precision_png(title, panels, points).map_err(|e| {
-        ResultsError {
+    let png = pictures::work_precision::work_precision_png(title, time_label, panels, points)
+        .map_err(|e| ResultsError {
             path: path.to_owned(),
             source: std::io::Error::other(e),
-        }
-    })?;
+        })?;
     crate::atomic::write(path, &png).map_err(at(path))
 }
 

@@ -20,7 +20,8 @@ use super::{FAMILY, Result, drawing, render};
 pub struct WorkPrecisionPoint {
     /// Its number in the bench's table (drawn beside the marker).
     pub number: usize,
-    /// Run time (s); a non-finite or non-positive time is not drawn.
+    /// Run time (s, the picture's time axis); a non-finite or non-positive
+    /// time is not drawn.
     pub wall_s: f64,
     /// One error per panel; a non-finite error is not drawn.
     pub errors: Vec<f64>,
@@ -86,6 +87,7 @@ fn log_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
 /// The PNG of `points`, one panel per entry of `panels` side by side.
 pub(in crate::results) fn work_precision_png(
     title: &str,
+    time_label: &str,
     panels: &[WorkPrecisionPanel],
     points: &[WorkPrecisionPoint],
 ) -> Result<Vec<u8>> {
@@ -105,7 +107,7 @@ pub(in crate::results) fn work_precision_png(
         let body = root.titled(title, (FAMILY, 22)).map_err(drawing)?;
         let areas = body.split_evenly((1, panels.len()));
         for (k, area) in areas.iter().enumerate() {
-            panel(area, &panels[k], points, k)?;
+            panel(area, time_label, &panels[k], points, k)?;
         }
         Ok(())
     })
@@ -113,6 +115,7 @@ pub(in crate::results) fn work_precision_png(
 
 fn panel(
     area: &super::Canvas<'_>,
+    time_label: &str,
     panel: &WorkPrecisionPanel,
     points: &[WorkPrecisionPoint],
     k: usize,
@@ -138,7 +141,7 @@ fn panel(
         .max_light_lines(1)
         .light_line_style(RGBColor(242, 242, 242))
         .bold_line_style(RGBColor(222, 222, 222))
-        .x_desc("wall time (s)")
+        .x_desc(time_label)
         .y_desc(panel.label.as_str())
         .x_label_formatter(&|v| short(*v))
         .y_label_formatter(&|v| short(*v))
@@ -274,11 +277,11 @@ mod tests {
                 target: None,
             },
         ];
-        let png = work_precision_png("test", &panels, &points).unwrap();
+        let png = work_precision_png("test", "wall time (s)", &panels, &points).unwrap();
         assert_eq!(&png[1..4], b"PNG");
         let mut wrong = points.clone();
         wrong[0].errors.pop();
-        assert!(work_precision_png("test", &panels, &wrong).is_err());
-        assert!(work_precision_png("test", &[], &points).is_err());
+        assert!(work_precision_png("test", "wall time (s)", &panels, &wrong).is_err());
+        assert!(work_precision_png("test", "wall time (s)", &[], &points).is_err());
     }
 }

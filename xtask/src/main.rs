@@ -69,7 +69,7 @@ tasks:
       version CI can afford.
   ci
       run what CI runs (.ci/run): the test suite, the quick validation,
-      then the quick stress suite";
+      the quick stress suite and the quick work-precision bench";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();

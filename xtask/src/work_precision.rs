@@ -186,6 +186,9 @@ impl Options {
     }
 }
 
+/// `--set key=value` pairs.
+type Overrides = Vec<(String, String)>;
+
 /// One setting: the scene's overrides and the thread count.
 #[derive(Debug, Clone)]
 struct Row {
@@ -259,10 +262,7 @@ impl Row {
 }
 
 /// The reference's overrides (besides the scene), and the rows.
-fn plan(
-    quick: bool,
-    reference_cells: Option<u32>,
-) -> Result<(Vec<(String, String)>, Vec<Row>), String> {
+fn plan(quick: bool, reference_cells: Option<u32>) -> Result<(Overrides, Vec<Row>), String> {
     let quiet = [set("output.vtu", false), set("output.pictures", false)];
     let n_ref = reference_cells.unwrap_or(if quick { 10 } else { 60 });
     // No mass scaling, the scene's own process time and safety factor

@@ -126,8 +126,7 @@ fn panel(
         .map(|p| (p.number, p.wall_s, p.errors[k].max(0.0)))
         .collect();
     let (x0, x1) = log_range(drawn.iter().map(|d| d.1)).unwrap_or((0.1, 10.0));
-    let (y0, y1) =
-        log_range(drawn.iter().map(|d| d.2).chain(panel.target.into_iter())).unwrap_or((0.01, 1.0));
+    let (y0, y1) = log_range(drawn.iter().map(|d| d.2).chain(panel.target)).unwrap_or((0.01, 1.0));
     // A zero error sits on the bottom edge.
     let y_of = |e: f64| e.max(y0);
     let mut chart = ChartBuilder::on(area)
@@ -199,19 +198,19 @@ fn panel(
                 + Text::new(number.to_string(), (5, -15), (FAMILY, 13).into_font())
         }))
         .map_err(drawing)?;
-    if let Some(p) = points.iter().find(|p| p.default) {
-        if p.wall_s.is_finite() && p.wall_s > 0.0 && p.errors[k].is_finite() {
-            chart
-                .draw_series([Rectangle::new(
-                    [(p.wall_s, y_of(p.errors[k])), (p.wall_s, y_of(p.errors[k]))],
-                    DEFAULT_COLOUR.filled(),
-                )])
-                .map_err(drawing)?
-                .label(format!("{}: shipped setting", p.number))
-                .legend(|(x, y)| {
-                    Rectangle::new([(x - 5, y - 5), (x + 5, y + 5)], DEFAULT_COLOUR.filled())
-                });
-        }
+    // The shipped setting: a red square over its dot, named in the legend.
+    if let Some(p) = points
+        .iter()
+        .find(|p| p.default && p.wall_s.is_finite() && p.wall_s > 0.0 && p.errors[k].is_finite())
+    {
+        chart
+            .draw_series([EmptyElement::at((p.wall_s, y_of(p.errors[k])))
+                + Rectangle::new([(-6, -6), (6, 6)], DEFAULT_COLOUR.filled())])
+            .map_err(drawing)?
+            .label(format!("{}: shipped setting", p.number))
+            .legend(|(x, y)| {
+                Rectangle::new([(x - 5, y - 5), (x + 5, y + 5)], DEFAULT_COLOUR.filled())
+            });
     }
     chart
         .configure_series_labels()

@@ -48,8 +48,9 @@
 //! reference's mesh (default 60 × 60 in full mode).
 //!
 //! Not a validation case: nothing here passes or fails on accuracy. The
-//! bench fails only when a row that must run is refused, or a run does not
-//! complete.
+//! bench fails when a row that must run is refused, and in quick mode when
+//! a run does not complete (a full-mode row that fails, such as a process
+//! time too short for the contact, is a row of the table).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -922,10 +923,20 @@ fn study(options: &Options, root: &Path, target: &Path) -> Result<(), String> {
     if !options.quick && options.filter.is_none() {
         update_readme(root, &markdown, &png_path)?;
     }
-    if failed.is_empty() {
-        Ok(())
-    } else {
-        Err(format!("rows that did not complete: {}", failed.join(", ")))
+    // A setting too aggressive to finish (a process time so short that the
+    // punch outruns the contact) is a finding of the full study, reported
+    // in its table; the quick rows are chosen to complete, so CI checks
+    // that they do.
+    match (failed.is_empty(), options.quick) {
+        (true, _) => Ok(()),
+        (false, false) => {
+            println!(
+                "rows that did not complete (see the table): {}",
+                failed.join(", ")
+            );
+            Ok(())
+        }
+        (false, true) => Err(format!("rows that did not complete: {}", failed.join(", "))),
     }
 }
 
@@ -1242,6 +1253,12 @@ fn prony_table(measured: &[Measured], prony: &[Measured]) -> String {
         else {
             continue;
         };
+        // A run that failed keeps its last frame, not the end of the
+        // stroke: no change to compare.
+        if !eo.completed() || !vo.completed() {
+            let _ = writeln!(md, "| {t} | did not complete | | | | | | |");
+            continue;
+        }
         let dv = vo.max_shear_deg - vb.max_shear_deg;
         let de = eo.max_shear_deg - eb.max_shear_deg;
         let _ = writeln!(

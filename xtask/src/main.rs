@@ -12,6 +12,9 @@
 //! - `bench [--quick] [--profile-only] [ARGS…]`: the explicit step's per-pass
 //!   profile and 1- vs 2-thread table (`benches/benches/step_profile.rs`),
 //!   then the criterion benches, `cargo bench -p drape-benches ARGS…`;
+//! - `bench work-precision [--quick] [--filter SUBSTR] [--fresh-reference]
+//!   [--timeout S] [--reference-cells N] [--time wall|cpu]`: run time against error for the hemisphere's ways to go
+//!   faster (see [`work_precision`]);
 //! - `ci`: what CI runs, the script `.ci/run`.
 //!
 //! Only std and the workspace's own dependencies: an xtask that needs a
@@ -23,6 +26,7 @@ use std::process::{Command, ExitCode};
 mod fit;
 mod stress;
 mod validate;
+mod work_precision;
 
 const USAGE: &str = "\
 usage: cargo xtask <task> [options]
@@ -55,9 +59,17 @@ tasks:
       windows and runs the criterion benches with short warm-up and
       measurement times; --profile-only stops after the tables.
       DRAPE_BENCH_CLOCK=thread-cpu times one-thread figures by CPU time.
+  bench work-precision [--quick] [--filter SUBSTR] [--fresh-reference] [--timeout S]
+                       [--reference-cells N] [--time wall|cpu]
+      the hemisphere's run time against its error for each way to run it
+      faster (mesh, mass scaling, process time, fibres, threads, implicit
+      increments), against a cached reference solution; writes
+      target/bench/work-precision.{csv,png,md} (a full run without
+      --filter also updates the README's section). --quick is the coarse
+      version CI can afford.
   ci
       run what CI runs (.ci/run): the test suite, the quick validation,
-      then the quick stress suite";
+      the quick stress suite and the quick work-precision bench";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -96,6 +108,12 @@ fn main() -> ExitCode {
 
 /// The step profile, then (unless `--profile-only`) the criterion benches.
 fn bench(args: &[String]) -> ExitCode {
+    if let Some(("work-precision", rest)) = args.split_first().map(|(a, r)| (a.as_str(), r)) {
+        return match work_precision::Options::parse(rest) {
+            Ok(options) => work_precision::main(&options, &workspace_root(), &target_dir()),
+            Err(message) => usage_error(&message),
+        };
+    }
     let quick = args.iter().any(|a| a == "--quick");
     let profile_only = args.iter().any(|a| a == "--profile-only");
     let mut rest: Vec<&str> = args

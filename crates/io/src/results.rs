@@ -66,6 +66,7 @@ mod vtk;
 pub use lock::{LOCK_FILE, OutputLock};
 pub use pictures::maps::MapPanel;
 pub use pictures::sweep::{SweepAxis, SweepRun};
+pub use pictures::work_precision::{WorkPrecisionPanel, WorkPrecisionPoint, pareto_front};
 pub use summary::{Peaks, RunSetup, max_yarn_tension};
 pub use tools::{ToolMesh, ToolMeshes};
 
@@ -674,6 +675,25 @@ pub fn write_sweep_picture(
         path: path.to_owned(),
         source: std::io::Error::other(e),
     })?;
+    crate::atomic::write(path, &png).map_err(at(path))
+}
+
+/// Writes the PNG `path` of a work-precision study: run time against each
+/// error of `panels` for every setting of `points` (time axis described by
+/// `time_label`), with the Pareto front
+/// (see `cargo xtask bench work-precision`).
+pub fn write_work_precision_picture(
+    path: &Path,
+    title: &str,
+    time_label: &str,
+    panels: &[WorkPrecisionPanel],
+    points: &[WorkPrecisionPoint],
+) -> Result<(), ResultsError> {
+    let png = pictures::work_precision::work_precision_png(title, time_label, panels, points)
+        .map_err(|e| ResultsError {
+            path: path.to_owned(),
+            source: std::io::Error::other(e),
+        })?;
     crate::atomic::write(path, &png).map_err(at(path))
 }
 

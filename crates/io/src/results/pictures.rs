@@ -15,6 +15,7 @@ pub(super) mod maps;
 pub(super) mod oblique;
 pub(super) mod sweep;
 mod text;
+pub(super) mod work_precision;
 
 use std::collections::BTreeMap;
 use std::sync::OnceLock;

@@ -27,7 +27,10 @@ use std::time::Duration;
 use drape_benches::{Clock, Stopwatch};
 use drape_io::scene::Scene;
 use drape_model::State;
-use drape_time::{Explicit, ExplicitSettings, NoObserver, ProfileClock, StepProfile, profile};
+use drape_time::{
+    DriverState, Explicit, ExplicitSettings, NoObserver, Observer, ProfileClock, StepProfile,
+    profile,
+};
 
 /// `--set key.path=value` pairs.
 type Overrides = Vec<(String, String)>;
@@ -101,8 +104,8 @@ fn main() {
             m.trusses.iter().map(|b| b.len()).sum::<usize>(),
             m.springs.iter().map(|b| b.len()).sum::<usize>(),
             m.tools.len(),
-            warm.step,
-            warm.step + window.steps,
+            warm.state.step,
+            warm.state.step + window.steps,
             load_average(),
         );
         for threads in [1, 2] {
@@ -186,20 +189,49 @@ fn settings(scene: &Scene, steps: u64) -> ExplicitSettings {
     }
 }
 
-/// The scene's state after `steps` steps on all threads.
-fn advance(scene: &Scene, steps: u64) -> State {
-    let mut state = scene.model.initial_state();
-    let mut driver = Explicit::new(&scene.model, settings(scene, steps)).expect("driver");
-    driver
-        .run(&mut state, &mut NoObserver)
-        .expect("warm-up run");
-    state
+/// A run stopped part way: its state and what its driver carries (the
+/// tools' positions and velocities, the step size), so that a new driver
+/// continues it instead of restarting the tools at their start.
+struct Warm {
+    state: State,
+    driver: DriverState,
 }
 
-fn profile_steps(scene: &Scene, start: &State, steps: u64, clock: ProfileClock) -> StepProfile {
+/// Keeps the last checkpoint a run hands out.
+struct LastCheckpoint(Option<DriverState>);
+impl Observer for LastCheckpoint {
+    fn checkpoint(&mut self, _state: &State, driver: &DriverState) {
+        self.0 = Some(driver.clone());
+    }
+}
+
+/// The scene's run after `steps` steps on all threads.
+fn advance(scene: &Scene, steps: u64) -> Warm {
+    let mut state = scene.model.initial_state();
+    let settings = ExplicitSettings {
+        checkpoint_every: Some(steps.max(1)),
+        ..settings(scene, steps)
+    };
+    let mut driver = Explicit::new(&scene.model, settings).expect("driver");
+    let mut last = LastCheckpoint(None);
+    driver.run(&mut state, &mut last).expect("warm-up run");
+    Warm {
+        state,
+        driver: last.0.expect("a checkpoint at the end of the warm-up"),
+    }
+}
+
+/// A driver for `steps` more steps that continues `warm`.
+fn continuing<'m>(scene: &'m Scene, warm: &Warm, steps: u64) -> Explicit<'m> {
     let mut driver = Explicit::new(&scene.model, settings(scene, steps)).expect("driver");
+    driver.resume_from(warm.driver.clone());
+    driver
+}
+
+fn profile_steps(scene: &Scene, start: &Warm, steps: u64, clock: ProfileClock) -> StepProfile {
+    let mut driver = continuing(scene, start, steps);
     driver.enable_profile(clock);
-    let mut state = start.clone();
+    let mut state = start.state.clone();
     driver
         .run(&mut state, &mut NoObserver)
         .expect("profiled run");
@@ -208,10 +240,10 @@ fn profile_steps(scene: &Scene, start: &State, steps: u64, clock: ProfileClock) 
 
 /// Time of `steps` steps from `start` (the driver's set-up and its first
 /// force pass not counted: they are a second run of one step, subtracted).
-fn time_steps(scene: &Scene, start: &State, steps: u64, clock: Clock) -> Duration {
+fn time_steps(scene: &Scene, start: &Warm, steps: u64, clock: Clock) -> Duration {
     let run = |n: u64| {
-        let mut driver = Explicit::new(&scene.model, settings(scene, n)).expect("driver");
-        let mut state = start.clone();
+        let mut driver = continuing(scene, start, n);
+        let mut state = start.state.clone();
         let watch = Stopwatch::start(clock);
         driver.run(&mut state, &mut NoObserver).expect("timed run");
         watch.elapsed()

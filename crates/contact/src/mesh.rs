@@ -398,6 +398,7 @@ impl std::fmt::Debug for MeshSurface {
 mod tests {
     use super::*;
     use crate::Surface;
+    use crate::surface::tests::lipschitz;
     use std::collections::HashMap;
 
     /// An icosahedron subdivided `levels` times, vertices on the sphere of
@@ -827,17 +828,6 @@ mod tests {
         );
         let message = SurfaceError::from(e).to_string();
         assert!(message.contains("triangles 0 and 1"), "{message}");
-    }
-
-    /// |g(a) − g(b)| ≤ |a − b| up to round-off.
-    fn lipschitz(s: &Surface, a: &Vector3<f64>, b: &Vector3<f64>) -> Result<(), String> {
-        let (ga, gb) = (s.project(a).gap, s.project(b).gap);
-        let d = (a - b).norm();
-        if (ga - gb).abs() <= d + 1e-12 * (1.0 + a.norm() + b.norm()) {
-            Ok(())
-        } else {
-            Err(format!("g({a:?}) = {ga}, g({b:?}) = {gb}, |a − b| = {d}"))
-        }
     }
 
     /// Points on every edge (midpoint and a point near one end) and every

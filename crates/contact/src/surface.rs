@@ -666,7 +666,7 @@ impl Surface {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use proptest::prelude::*;
 
@@ -891,7 +891,7 @@ mod tests {
     }
 
     /// |g(a) − g(b)| ≤ |a − b|, up to round-off of the coordinates.
-    fn lipschitz(s: &Surface, a: &Vector3<f64>, b: &Vector3<f64>) -> Result<(), String> {
+    pub(crate) fn lipschitz(s: &Surface, a: &Vector3<f64>, b: &Vector3<f64>) -> Result<(), String> {
         let (ga, gb) = (s.project(a).gap, s.project(b).gap);
         let d = (a - b).norm();
         if (ga - gb).abs() <= d + 1e-12 * (1.0 + a.norm() + b.norm()) {

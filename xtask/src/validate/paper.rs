@@ -241,12 +241,7 @@ fn hemisphere_table_2() -> Vec<Check> {
             .iter()
             .map(|mu| {
                 let o = find(&outcomes, orientation, &format!("μ = {mu}"));
-                let points = if line == "diagonal" {
-                    &o.profile_diagonal
-                } else {
-                    &o.profile_median
-                };
-                (format!("μ = {mu}"), points.as_slice())
+                (format!("μ = {mu}"), o.profile(line))
             })
             .collect();
         let title = format!(
@@ -395,14 +390,7 @@ fn deep_drawing_table_4() -> Vec<Check> {
         let curves: Vec<(String, &[ProfilePoint])> = outcomes
             .iter()
             .filter(|o| o.run.orientation == orientation)
-            .map(|o| {
-                let points = if line == "diagonal" {
-                    &o.profile_diagonal
-                } else {
-                    &o.profile_median
-                };
-                (o.run.label.clone(), points.as_slice())
-            })
+            .map(|o| (o.run.label.clone(), o.profile(line)))
             .collect();
         let title = format!(
             "Deep drawing {}: shear along the {line} (paper Fig. 12), {cells}×{cells}",

@@ -157,6 +157,17 @@ pub(super) struct Outcome {
     pub(super) wall_s: f64,
 }
 
+impl Outcome {
+    /// The shear profile along `line`: "diagonal", else the median.
+    pub(super) fn profile(&self, line: &str) -> &[ProfilePoint] {
+        if line == "diagonal" {
+            &self.profile_diagonal
+        } else {
+            &self.profile_median
+        }
+    }
+}
+
 /// The neighbourhood of a holding node left out of "the maximum shear away
 /// from the holding" (mm, in the flat blank): about three cells of the
 /// shipped 40×40 hemisphere mesh (8.75 mm), fixed in millimetres so that it

@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
 mod fit;
+mod holding;
 mod stress;
 mod validate;
 mod work_precision;

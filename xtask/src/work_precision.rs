@@ -4,17 +4,28 @@
 //! A reference solution of `scenes/hemisphere-0-90.toml` (a finer mesh,
 //! no mass scaling, the scene's own process time) is computed once and
 //! cached in `target/bench/work-precision/reference-<key>/`, the key being
-//! a fingerprint of the scene file and the reference's overrides: reruns
-//! reuse it, `--fresh-reference` recomputes it. Then every setting — the
-//! shipped one, coarser and finer meshes, mass-scaling targets, a shorter
-//! process time (with the viscoelastic resin as is, and with its Prony
-//! times scaled along), embedded fibres instead of trusses, one thread
-//! instead of two, and the implicit solver with its increment sizes when
-//! this drape has one — is a list of scene overrides, exactly as
+//! a fingerprint of the scene as the reference runs it (its values after
+//! the reference's overrides, so a new shipped mass scaling or a comment
+//! keeps it): reruns reuse it, `--fresh-reference` recomputes it. Then
+//! every setting — the shipped one, coarser and finer meshes,
+//! mass-scaling targets, a shorter process time (with the viscoelastic
+//! resin as is, and with its Prony times scaled along), embedded fibres
+//! instead of trusses, one thread instead of two, and the implicit solver
+//! with its increment sizes (on a 10 × 10 blank only: it is too slow for
+//! more, see [`plan`]) — is a list of scene overrides, exactly as
 //! `drape run SCENE --set key=value …` takes them, run by the `drape`
 //! binary one after the other, and compared with the reference:
 //!
 //! - `err_max_shear_deg`: |largest |γ| at the end − the reference's|;
+//! - `err_max_shear_away_deg`: the same for the largest |γ| away from the
+//!   holding (elements more than 25 mm from a spring's node in the flat
+//!   blank, [`crate::holding`], as in the paper cases), from the run's
+//!   `orientations.csv`. **The ≤ 0.5° target ([`TARGET_MAX_SHEAR_DEG`]),
+//!   the Pareto front and the shipped default are judged on this one**
+//!   ([`JUDGED`]): the maximum anywhere sits at a point spring, where the
+//!   shear grows with every refinement (18.7 / 24.2 / 30.9 / 37.2° on 10 /
+//!   20 / 40 / 80 cells), so its error against a finer reference is mostly
+//!   a singularity no finite mesh resolves, not what a setting costs;
 //! - `err_profile_rms_deg`: RMS over the setting's diagonal profile points
 //!   (element centroids near the blank's diagonal, equal distances
 //!   averaged) of its shear minus the reference's profile interpolated
@@ -33,11 +44,12 @@
 //!
 //! Writes `target/bench/work-precision.csv` (`setting, wall_s,
 //! steps_or_increments, err_max_shear_deg, err_profile_rms_deg,
-//! err_draw_in_mm, default`), `target/bench/work-precision.png` (time
+//! err_draw_in_mm, default, err_max_shear_away_deg`: the issue's columns,
+//! then the judged error), `target/bench/work-precision.png` (time
 //! against each error, log–log, the Pareto front drawn) and
 //! `target/bench/work-precision.md` (every row, the front, the fastest
-//! setting within [`TARGET_MAX_SHEAR_DEG`], and how much a shorter process
-//! time changes the Prony response). A full run without `--filter` also
+//! setting within [`TARGET_MAX_SHEAR_DEG`] away from the holding, and how
+//! much a shorter process time changes the Prony response). A full run without `--filter` also
 //! puts that Markdown into the README between its `work-precision` markers
 //! and the picture into `docs/work-precision.png`.
 //!
@@ -64,11 +76,30 @@ use drape_io::results::{
 };
 use drape_io::scene::Scene;
 
+use crate::holding::{AWAY_FROM_HOLDING_MM, max_shear_away};
+
 /// The error in maximum shear a shipped default must stay within (deg).
 pub const TARGET_MAX_SHEAR_DEG: f64 = 0.5;
 
 /// Rows faster than this (s, wall) are run three times, the fastest kept.
 const REPEAT_BELOW_S: f64 = 5.0;
+
+/// Index of the error in maximum shear anywhere in [`Measured::errors`].
+const SHEAR: usize = 0;
+/// Index of the error in maximum shear away from the holding.
+const SHEAR_AWAY: usize = 1;
+/// Index of the diagonal profile's RMS error.
+const PROFILE: usize = 2;
+/// Index of the error in draw-in.
+const DRAW_IN: usize = 3;
+
+/// The error that [`TARGET_MAX_SHEAR_DEG`], the Pareto front and the
+/// choice of a default are judged on: the maximum shear away from the
+/// holding. The maximum anywhere sits at a point spring, where the shear
+/// grows with every refinement (a point load on a membrane), so its error
+/// against a finer reference is mostly that singularity, which no setting
+/// of a coarser mesh can remove, and not what a setting costs in accuracy.
+const JUDGED: usize = SHEAR_AWAY;
 
 /// The scene studied, relative to the workspace root.
 const SCENE: &str = "scenes/hemisphere-0-90.toml";
@@ -262,8 +293,46 @@ impl Row {
     }
 }
 
+/// The shipped scene's mesh and mass-scaling target, which the full
+/// study's rows are named by and varied from.
+#[derive(Debug, Clone, Copy)]
+struct Shipped {
+    /// Cells along each side of the blank.
+    cells: u32,
+    /// `simulation.mass_scaling_dt` (s).
+    mass_scaling_dt: f64,
+}
+
+impl Shipped {
+    /// Reads them from the scene file at `path`.
+    fn of(path: &Path) -> Result<Self, String> {
+        let spec = Scene::from_file(path, &[]).map_err(|e| e.to_string())?.spec;
+        let (cells, mass_scaling_dt) =
+            match (spec.fabric.blank.cells, spec.simulation.mass_scaling_dt) {
+                (Some([nx, ny]), Some(dt)) if nx == ny => (nx, dt),
+                _ => {
+                    return Err(format!(
+                        "{}: the study expects a square blank of `cells = [n, n]` and a \
+                     `mass_scaling_dt`",
+                        path.display()
+                    ));
+                }
+            };
+        let cells =
+            u32::try_from(cells).map_err(|_| format!("{}: {cells} cells", path.display()))?;
+        Ok(Self {
+            cells,
+            mass_scaling_dt,
+        })
+    }
+}
+
 /// The reference's overrides (besides the scene), and the rows.
-fn plan(quick: bool, reference_cells: Option<u32>) -> Result<(Overrides, Vec<Row>), String> {
+fn plan(
+    quick: bool,
+    reference_cells: Option<u32>,
+    shipped: Shipped,
+) -> Result<(Overrides, Vec<Row>), String> {
     let quiet = [set("output.vtu", false), set("output.pictures", false)];
     let n_ref = reference_cells.unwrap_or(if quick { 10 } else { 60 });
     // No mass scaling, the scene's own process time and safety factor
@@ -321,61 +390,93 @@ fn plan(quick: bool, reference_cells: Option<u32>) -> Result<(Overrides, Vec<Row
         implicit.optional = true;
         rows.push(implicit);
     } else {
-        let mut shipped = Row::new("shipped", "40x40 ms2e-5 (shipped)", Vec::new());
-        shipped.default = true;
-        rows.push(shipped);
-        // Finer meshes are the mesh-convergence case's (`cargo xtask
-        // validate --filter mesh-convergence`).
+        let (n0, dt0) = (shipped.cells, shipped.mass_scaling_dt);
+        let mut row = Row::new(
+            "shipped",
+            &format!("{n0}x{n0} ms{dt0:e} (shipped)"),
+            Vec::new(),
+        );
+        row.default = true;
+        rows.push(row);
+        // The shipped setting is the row above; the others name every
+        // value they change, so that they mean the same whatever ships.
+        let mut add = |group: &'static str, n: u32, dt: f64, suffix: &str, extra: Overrides| {
+            if extra.is_empty() && n == n0 && dt == dt0 {
+                return;
+            }
+            rows.push(Row::new(
+                group,
+                &format!("{n}x{n} ms{dt:e}{suffix}"),
+                [vec![cells(n), mass_scaling(dt)], extra].concat(),
+            ));
+        };
+        // Coarser meshes at the shipped mass-scaling target (finer ones
+        // are the mesh-convergence case's, `cargo xtask validate --filter
+        // mesh-convergence`).
         for n in [10, 20, 30] {
-            rows.push(Row::new("mesh", &format!("{n}x{n} ms2e-5"), vec![cells(n)]));
+            add("mesh", n, dt0, "", Vec::new());
         }
-        for dt in [5e-6, 1e-5, 5e-5, 1e-4] {
-            rows.push(Row::new(
-                "mass scaling",
-                &format!("40x40 ms{dt:e}"),
-                vec![mass_scaling(dt)],
-            ));
+        // The mass-scaling target on the shipped mesh: inertia against
+        // time, the main trade of the explicit driver.
+        for dt in [5e-6, 1e-5, 1.25e-5, 1.5e-5, 2e-5, 3e-5, 5e-5, 1e-4] {
+            add("mass scaling", 40, dt, "", Vec::new());
         }
+        // Finer meshes with light mass scaling: what the mesh still costs
+        // away from the springs once inertia is small.
+        for dt in [1e-5, 1.5e-5] {
+            add("combined", 50, dt, "", Vec::new());
+        }
+        // Coarser meshes with lighter mass scaling: the fast end of the
+        // front, where mesh and inertia errors trade.
+        for n in [20, 30] {
+            add("combined", n, 1e-5, "", Vec::new());
+        }
+        // The shipped setting changed in one way each (the Prony table
+        // compares the process-time rows with the shipped row).
         for t in [0.5, 0.2, 0.1] {
-            rows.push(Row::new(
-                "process time",
-                &format!("40x40 ms2e-5 T{t}"),
-                process_time(t),
-            ));
-            rows.push(Row::new(
+            add("process time", n0, dt0, &format!(" T{t}"), process_time(t));
+            add(
                 "process time, Prony τ scaled",
-                &format!("40x40 ms2e-5 T{t} tau{t}"),
+                n0,
+                dt0,
+                &format!(" T{t} tau{t}"),
                 [
                     vec![carbon_resin(Some(t), &format!("carbon, τ × {t}"))?],
                     process_time(t),
                 ]
                 .concat(),
-            ));
+            );
         }
-        // Coarser meshes with lighter mass scaling: the fast end of the
-        // front, where mesh and inertia errors trade.
-        for (n, dt) in [(20, 1e-5), (30, 1e-5)] {
-            rows.push(Row::new(
-                "combined",
-                &format!("{n}x{n} ms{dt:e}"),
-                vec![cells(n), mass_scaling(dt)],
-            ));
-        }
-        rows.push(Row::new(
+        add(
             "fibres",
-            "40x40 ms2e-5 embedded",
+            n0,
+            dt0,
+            " embedded",
             vec![set("fabric.fibres", "embedded")],
-        ));
-        let mut one = Row::new("threads", "40x40 ms2e-5 1 thread", Vec::new());
+        );
+        let mut one = Row::new(
+            "threads",
+            &format!("{n0}x{n0} ms{dt0:e} 1 thread"),
+            Vec::new(),
+        );
         one.threads = 1;
         rows.push(one);
-        // The implicit solver's rows run once this drape has one (the
-        // scene refuses `solver = "implicit"` until then).
+        // The implicit driver on the 10 × 10 blank only: it takes about a
+        // minute there and 20 min on 16 × 16 (the condensed contact solve,
+        // issue 11), so 40 × 40 rows would take the study hours. Beside
+        // them, the explicit 10 × 10 rows without and with mass scaling
+        // separate the mesh's error from the inertia's.
+        rows.push(Row::new(
+            "implicit",
+            "10x10 no mass scaling",
+            vec![cells(10), no_mass_scaling()],
+        ));
         for dt in [0.05, 0.02, 0.01] {
             let mut implicit = Row::new(
                 "implicit",
-                &format!("40x40 implicit dt{dt}"),
+                &format!("10x10 implicit dt{dt}"),
                 vec![
+                    cells(10),
                     set("simulation.solver", "\"implicit\""),
                     set("simulation.max_increment", dt),
                 ],
@@ -423,6 +524,8 @@ struct Outcome {
     cpu_s: f64,
     steps: u64,
     max_shear_deg: f64,
+    /// The largest |γ| away from the holding ([`crate::holding`]).
+    max_shear_away_deg: f64,
     draw_in: [f64; 3],
     /// (initial distance from the centre, shear) along the diagonal, equal
     /// distances averaged, by distance.
@@ -436,13 +539,15 @@ impl Outcome {
     }
 }
 
-/// The errors of `o` against the reference `r`: max shear (deg), profile
-/// RMS (deg), draw-in (mm).
-fn errors(o: &Outcome, r: &Outcome) -> [f64; 3] {
+/// The errors of `o` against the reference `r`, indexed by [`SHEAR`],
+/// [`SHEAR_AWAY`], [`PROFILE`] and [`DRAW_IN`]: max shear anywhere (deg),
+/// max shear away from the holding (deg), profile RMS (deg), draw-in (mm).
+fn errors(o: &Outcome, r: &Outcome) -> [f64; 4] {
     if !o.completed() {
-        return [f64::NAN; 3];
+        return [f64::NAN; 4];
     }
     let shear = (o.max_shear_deg - r.max_shear_deg).abs();
+    let shear_away = (o.max_shear_away_deg - r.max_shear_away_deg).abs();
     let mut sum = 0.0;
     let mut n = 0usize;
     for &(d, g) in &o.profile {
@@ -459,7 +564,7 @@ fn errors(o: &Outcome, r: &Outcome) -> [f64; 3] {
     let draw_in = (0..3)
         .map(|k| (o.draw_in[k] - r.draw_in[k]).abs())
         .fold(0.0f64, f64::max);
-    [shear, rms, draw_in]
+    [shear, shear_away, rms, draw_in]
 }
 
 /// `profile` (sorted by distance) at `d`, linearly; `None` outside it.
@@ -509,6 +614,76 @@ fn read_diagonal(dir: &Path) -> Result<Vec<(f64, f64)>, String> {
         .into_iter()
         .map(|(d, sum, n)| (d, sum / n as f64))
         .collect())
+}
+
+/// The last frame's shear per element (deg, signed), in the model's
+/// element order: the `shear_deg` column of a run's `orientations.csv`
+/// (its rows are labelled element index + 1; a label out of order is an
+/// error).
+fn read_element_shear(dir: &Path) -> Result<Vec<f64>, String> {
+    let path = dir.join("orientations.csv");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut lines = text.lines().enumerate();
+    let column = lines
+        .next()
+        .and_then(|(_, header)| header.split(',').position(|h| h == "shear_deg"))
+        .ok_or_else(|| format!("{}:1: no `shear_deg` column", path.display()))?;
+    lines
+        .map(|(i, line)| {
+            let fields: Vec<&str> = line.split(',').collect();
+            let label: Option<usize> = fields.first().and_then(|f| f.parse().ok());
+            if label != Some(i) {
+                return Err(format!(
+                    "{}:{}: expected element {i}, found `{}`",
+                    path.display(),
+                    i + 1,
+                    fields.first().unwrap_or(&"")
+                ));
+            }
+            fields
+                .get(column)
+                .and_then(|f| f.parse().ok())
+                .ok_or_else(|| format!("{}:{}: no shear_deg value", path.display(), i + 1))
+        })
+        .collect()
+}
+
+/// The largest |γ| away from the holding ([`crate::holding`]) at the end
+/// of the run in `dir` of `scene` with `overrides`: its per-element shear
+/// over its model's reference centroids and held nodes. The largest |γ|
+/// of all elements must be the summary's `max_shear_deg` (bit for bit:
+/// both are the same numbers written round-trip), which checks that the
+/// table is the summary's frame and the model is the run's.
+fn max_shear_away_of(
+    dir: &Path,
+    scene: &Path,
+    overrides: &[(String, String)],
+    max_shear_deg: f64,
+) -> Result<f64, String> {
+    let shear = read_element_shear(dir)?;
+    let model = Scene::from_file(scene, overrides)
+        .map_err(|e| e.to_string())?
+        .model;
+    let fields = model
+        .element_fields(&model.initial_state())
+        .map_err(|e| format!("{}: the initial mesh: {e}", scene.display()))?;
+    if shear.len() != fields.centroid0.len() {
+        return Err(format!(
+            "{}: {} elements in orientations.csv, {} in the scene's mesh",
+            dir.display(),
+            shear.len(),
+            fields.centroid0.len()
+        ));
+    }
+    let anywhere = shear.iter().fold(0.0f64, |m, g| m.max(g.abs()));
+    if anywhere != max_shear_deg {
+        return Err(format!(
+            "{}: the largest |shear| of orientations.csv, {anywhere}°, is not summary.json's \
+             max_shear_deg, {max_shear_deg}°",
+            dir.display()
+        ));
+    }
+    Ok(max_shear_away(&model, &fields.centroid0, shear))
 }
 
 /// The children's CPU time so far (user + system, s), from
@@ -575,6 +750,7 @@ fn run_row(
                     cpu_s: f64::NAN,
                     steps: 0,
                     max_shear_deg: f64::NAN,
+                    max_shear_away_deg: f64::NAN,
                     draw_in: [f64::NAN; 3],
                     profile: Vec::new(),
                     added_mass_fraction: f64::NAN,
@@ -596,6 +772,12 @@ fn run_row(
     let summary: Summary = read_summary(out)
         .map_err(|e| format!("row `{}` ({status}): {e}; see {}", row.name, log.display()))?;
     let profile = read_diagonal(out)?;
+    // A run that stopped early keeps its last frame, which is not compared.
+    let max_shear_away_deg = if summary.status == "completed" {
+        max_shear_away_of(out, scene, &row.overrides, summary.max_shear_deg)?
+    } else {
+        f64::NAN
+    };
     Ok(Outcome {
         status: match &summary.reason {
             Some(reason) if summary.status != "completed" => {
@@ -607,6 +789,7 @@ fn run_row(
         cpu_s,
         steps: summary.run.steps,
         max_shear_deg: summary.max_shear_deg,
+        max_shear_away_deg,
         draw_in: [
             summary.draw_in_mm.dx,
             summary.draw_in_mm.dy,
@@ -627,6 +810,21 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
+/// The reference cache's key: a fingerprint of the scene as the reference
+/// runs it (every value after `overrides`, not the file's text), so that
+/// changing a value the reference overrides — the shipped mesh or mass
+/// scaling, a comment — keeps the reference, and any other change makes a
+/// new one. (The drape version is not in the key: `--fresh-reference`
+/// after a change to the physics.)
+fn reference_key(text: &str, scene: &Path, overrides: &[(String, String)]) -> Result<u64, String> {
+    let spec = Scene::parse(text, scene, overrides)
+        .map_err(|e| e.to_string())?
+        .resolved_spec();
+    let values =
+        toml::to_string(&spec).map_err(|e| format!("{}: to TOML: {e}", scene.display()))?;
+    Ok(fnv1a(values.as_bytes()))
+}
+
 /// The reference: from the cache when its key matches and it completed,
 /// else computed (and cached).
 fn reference(
@@ -636,13 +834,18 @@ fn reference(
     bench: &Path,
     options: &Options,
 ) -> Result<(Outcome, PathBuf, bool), String> {
-    let mut keyed = std::fs::read(scene).map_err(|e| format!("{}: {e}", scene.display()))?;
-    for (k, v) in overrides {
-        keyed.extend_from_slice(format!("\n--set {k}={v}").as_bytes());
-    }
-    let dir = bench.join(format!("reference-{:016x}", fnv1a(&keyed)));
+    let text = std::fs::read_to_string(scene).map_err(|e| format!("{}: {e}", scene.display()))?;
+    let dir = bench.join(format!(
+        "reference-{:016x}",
+        reference_key(&text, scene, overrides)?
+    ));
     let done = dir.join("reference.txt");
-    let row = Row::new("reference", "reference", overrides.to_vec());
+    // One thread: the result is the same on any number (determinism is a
+    // validation case), and on a shared machine a long two-thread run
+    // spends much of its CPU waiting at the step's barriers for a thread
+    // that is not scheduled.
+    let mut row = Row::new("reference", "reference", overrides.to_vec());
+    row.threads = 1;
     let cached = !options.fresh_reference && done.exists();
     if !cached {
         println!(
@@ -684,6 +887,7 @@ fn reference(
         cpu_s: field("cpu_s "),
         steps: summary.run.steps,
         max_shear_deg: summary.max_shear_deg,
+        max_shear_away_deg: max_shear_away_of(&dir, scene, overrides, summary.max_shear_deg)?,
         draw_in: [
             summary.draw_in_mm.dx,
             summary.draw_in_mm.dy,
@@ -746,7 +950,7 @@ struct Measured {
     outcome: Option<Outcome>,
     /// Why it did not run.
     skipped: Option<String>,
-    errors: [f64; 3],
+    errors: [f64; 4],
     runs: usize,
 }
 
@@ -792,7 +996,8 @@ fn study(options: &Options, root: &Path, target: &Path) -> Result<(), String> {
     let bench = target.join("bench");
     let runs_dir = bench.join("work-precision");
     std::fs::create_dir_all(&runs_dir).map_err(|e| format!("{}: {e}", runs_dir.display()))?;
-    let (reference_overrides, mut rows) = plan(options.quick, options.reference_cells)?;
+    let (reference_overrides, mut rows) =
+        plan(options.quick, options.reference_cells, Shipped::of(&scene)?)?;
     let mut prony_rows = prony_plan(options.quick)?;
     if let Some(f) = &options.filter {
         rows.retain(|r| r.name.contains(f.as_str()) || r.group.contains(f.as_str()));
@@ -807,11 +1012,12 @@ fn study(options: &Options, root: &Path, target: &Path) -> Result<(), String> {
     let (reference, reference_dir, cached) =
         reference(&drape, &scene, &reference_overrides, &runs_dir, options)?;
     println!(
-        "reference{}: {} steps, {:.1} s wall; max shear {:.3}°, DX {:.2} DY {:.2} DD {:.2} mm",
+        "reference{}: {} steps, {:.1} s wall; max shear {:.3}° ({:.3}° away from the holding), DX {:.2} DY {:.2} DD {:.2} mm",
         if cached { " (cached)" } else { "" },
         reference.steps,
         reference.wall_s,
         reference.max_shear_deg,
+        reference.max_shear_away_deg,
         reference.draw_in[0],
         reference.draw_in[1],
         reference.draw_in[2]
@@ -834,7 +1040,7 @@ fn study(options: &Options, root: &Path, target: &Path) -> Result<(), String> {
                     row: row.clone(),
                     outcome: None,
                     skipped: Some(e),
-                    errors: [f64::NAN; 3],
+                    errors: [f64::NAN; 4],
                     runs: 0,
                 });
             }
@@ -862,14 +1068,15 @@ fn study(options: &Options, root: &Path, target: &Path) -> Result<(), String> {
         }
         let errors = errors(&best, &reference);
         println!(
-            "{:<34} {:>8.3} s wall {:>8.2} s CPU {:>8} steps  err γmax {:.3}°  profile {:.3}°  draw-in {:.3} mm  {}",
+            "{:<34} {:>8.3} s wall {:>8.2} s CPU {:>8} steps  err γmax {:.3}°  away {:.3}°  profile {:.3}°  draw-in {:.3} mm  {}",
             row.name,
             best.wall_s,
             best.cpu_s,
             best.steps,
-            errors[0],
-            errors[1],
-            errors[2],
+            errors[SHEAR],
+            errors[SHEAR_AWAY],
+            errors[PROFILE],
+            errors[DRAW_IN],
             best.status
         );
         Ok(Measured {
@@ -969,10 +1176,13 @@ fn cell(v: f64, decimals: usize) -> String {
 }
 
 /// `work-precision.csv`: the rows that ran (skipped ones are not rows of
-/// the study); errors of a run that did not complete are empty.
+/// the study); errors of a run that did not complete are empty. The
+/// columns the issue asked for come first, in its order; the error away
+/// from the holding (the one the target is judged on) is appended so that
+/// they keep their places.
 fn csv(measured: &[Measured]) -> String {
     let mut csv = String::from(
-        "setting,wall_s,steps_or_increments,err_max_shear_deg,err_profile_rms_deg,err_draw_in_mm,default\n",
+        "setting,wall_s,steps_or_increments,err_max_shear_deg,err_profile_rms_deg,err_draw_in_mm,default,err_max_shear_away_deg\n",
     );
     let num = |v: f64| {
         if v.is_finite() {
@@ -985,14 +1195,15 @@ fn csv(measured: &[Measured]) -> String {
         let Some(o) = &m.outcome else { continue };
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{}",
             m.row.name,
             num(o.wall_s),
             o.steps,
-            num(m.errors[0]),
-            num(m.errors[1]),
-            num(m.errors[2]),
-            u8::from(m.row.default)
+            num(m.errors[SHEAR]),
+            num(m.errors[PROFILE]),
+            num(m.errors[DRAW_IN]),
+            u8::from(m.row.default),
+            num(m.errors[SHEAR_AWAY]),
         );
     }
     csv
@@ -1012,9 +1223,15 @@ fn picture(path: &Path, measured: &[Measured], quick: bool, clock: Clock) -> Res
             })
         })
         .collect();
+    // In the order of `Measured::errors`; the target line on the error it
+    // is judged on.
     let panels = [
         WorkPrecisionPanel {
-            label: "error in max shear (deg)".into(),
+            label: "error in max shear anywhere (deg)".into(),
+            target: None,
+        },
+        WorkPrecisionPanel {
+            label: format!("error in max shear > {AWAY_FROM_HOLDING_MM} mm from holding (deg)"),
             target: Some(TARGET_MAX_SHEAR_DEG),
         },
         WorkPrecisionPanel {
@@ -1046,15 +1263,15 @@ struct Context<'a> {
     clock: Clock,
 }
 
-/// The Pareto front on (time by `clock`, error in max shear), as indices
-/// into `measured`.
+/// The Pareto front on (time by `clock`, the [`JUDGED`] error), as
+/// indices into `measured`.
 fn shear_front(measured: &[Measured], clock: Clock) -> Vec<usize> {
     let points: Vec<(f64, f64)> = measured
         .iter()
         .map(|m| {
             m.outcome
                 .as_ref()
-                .map_or((f64::NAN, f64::NAN), |o| (clock.of(o), m.errors[0]))
+                .map_or((f64::NAN, f64::NAN), |o| (clock.of(o), m.errors[JUDGED]))
         })
         .collect();
     pareto_front(&points)
@@ -1076,7 +1293,7 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
     let _ = writeln!(
         md,
         "Reference: `{}` ({} steps, {:.0} s wall, {:.0} s CPU; added mass {:.3} of the blank's; cached in `{}`): \
-         max shear {:.3}°, DX {:.2} mm, DY {:.2} mm, DD {:.2} mm.\n",
+         max shear {:.3}° anywhere, {:.3}° away from the holding, DX {:.2} mm, DY {:.2} mm, DD {:.2} mm.\n",
         describe(c.reference_overrides),
         r.steps,
         r.wall_s,
@@ -1086,14 +1303,24 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
         r.max_shear_deg,
+        r.max_shear_away_deg,
         r.draw_in[0],
         r.draw_in[1],
         r.draw_in[2]
     );
+    let _ = writeln!(
+        md,
+        "\"Away from the holding\" leaves out the elements within {AWAY_FROM_HOLDING_MM} mm (in the flat blank) of a \
+         spring's node, as the paper cases do. The target (≤ {TARGET_MAX_SHEAR_DEG}°), the front and the default are judged \
+         on the error away from the holding: the maximum anywhere sits at a point spring, where the shear grows with every \
+         refinement of the mesh (a point load on a membrane: 18.7 / 24.2 / 30.9 / 37.2° on 10 / 20 / 40 / 80 cells, \
+         `cargo xtask validate --filter mesh-convergence`), so its error against a finer reference is mostly that \
+         singularity, not what a setting costs in accuracy.\n"
+    );
     let front = shear_front(measured, c.clock);
     md.push_str(
-        "| # | setting | overrides (`--set`) | threads | wall s | CPU s | steps | max shear ° | err max shear ° | err profile RMS ° | err draw-in mm | front | status |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| # | setting | overrides (`--set`) | threads | wall s | CPU s | steps | max shear ° | err max shear ° | max shear away ° | err away ° | err profile RMS ° | err draw-in mm | front | status |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for (i, m) in measured.iter().enumerate() {
         let name = if m.row.default {
@@ -1105,7 +1332,7 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
             (Some(o), _) => {
                 let _ = writeln!(
                     md,
-                    "| {} | {} | {} | {} | {}{} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                    "| {} | {} | {} | {} | {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                     i + 1,
                     name,
                     describe(&m.row.overrides),
@@ -1119,9 +1346,11 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
                     cell(o.cpu_s, 1),
                     o.steps,
                     cell(o.max_shear_deg, 3),
-                    cell(m.errors[0], 3),
-                    cell(m.errors[1], 3),
-                    cell(m.errors[2], 2),
+                    cell(m.errors[SHEAR], 3),
+                    cell(o.max_shear_away_deg, 3),
+                    cell(m.errors[SHEAR_AWAY], 3),
+                    cell(m.errors[PROFILE], 3),
+                    cell(m.errors[DRAW_IN], 2),
                     if front.contains(&i) { "yes" } else { "" },
                     o.status
                 );
@@ -1129,7 +1358,7 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
             (None, skipped) => {
                 let _ = writeln!(
                     md,
-                    "| {} | {} | {} | {} | | | | | | | | | skipped: {} |",
+                    "| {} | {} | {} | {} | | | | | | | | | | | skipped: {} |",
                     i + 1,
                     name,
                     describe(&m.row.overrides),
@@ -1141,8 +1370,9 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
     }
     md.push_str(
         &format!(
-            "\nPareto front on ({}, error in max shear): no other setting is both faster and closer to the reference.\n\n\
-             | # | setting | wall s | CPU s | err max shear ° | err profile RMS ° | err draw-in mm |\n|---|---|---|---|---|---|---|\n",
+            "\nPareto front on ({}, error in max shear away from the holding): no other setting is both faster and closer \
+             to the reference.\n\n\
+             | # | setting | wall s | CPU s | err max shear ° | err away ° | err profile RMS ° | err draw-in mm |\n|---|---|---|---|---|---|---|---|\n",
             c.clock.name()
         ),
     );
@@ -1151,21 +1381,22 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
         if let Some(o) = &m.outcome {
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} |",
                 i + 1,
                 m.row.name,
                 cell(o.wall_s, 2),
                 cell(o.cpu_s, 1),
-                cell(m.errors[0], 3),
-                cell(m.errors[1], 3),
-                cell(m.errors[2], 2)
+                cell(m.errors[SHEAR], 3),
+                cell(m.errors[SHEAR_AWAY], 3),
+                cell(m.errors[PROFILE], 3),
+                cell(m.errors[DRAW_IN], 2)
             );
         }
     }
     let within: Option<usize> = front
         .iter()
         .copied()
-        .find(|&i| measured[i].errors[0] <= TARGET_MAX_SHEAR_DEG);
+        .find(|&i| measured[i].errors[JUDGED] <= TARGET_MAX_SHEAR_DEG);
     let shipped = measured.iter().position(|m| m.row.default);
     let _ = writeln!(md);
     match within {
@@ -1177,21 +1408,22 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
                 .map_or((f64::NAN, f64::NAN), |o| (o.wall_s, o.cpu_s));
             let _ = write!(
                 md,
-                "Fastest setting within {TARGET_MAX_SHEAR_DEG}° of the reference's max shear: **#{} {}** \
-                 ({} s wall, {} s CPU, error {}°, profile RMS {}°, draw-in {} mm)",
+                "Fastest setting within {TARGET_MAX_SHEAR_DEG}° of the reference's max shear away from the holding: \
+                 **#{} {}** ({} s wall, {} s CPU, error {}° away, {}° anywhere, profile RMS {}°, draw-in {} mm)",
                 i + 1,
                 m.row.name,
                 cell(wall, 2),
                 cell(cpu, 1),
-                cell(m.errors[0], 3),
-                cell(m.errors[1], 3),
-                cell(m.errors[2], 2)
+                cell(m.errors[SHEAR_AWAY], 3),
+                cell(m.errors[SHEAR], 3),
+                cell(m.errors[PROFILE], 3),
+                cell(m.errors[DRAW_IN], 2)
             );
         }
         None => {
             let _ = write!(
                 md,
-                "No setting is within {TARGET_MAX_SHEAR_DEG}° of the reference's max shear"
+                "No setting is within {TARGET_MAX_SHEAR_DEG}° of the reference's max shear away from the holding"
             );
         }
     }
@@ -1199,11 +1431,13 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
         Some((s, o)) => {
             let _ = writeln!(
                 md,
-                "; the shipped setting (#{}) takes {} s wall, {} s CPU, with an error of {}°{}.",
+                "; the shipped setting (#{}) takes {} s wall, {} s CPU, with an error of {}° away from the holding \
+                 ({}° anywhere){}.",
                 s + 1,
                 cell(o.wall_s, 2),
                 cell(o.cpu_s, 1),
-                cell(measured[s].errors[0], 3),
+                cell(measured[s].errors[SHEAR_AWAY], 3),
+                cell(measured[s].errors[SHEAR], 3),
                 if front.contains(&s) {
                     " and is on the front"
                 } else {
@@ -1311,6 +1545,11 @@ mod tests {
     use super::*;
     use drape_io::scene::MaterialSpec;
 
+    fn shipped() -> Shipped {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap();
+        Shipped::of(&root.join(SCENE)).unwrap()
+    }
+
     #[test]
     fn interpolation_inside_at_points_and_outside() {
         let p = [(-1.0, 2.0), (0.0, 4.0), (2.0, 0.0)];
@@ -1330,6 +1569,7 @@ mod tests {
             cpu_s: 1.0,
             steps: 10,
             max_shear_deg: max_shear,
+            max_shear_away_deg: max_shear - 8.0,
             draw_in,
             profile,
             added_mass_fraction: 0.0,
@@ -1341,13 +1581,15 @@ mod tests {
         let r = outcome(30.0, vec![(-2.0, 0.0), (2.0, 4.0)], [50.0, 50.0, 60.0]);
         // Profile points at −1 (ref 1) and 1 (ref 3), one outside the
         // reference's range (ignored): errors 1 and −1 → RMS 1.
-        let o = outcome(
+        let mut o = outcome(
             29.5,
             vec![(-3.0, 9.0), (-1.0, 2.0), (1.0, 2.0)],
             [51.0, 49.5, 57.0],
         );
-        let [shear, rms, draw_in] = errors(&o, &r);
+        o.max_shear_away_deg = 22.25;
+        let [shear, away, rms, draw_in] = errors(&o, &r);
         assert!((shear - 0.5).abs() < 1e-12);
+        assert!((away - 0.25).abs() < 1e-12);
         assert!((rms - 1.0).abs() < 1e-12);
         assert!((draw_in - 3.0).abs() < 1e-12);
         let mut failed = o.clone();
@@ -1356,9 +1598,42 @@ mod tests {
     }
 
     #[test]
+    fn the_reference_key_follows_the_values_the_reference_runs() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap();
+        let scene = root.join(SCENE);
+        let text = std::fs::read_to_string(&scene).unwrap();
+        let (overrides, _) = plan(false, None, shipped()).unwrap();
+        let key = |text: &str| reference_key(text, &scene, &overrides).unwrap();
+        let as_shipped = key(&text);
+        // Values the reference overrides, and comments: the same reference.
+        let line = |prefix: &str, new: &str| -> String {
+            let changed: Vec<&str> = text
+                .lines()
+                .map(|l| if l.starts_with(prefix) { new } else { l })
+                .collect();
+            assert_ne!(changed.join("\n"), text.trim_end(), "no line `{prefix}…`");
+            changed.join("\n")
+        };
+        assert_eq!(
+            key(&line("mass_scaling_dt", "mass_scaling_dt = 3e-4")),
+            as_shipped
+        );
+        assert_eq!(key(&format!("# another comment\n{text}")), as_shipped);
+        let finer = "blank = { width = 350, height = 350, cells = [50, 50] }";
+        assert_eq!(key(&line("blank =", finer)), as_shipped);
+        // A value it runs with: a new reference.
+        assert_ne!(key(&line("friction =", "friction = 0.2")), as_shipped);
+        let wider = "blank = { width = 360, height = 350, cells = [40, 40] }";
+        assert_ne!(key(&line("blank =", wider)), as_shipped);
+        // And another mesh for the reference itself.
+        let (coarse, _) = plan(false, Some(30), shipped()).unwrap();
+        assert_ne!(reference_key(&text, &scene, &coarse).unwrap(), as_shipped);
+    }
+
+    #[test]
     fn rows_are_unique_and_one_is_shipped() {
         for quick in [false, true] {
-            let (reference, rows) = plan(quick, None).unwrap();
+            let (reference, rows) = plan(quick, None, shipped()).unwrap();
             assert!(!reference.is_empty());
             let mut names: Vec<&str> = rows.iter().map(|r| r.name.as_str()).collect();
             names.sort_unstable();
@@ -1375,7 +1650,7 @@ mod tests {
     fn material_overrides_make_a_valid_scene() {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap();
         let scene = root.join(SCENE);
-        for row in plan(false, None)
+        for row in plan(false, None, shipped())
             .unwrap()
             .1
             .iter()

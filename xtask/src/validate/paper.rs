@@ -61,7 +61,8 @@ pub const CASES: &[Case] = &[
     },
 ];
 
-/// The shipped hemisphere's mesh and mass-scaling step.
+/// The shipped hemisphere's mesh and mass-scaling step (a test checks
+/// that they are the scene files').
 const HEMISPHERE_CELLS: usize = 40;
 const HEMISPHERE_MASS_SCALING_DT: f64 = 2e-5;
 
@@ -688,6 +689,26 @@ mod tests {
         // Oscillating differences have no order.
         assert!(richardson(1.0, 2.0, 1.5).is_none());
         assert!(richardson(1.0, 1.0, 1.0).is_none());
+    }
+
+    #[test]
+    fn the_hemisphere_constants_are_the_shipped_scenes() {
+        for orientation in [Orientation::ZeroNinety, Orientation::PlusMinus45] {
+            let path = orientation.scene("hemisphere");
+            let spec = drape_io::scene::Scene::from_file(&path, &[]).unwrap().spec;
+            assert_eq!(
+                spec.fabric.blank.cells,
+                Some([HEMISPHERE_CELLS; 2]),
+                "{}",
+                path.display()
+            );
+            assert_eq!(
+                spec.simulation.mass_scaling_dt,
+                Some(HEMISPHERE_MASS_SCALING_DT),
+                "{}",
+                path.display()
+            );
+        }
     }
 
     #[test]

@@ -29,6 +29,8 @@ use drape_time::{Energies, Explicit, Frame, Observer};
 use rayon::prelude::*;
 
 use super::{Case, Check, note};
+pub(super) use crate::holding::AWAY_FROM_HOLDING_MM;
+use crate::holding::max_shear_away;
 
 /// The cases of this module.
 pub const CASES: &[Case] = &[
@@ -168,12 +170,6 @@ impl Outcome {
     }
 }
 
-/// The neighbourhood of a holding node left out of "the maximum shear away
-/// from the holding" (mm, in the flat blank): about three cells of the
-/// shipped 40×40 hemisphere mesh (8.75 mm), fixed in millimetres so that it
-/// is the same region on every mesh.
-pub(super) const AWAY_FROM_HOLDING_MM: f64 = 25.0;
-
 /// Keeps the last frame's energies and the punch's travel.
 struct Last {
     punch: usize,
@@ -227,20 +223,12 @@ fn execute(run: &Run) -> Outcome {
         Some(m) => (m.max_shear_deg, m.profile_diagonal, m.profile_median),
         None => (f64::NAN, Vec::new(), Vec::new()),
     };
-    let held: Vec<u32> = (scene.model.springs.iter().map(|s| &s.nodes))
-        .chain(scene.model.loads.iter().map(|l| &l.nodes))
-        .flatten()
-        .copied()
-        .collect();
     let max_shear_away_deg = scene.model.element_fields(&state).map_or(f64::NAN, |f| {
-        f.shear
-            .iter()
-            .zip(&f.centroid0)
-            .filter(|(_, c)| {
-                held.iter()
-                    .all(|&n| (scene.model.x0[n as usize] - *c).xy().norm() > AWAY_FROM_HOLDING_MM)
-            })
-            .fold(0.0, |m: f64, (g, _)| m.max(g.abs().to_degrees()))
+        max_shear_away(
+            &scene.model,
+            &f.centroid0,
+            f.shear.iter().map(|g| g.to_degrees()),
+        )
     });
     Outcome {
         run: run.clone(),

@@ -48,10 +48,8 @@ pub enum Pass {
     Works,
     /// Gravity and nodal loads.
     Loads,
-    /// Truss forces.
+    /// Truss forces, with the dashpots of kinked yarns (one pass).
     Trusses,
-    /// The dashpots of kinked yarns.
-    TrussDashpots,
     /// Membrane forces (resin, embedded fibres) and their new history.
     Membranes,
     /// Holding springs.
@@ -70,7 +68,7 @@ pub enum Pass {
 
 impl Pass {
     /// Every pass, in step order.
-    pub const ALL: [Pass; 15] = [
+    pub const ALL: [Pass; 14] = [
         Pass::StableStep,
         Pass::Update,
         Pass::BoundaryConditions,
@@ -78,7 +76,6 @@ impl Pass {
         Pass::Works,
         Pass::Loads,
         Pass::Trusses,
-        Pass::TrussDashpots,
         Pass::Membranes,
         Pass::Springs,
         Pass::Bending,
@@ -97,8 +94,7 @@ impl Pass {
             Pass::Contact => "contact",
             Pass::Works => "works (energy sums)",
             Pass::Loads => "gravity and loads",
-            Pass::Trusses => "element forces: trusses",
-            Pass::TrussDashpots => "element forces: yarn dashpots",
+            Pass::Trusses => "element forces: trusses, dashpots",
             Pass::Membranes => "element forces: membranes",
             Pass::Springs => "element forces: springs",
             Pass::Bending => "element forces: yarn bending",

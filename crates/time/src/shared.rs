@@ -6,6 +6,7 @@
 //! Not here: anything about how a driver advances time (central
 //! differences, Newton increments) or treats contact.
 
+use drape_elements::ElementError;
 use drape_model::{Model, Motion, SlotLayout, State};
 use nalgebra::Vector3;
 
@@ -147,7 +148,8 @@ impl ForcePass {
         time: f64,
         mut profiler: Option<&mut Profiler>,
     ) -> Result<(), RunError> {
-        let fail = |batch: String, error| RunError::Element {
+        let profiled = profiler.is_some();
+        let fail = |batch: String, error: ElementError| RunError::Element {
             step,
             time,
             batch,
@@ -158,29 +160,56 @@ impl ForcePass {
                 p.lap(pass);
             }
         };
-        for (i, b) in model.trusses.iter().enumerate() {
-            let start = self.layout.truss_offsets[i];
-            let slots = &mut self.slots[start..start + 2 * b.len()];
-            b.forces_into(x, slots)
-                .map_err(|e| fail(format!("truss batch {i}"), e))?;
-            lap(Pass::Trusses);
-            if let Some((v, c)) = dashpots.filter(|(_, c)| !c[i].is_empty()) {
-                b.add_damping_into(x, v, &c[i], slots);
-                lap(Pass::TrussDashpots);
+        let truss_slots = self.layout.membrane_offsets.first().copied();
+        match truss_slots {
+            // Unprofiled, trusses and membranes in one parallel region: on
+            // a small model each kind alone is one or two tasks, and two
+            // passes one after the other leave the second thread idle (or
+            // asleep) for most of the step. Each slot and history entry is
+            // written by the same operations either way, so the bits do
+            // not depend on this choice; a truss failure is reported before
+            // a membrane one, as in the sequence below.
+            Some(split) if !profiled && !model.trusses.is_empty() => {
+                let (truss_part, rest) = self.slots.split_at_mut(split);
+                let history_new = &mut self.history_new;
+                let layout = &self.layout;
+                let (trusses, membranes) = rayon::join(
+                    || truss_forces(model, x, dashpots, truss_part, &fail, &mut |_| {}),
+                    || {
+                        membrane_forces(
+                            model,
+                            x,
+                            history,
+                            history_new,
+                            dt,
+                            rest,
+                            layout,
+                            split,
+                            &fail,
+                            &mut |_| {},
+                        )
+                    },
+                );
+                trusses?;
+                membranes?;
             }
-        }
-        for (i, b) in model.membranes.iter().enumerate() {
-            let start = self.layout.membrane_offsets[i];
-            let n = b.shape().nodes() * b.len();
-            b.forces_into(
-                x,
-                &history[i],
-                &mut self.history_new[i],
-                dt,
-                &mut self.slots[start..start + n],
-            )
-            .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
-            lap(Pass::Membranes);
+            _ => {
+                let split = truss_slots.unwrap_or(self.layout.len);
+                let (truss_part, rest) = self.slots.split_at_mut(split);
+                truss_forces(model, x, dashpots, truss_part, &fail, &mut lap)?;
+                membrane_forces(
+                    model,
+                    x,
+                    history,
+                    &mut self.history_new,
+                    dt,
+                    rest,
+                    &self.layout,
+                    split,
+                    &fail,
+                    &mut lap,
+                )?;
+            }
         }
         for (i, b) in model.springs.iter().enumerate() {
             let start = self.layout.spring_offsets[i];
@@ -197,6 +226,61 @@ impl ForcePass {
         lap(Pass::Gather);
         Ok(())
     }
+}
+
+/// The truss batches' forces (and dashpots) into `slots`, the slots of
+/// every truss batch (the layout puts them first).
+fn truss_forces(
+    model: &Model,
+    x: &[Vector3<f64>],
+    dashpots: Option<Dashpots<'_>>,
+    slots: &mut [Vector3<f64>],
+    fail: &(dyn Fn(String, ElementError) -> RunError + Sync),
+    lap: &mut dyn FnMut(Pass),
+) -> Result<(), RunError> {
+    let mut start = 0;
+    for (i, b) in model.trusses.iter().enumerate() {
+        let end = start + 2 * b.len();
+        let dashpots = dashpots
+            .filter(|(_, c)| !c[i].is_empty())
+            .map(|(v, c)| (v, c[i].as_slice()));
+        b.forces_with_damping_into(x, dashpots, &mut slots[start..end])
+            .map_err(|e| fail(format!("truss batch {i}"), e))?;
+        lap(Pass::Trusses);
+        start = end;
+    }
+    Ok(())
+}
+
+/// The membrane batches' forces into `slots` (which begin at slot `base`
+/// of `layout`) and their new histories into `history_new`.
+#[allow(clippy::too_many_arguments)]
+fn membrane_forces(
+    model: &Model,
+    x: &[Vector3<f64>],
+    history: &[Vec<f64>],
+    history_new: &mut [Vec<f64>],
+    dt: f64,
+    slots: &mut [Vector3<f64>],
+    layout: &SlotLayout,
+    base: usize,
+    fail: &(dyn Fn(String, ElementError) -> RunError + Sync),
+    lap: &mut dyn FnMut(Pass),
+) -> Result<(), RunError> {
+    for (i, b) in model.membranes.iter().enumerate() {
+        let start = layout.membrane_offsets[i] - base;
+        let n = b.shape().nodes() * b.len();
+        b.forces_into(
+            x,
+            &history[i],
+            &mut history_new[i],
+            dt,
+            &mut slots[start..start + n],
+        )
+        .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
+        lap(Pass::Membranes);
+    }
+    Ok(())
 }
 
 /// Gravity and the nodal loads at time `t` into `f_ext`.

@@ -13,6 +13,9 @@ use crate::profile::{Pass, ProfileClock, Profiler, StepProfile};
 use crate::shared::{self, Constraints, ForcePass};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
+/// Nodes per task of the per-node checks (≈ 15–35 instructions a node).
+pub(crate) const CHECK_PIECE: usize = 8192;
+
 /// Settings of an explicit run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExplicitSettings {
@@ -705,10 +708,17 @@ impl<'m> Explicit<'m> {
                 t_new,
                 self.profiler.as_mut(),
             )?;
-            if let Some(i) = (0..n).find(|&i| {
-                !(self.x_new[i].iter().all(|v| v.is_finite())
-                    && self.forces.f_int[i].iter().all(|v| v.is_finite()))
-            }) {
+            // The lowest such node whatever the split; in parallel, as a
+            // sequential scan was a serial part of a large model's step.
+            let (x_new, f_int) = (&self.x_new, &self.forces.f_int);
+            if let Some(i) = (0..n)
+                .into_par_iter()
+                .with_min_len(CHECK_PIECE)
+                .position_first(|i| {
+                    !(x_new[i].iter().all(|v| v.is_finite())
+                        && f_int[i].iter().all(|v| v.is_finite()))
+                })
+            {
                 return Err(RunError::NonFinite {
                     step: state.step + 1,
                     time: t_new,

@@ -465,13 +465,17 @@ impl Guard {
             self.high.add_scalar(self.reach),
         );
         let limit = self.speed_limit_squared;
-        // Sequential: two comparisons a node cost less than rayon's split
-        // at the sizes drape runs (the step's element pass dominates).
-        let bad = (0..x.len()).find(|&i| {
-            let p = &x[i];
-            let outside = (0..3).any(|k| p[k] < low[k] || p[k] > high[k]);
-            outside || (movable[i] && v[i].norm_squared() > limit)
-        });
+        // The lowest offending node whatever the split. In pieces of
+        // CHECK_PIECE nodes: a small model's check stays on one thread,
+        // a large model's is no serial part of its step.
+        let bad = (0..x.len())
+            .into_par_iter()
+            .with_min_len(crate::explicit::CHECK_PIECE)
+            .position_first(|i| {
+                let p = &x[i];
+                let outside = (0..3).any(|k| p[k] < low[k] || p[k] > high[k]);
+                outside || (movable[i] && v[i].norm_squared() > limit)
+            });
         let Some(i) = bad else {
             return Ok(());
         };

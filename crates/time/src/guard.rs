@@ -465,17 +465,13 @@ impl Guard {
             self.high.add_scalar(self.reach),
         );
         let limit = self.speed_limit_squared;
-        // The lowest offending node whatever the split. In pieces of
-        // CHECK_PIECE nodes: a small model's check stays on one thread,
-        // a large model's is no serial part of its step.
-        let bad = (0..x.len())
-            .into_par_iter()
-            .with_min_len(crate::explicit::CHECK_PIECE)
-            .position_first(|i| {
-                let p = &x[i];
-                let outside = (0..3).any(|k| p[k] < low[k] || p[k] > high[k]);
-                outside || (movable[i] && v[i].norm_squared() > limit)
-            });
+        // In pieces of 8 192 nodes: a small model's check stays on one
+        // thread, a large model's is no serial part of its step.
+        let bad = crate::explicit::first_node(x.len(), |i| {
+            let p = &x[i];
+            let outside = (0..3).any(|k| p[k] < low[k] || p[k] > high[k]);
+            outside || (movable[i] && v[i].norm_squared() > limit)
+        });
         let Some(i) = bad else {
             return Ok(());
         };

@@ -12,7 +12,11 @@
 //! each for the wall clock, more for thread CPU time), which is noise on
 //! a step of the hemisphere scene but not on a step of a ten-element
 //! model; and with more than one thread each pass is timed on the driver's
-//! thread, i.e. as wall time until the pass's last task ends.
+//! thread, i.e. as wall time until the pass's last task ends. A profiled
+//! step runs the truss and membrane passes one after the other, so each
+//! has its own time; an unprofiled step runs them side by side (see
+//! `shared::ForcePass::evaluate`), so on two threads it can be shorter
+//! than the profile's sum says.
 //!
 //! The clock is a plain function, the wall clock unless the caller passes
 //! another ([`ProfileClock`]): the benches pass the calling thread's CPU

@@ -112,6 +112,30 @@ pub(crate) struct ForcePass {
     pub f_int: Vec<Vector3<f64>>,
     /// The membranes' histories of the last evaluation.
     pub history_new: Vec<Vec<f64>>,
+    /// Estimated instructions of the truss and of the membrane pass.
+    work: (usize, usize),
+}
+
+/// Instructions below which a kind's pass is not worth a task of its own
+/// (about what waking a second thread costs, with a margin): the pieces of
+/// the element passes are sized alike (`drape-elements`).
+const SIDE_BY_SIDE_WORK: usize = 100_000;
+
+/// Estimated instructions of the truss and of the membrane pass of `model`
+/// (callgrind, 200 × 200 blank: ≈ 125 per truss on the lanes, ≈ 950 per
+/// quad on the lanes; a quad with embedded fibres or a Prony table the
+/// lanes do not take about twice that; a triangle about a quarter of it).
+fn pass_work(model: &Model) -> (usize, usize) {
+    let trusses = model.trusses.iter().map(|b| 125 * b.len()).sum();
+    let membranes = model
+        .membranes
+        .iter()
+        .map(|b| match b.shape() {
+            drape_elements::MembraneShape::Quad => 1000 * b.len(),
+            drape_elements::MembraneShape::Triangle => 250 * b.len(),
+        })
+        .sum();
+    (trusses, membranes)
 }
 
 impl ForcePass {
@@ -126,6 +150,7 @@ impl ForcePass {
                 .iter()
                 .map(|b| b.initial_history())
                 .collect(),
+            work: pass_work(model),
         }
     }
 
@@ -161,35 +186,43 @@ impl ForcePass {
             }
         };
         let truss_slots = self.layout.membrane_offsets.first().copied();
+        let (truss_work, membrane_work) = self.work;
         match truss_slots {
-            // Unprofiled, trusses and membranes in one parallel region: on
-            // a small model each kind alone is one or two tasks, and two
-            // passes one after the other leave the second thread idle (or
-            // asleep) for most of the step. Each slot and history entry is
-            // written by the same operations either way, so the bits do
-            // not depend on this choice; a truss failure is reported before
-            // a membrane one, as in the sequence below.
-            Some(split) if !profiled && !model.trusses.is_empty() => {
+            // Unprofiled, trusses and membranes in one parallel region when
+            // both are worth a task of their own: on a small model each
+            // kind alone is one or two tasks, and two passes one after the
+            // other leave the second thread idle (or asleep) for most of
+            // the step. The larger kind runs on this thread, the smaller
+            // is offered to the other: if waking it takes longer than the
+            // larger kind, this thread runs both, as in sequence. Each
+            // slot and history entry is written by the same operations
+            // either way, so the bits do not depend on this choice; a truss
+            // failure is reported before a membrane one, as in sequence.
+            Some(split) if !profiled && truss_work.min(membrane_work) >= SIDE_BY_SIDE_WORK => {
                 let (truss_part, rest) = self.slots.split_at_mut(split);
                 let history_new = &mut self.history_new;
                 let layout = &self.layout;
-                let (trusses, membranes) = rayon::join(
-                    || truss_forces(model, x, dashpots, truss_part, &fail, &mut |_| {}),
-                    || {
-                        membrane_forces(
-                            model,
-                            x,
-                            history,
-                            history_new,
-                            dt,
-                            rest,
-                            layout,
-                            split,
-                            &fail,
-                            &mut |_| {},
-                        )
-                    },
-                );
+                let trusses = || truss_forces(model, x, dashpots, truss_part, &fail, &mut |_| {});
+                let membranes = || {
+                    membrane_forces(
+                        model,
+                        x,
+                        history,
+                        history_new,
+                        dt,
+                        rest,
+                        layout,
+                        split,
+                        &fail,
+                        &mut |_| {},
+                    )
+                };
+                let (trusses, membranes) = if membrane_work >= truss_work {
+                    let (m, t) = rayon::join(membranes, trusses);
+                    (t, m)
+                } else {
+                    rayon::join(trusses, membranes)
+                };
                 trusses?;
                 membranes?;
             }

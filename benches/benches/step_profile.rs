@@ -19,7 +19,11 @@
 //! one-thread figures are the driver thread's CPU time instead (a
 //! per-core figure that survives a busy machine); two-thread figures are
 //! always wall time. `--quick` profiles shorter windows from earlier in
-//! the stroke.
+//! the stroke. `--filter TEXT` keeps the cases and scenes whose name
+//! contains TEXT; `--profile-scenes` prints the per-pass profile of each
+//! shipped scene too (where a small model's step goes on 2 threads);
+//! `--threads N` profiles on N threads only (for a run under callgrind,
+//! `--toggle-collect='*profile_steps*'`).
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -44,7 +48,20 @@ struct Window {
 
 fn main() {
     // cargo bench passes `--bench`; criterion-style filters are ignored.
-    let quick = std::env::args().any(|a| a == "--quick");
+    let args: Vec<String> = std::env::args().collect();
+    let quick = args.iter().any(|a| a == "--quick");
+    let profile_scenes = args.iter().any(|a| a == "--profile-scenes");
+    let filter = args
+        .iter()
+        .position(|a| a == "--filter")
+        .and_then(|k| args.get(k + 1))
+        .cloned()
+        .unwrap_or_default();
+    let threads: Vec<usize> = args
+        .iter()
+        .position(|a| a == "--threads")
+        .and_then(|k| args.get(k + 1))
+        .map_or_else(|| vec![1, 2], |n| vec![n.parse().expect("--threads N")]);
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .expect("benches/ sits in the workspace")
@@ -92,36 +109,9 @@ fn main() {
             },
         ),
     ];
-    for (name, overrides, window) in &cases {
+    for (name, overrides, window) in cases.iter().filter(|c| c.0.contains(&filter)) {
         let scene = load(&hemisphere, overrides);
-        let warm = advance(&scene, window.warm_steps);
-        let m = &scene.model;
-        println!(
-            "\n== {name}: {} nodes, {} membranes, {} trusses, {} springs, {} tools; \
-             profile of steps {}..{} (load {})",
-            m.node_count(),
-            m.membrane_count(),
-            m.trusses.iter().map(|b| b.len()).sum::<usize>(),
-            m.springs.iter().map(|b| b.len()).sum::<usize>(),
-            m.tools.len(),
-            warm.state.step,
-            warm.state.step + window.steps,
-            load_average(),
-        );
-        for threads in [1, 2] {
-            let profile_clock: ProfileClock = match (clock, threads) {
-                (Clock::ThreadCpu, 1) => thread_cpu,
-                _ => profile::wall_clock,
-            };
-            let p = in_pool(threads, || {
-                profile_steps(&scene, &warm, window.steps, profile_clock)
-            });
-            println!(
-                "-- {threads} thread(s): {:.3} ms/step",
-                p.step_time().as_secs_f64() * 1e3
-            );
-            print!("{}", p.table());
-        }
+        print_profiles(name, &scene, *window, clock, &threads);
     }
 
     println!(
@@ -150,7 +140,14 @@ fn main() {
         }
     };
     for path in shipped_scenes(&root) {
+        let file = path.file_name().unwrap_or_default().to_string_lossy();
+        if !file.contains(&filter) {
+            continue;
+        }
         let scene = load(&path, &[]);
+        if profile_scenes {
+            print_profiles(&file, &scene, window, clock, &threads);
+        }
         let warm = advance(&scene, window.warm_steps);
         // Alternating 1 and 2 threads, best of three: a burst of other work
         // on the machine hits one repeat, not the figure.
@@ -175,6 +172,38 @@ fn main() {
             best[1],
             best[1] / best[0],
         );
+    }
+}
+
+/// The per-pass profile of `window` on 1 and on 2 threads.
+fn print_profiles(name: &str, scene: &Scene, window: Window, clock: Clock, threads: &[usize]) {
+    let warm = advance(scene, window.warm_steps);
+    let m = &scene.model;
+    println!(
+        "\n== {name}: {} nodes, {} membranes, {} trusses, {} springs, {} tools; \
+         profile of steps {}..{} (load {})",
+        m.node_count(),
+        m.membrane_count(),
+        m.trusses.iter().map(|b| b.len()).sum::<usize>(),
+        m.springs.iter().map(|b| b.len()).sum::<usize>(),
+        m.tools.len(),
+        warm.state.step,
+        warm.state.step + window.steps,
+        load_average(),
+    );
+    for &threads in threads {
+        let profile_clock: ProfileClock = match (clock, threads) {
+            (Clock::ThreadCpu, 1) => thread_cpu,
+            _ => profile::wall_clock,
+        };
+        let p = in_pool(threads, || {
+            profile_steps(scene, &warm, window.steps, profile_clock)
+        });
+        println!(
+            "-- {threads} thread(s): {:.3} ms/step",
+            p.step_time().as_secs_f64() * 1e3
+        );
+        print!("{}", p.table());
     }
 }
 
@@ -228,6 +257,7 @@ fn continuing<'m>(scene: &'m Scene, warm: &Warm, steps: u64) -> Explicit<'m> {
     driver
 }
 
+#[inline(never)]
 fn profile_steps(scene: &Scene, start: &Warm, steps: u64, clock: ProfileClock) -> StepProfile {
     let mut driver = continuing(scene, start, steps);
     driver.enable_profile(clock);

@@ -105,6 +105,13 @@ where
 /// Elements per rayon task: below this, splitting costs more than it saves.
 pub(crate) const MIN_CHUNK: usize = 256;
 
+/// Trusses per rayon task of the truss pass. A truss costs about a seventh
+/// of a quad (≈ 160 instructions on the lanes against ≈ 1 100), so its
+/// tasks are four times as long in elements as [`MIN_CHUNK`]; with 256 a
+/// task was ≈ 40 k instructions, about what waking a second thread costs,
+/// and the small scenes ran no faster on two threads than on one.
+pub(crate) const TRUSS_PIECE: usize = 1024;
+
 #[cfg(test)]
 pub(crate) mod test_support {
     use nalgebra::{DMatrix, Rotation3, Vector3};

@@ -211,11 +211,15 @@ impl QuadLanes {
                 (zero - u01) / det_u,
                 (tr_u - u11) / det_u,
             );
-            // Rotated strain increment from the committed U.
+            // Rotated strain increment from the committed U. Each lane's
+            // point history as a slice of `used` values, its first six as
+            // an array: one bounds check per lane, not one per value.
             let at = p * stride;
-            let hk = |k: usize| &h_in[k * eh + at..k * eh + at + stride];
+            let hk = |k: usize| &h_in[k * eh + at..k * eh + at + used];
             let (h0, h1, h2, h3) = (hk(0), hk(1), hk(2), hk(3));
-            let un = |i: usize| lanes([h0[i], h1[i], h2[i], h3[i]]);
+            let fixed = |h: &[f64]| -> [f64; 6] { h[..6].try_into().expect("six values") };
+            let (g0, g1, g2, g3) = (fixed(h0), fixed(h1), fixed(h2), fixed(h3));
+            let un = |i: usize| lanes([g0[i], g1[i], g2[i], g3[i]]);
             let (n00, n11, n01) = (un(0), un(1), un(2));
             let (m00, m01, m11) = ((n00 + u00) * half, (n01 + u01) * half, (n11 + u11) * half);
             let det_m = m00 * m11 - m01 * m01;
@@ -240,21 +244,23 @@ impl QuadLanes {
             let t00 = un(3) + k * (e00 + nu * e11);
             let t11 = un(4) + k * (nu * e00 + e11);
             let d_s0 = f64x4::splat(resin.shear_modulus) * (e01 + e10);
+            let mut out = point_history(h_out, eh, at, used);
             let t01 = if resin.prony.is_empty() {
                 un(5) + d_s0
             } else {
-                let s0 = un(6) + d_s0;
+                let tail = |i: usize| lanes([h0[i], h1[i], h2[i], h3[i]]);
+                let s0 = tail(6) + d_s0;
                 let mut relaxing = zero;
                 for (q, &(decay, weight)) in resin.prony.iter().enumerate() {
-                    let qk = f64x4::splat(decay) * un(7 + q) + f64x4::splat(weight) * d_s0;
+                    let qk = f64x4::splat(decay) * tail(7 + q) + f64x4::splat(weight) * d_s0;
                     relaxing += qk;
-                    write_lanes(h_out, eh, stride, p, 7 + q, qk);
+                    write_lanes(&mut out, 7 + q, qk);
                 }
-                write_lanes(h_out, eh, stride, p, 6, s0);
+                write_lanes(&mut out, 6, s0);
                 f64x4::splat(resin.long_term) * s0 + relaxing
             };
             for (i, v) in [u00, u11, u01, t00, t11, t01].into_iter().enumerate() {
-                write_lanes(h_out, eh, stride, p, i, v);
+                write_lanes(&mut out, i, v);
             }
             // P = F·(U⁻¹·τ̄·U⁻¹)·h_m.
             let a00 = ui00 * t00 + ui01 * t01;
@@ -290,9 +296,25 @@ impl QuadLanes {
     }
 }
 
+/// The `used` history values at offset `at` of each lane's element
+/// (`eh` values each) in a block's `h`.
 #[inline(always)]
-fn write_lanes(h: &mut [f64], eh: usize, stride: usize, p: usize, i: usize, v: f64x4) {
-    for k in 0..LANES {
-        h[k * eh + p * stride + i] = v.0[k];
-    }
+fn point_history(h: &mut [f64], eh: usize, at: usize, used: usize) -> [&mut [f64]; LANES] {
+    let (h0, rest) = h.split_at_mut(eh);
+    let (h1, rest) = rest.split_at_mut(eh);
+    let (h2, h3) = rest.split_at_mut(eh);
+    [
+        &mut h0[at..at + used],
+        &mut h1[at..at + used],
+        &mut h2[at..at + used],
+        &mut h3[at..at + used],
+    ]
+}
+
+#[inline(always)]
+fn write_lanes(out: &mut [&mut [f64]; LANES], i: usize, v: f64x4) {
+    out[0][i] = v.0[0];
+    out[1][i] = v.0[1];
+    out[2][i] = v.0[2];
+    out[3][i] = v.0[3];
 }

@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
 
 use crate::lanes::LANES;
-use crate::{ElementError, KinematicsError, MIN_CHUNK, lowest_error, truss_lanes};
+use crate::{ElementError, KinematicsError, TRUSS_PIECE, lowest_error, truss_lanes};
 
 /// A batch of trusses of one fibre law, usually one yarn family.
 ///
@@ -130,38 +130,71 @@ impl TrussBatch {
         x: &[Vector3<f64>],
         slots: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
+        self.forces_with_damping_into(x, None, slots)
+    }
+
+    /// [`Self::forces_into`], and when `dashpots` = (velocities,
+    /// coefficient per truss) is given, the dashpot forces of
+    /// [`Self::add_damping_into`] added piece by piece in the same pass
+    /// (the same operations on each slot in the same order as the two
+    /// calls one after the other, so the same bits, with one parallel
+    /// region and one sweep over the slots instead of two).
+    pub fn forces_with_damping_into(
+        &self,
+        x: &[Vector3<f64>],
+        dashpots: Option<(&[Vector3<f64>], &[f64])>,
+        slots: &mut [Vector3<f64>],
+    ) -> Result<(), ElementError> {
         assert_eq!(slots.len(), 2 * self.len());
-        // Tasks of MIN_CHUNK trusses, each a plain loop over blocks of LANES
-        // trusses on the lanes (crate::truss_lanes, same bits) that stops at
-        // its first failure (its lowest element): a per-truss reduction of
-        // results cost a third of the pass. A block with a failing truss,
-        // and the last partial block, run on the scalar path.
-        const _: () = assert!(MIN_CHUNK % LANES == 0);
+        if let Some((_, c)) = dashpots {
+            assert_eq!(c.len(), self.len());
+        }
+        // Tasks of TRUSS_PIECE trusses, each a plain loop over blocks of
+        // LANES trusses on the lanes (crate::truss_lanes, same bits) that
+        // stops at its first failure (its lowest element): a per-truss
+        // reduction of results cost a third of the pass. A block with a
+        // failing truss, and the last partial block, run on the scalar path.
+        const _: () = assert!(TRUSS_PIECE % LANES == 0);
         lowest_error(
             slots
-                .par_chunks_mut(2 * MIN_CHUNK)
+                .par_chunks_mut(2 * TRUSS_PIECE)
                 .enumerate()
                 .map(|(c, out)| {
-                    let first = c * MIN_CHUNK;
-                    let done = out.len() / (2 * LANES) * LANES;
-                    let mut blocks = out.chunks_exact_mut(2 * LANES);
-                    for (b, block) in blocks.by_ref().enumerate() {
-                        let e0 = first + b * LANES;
-                        let range = e0..e0 + LANES;
-                        if !truss_lanes::block_forces(
-                            &self.law,
-                            &self.nodes[range.clone()],
-                            &self.length[range.clone()],
-                            &self.section[range],
-                            x,
-                            block,
-                        ) {
-                            self.scalar_forces_into(e0, x, block)?;
-                        }
+                    let first = c * TRUSS_PIECE;
+                    self.piece_forces_into(first, x, out)?;
+                    if let Some((v, coefficient)) = dashpots {
+                        self.piece_damping_into(first, x, v, coefficient, out);
                     }
-                    self.scalar_forces_into(first + done, x, blocks.into_remainder())
+                    Ok(())
                 }),
         )
+    }
+
+    /// The forces of trusses `first..first + out.len() / 2` into `out`,
+    /// blocks of [`LANES`] on the lanes.
+    fn piece_forces_into(
+        &self,
+        first: usize,
+        x: &[Vector3<f64>],
+        out: &mut [Vector3<f64>],
+    ) -> Result<(), ElementError> {
+        let done = out.len() / (2 * LANES) * LANES;
+        let mut blocks = out.chunks_exact_mut(2 * LANES);
+        for (b, block) in blocks.by_ref().enumerate() {
+            let e0 = first + b * LANES;
+            let range = e0..e0 + LANES;
+            if !truss_lanes::block_forces(
+                &self.law,
+                &self.nodes[range.clone()],
+                &self.length[range.clone()],
+                &self.section[range],
+                x,
+                block,
+            ) {
+                self.scalar_forces_into(e0, x, block)?;
+            }
+        }
+        self.scalar_forces_into(first + done, x, blocks.into_remainder())
     }
 
     /// The forces of trusses `first..` into `slots` (2 per truss), one by
@@ -232,21 +265,34 @@ impl TrussBatch {
         assert_eq!(slots.len(), 2 * self.len());
         assert_eq!(coefficient.len(), self.len());
         slots
-            .par_chunks_mut(2)
-            .with_min_len(MIN_CHUNK)
+            .par_chunks_mut(2 * TRUSS_PIECE)
             .enumerate()
-            .for_each(|(e, out)| {
-                let [i, j] = self.nodes[e];
-                let (i, j) = (i as usize, j as usize);
-                let d = x[j] - x[i];
-                let l = d.norm();
-                if l > 0.0 {
-                    let n = d / l;
-                    let f = n * (coefficient[e] * n.dot(&(v[j] - v[i])));
-                    out[0] -= f;
-                    out[1] += f;
-                }
-            });
+            .for_each(|(c, out)| self.piece_damping_into(c * TRUSS_PIECE, x, v, coefficient, out));
+    }
+
+    /// The dashpot forces of trusses `first..first + out.len() / 2` added
+    /// to `out`.
+    fn piece_damping_into(
+        &self,
+        first: usize,
+        x: &[Vector3<f64>],
+        v: &[Vector3<f64>],
+        coefficient: &[f64],
+        out: &mut [Vector3<f64>],
+    ) {
+        for (k, pair) in out.chunks_exact_mut(2).enumerate() {
+            let e = first + k;
+            let [i, j] = self.nodes[e];
+            let (i, j) = (i as usize, j as usize);
+            let d = x[j] - x[i];
+            let l = d.norm();
+            if l > 0.0 {
+                let n = d / l;
+                let f = n * (coefficient[e] * n.dot(&(v[j] - v[i])));
+                pair[0] -= f;
+                pair[1] += f;
+            }
+        }
     }
 
     /// How many trusses of the batch meet at each of `node_count` nodes.
@@ -388,7 +434,11 @@ mod tests {
     /// −3 %), in the crimp law's series range (0 < ε < 4e-6, below
     /// 1e-3·ε_sh), on its closed form (to +5 %), and at λ = 1 ± 1e-9 or 1.
     fn spread(law: FibreLaw) -> (TrussBatch, Vec<Vector3<f64>>) {
-        let count = 203;
+        spread_n(law, 203)
+    }
+
+    /// [`spread`] with `count` trusses.
+    fn spread_n(law: FibreLaw, count: usize) -> (TrussBatch, Vec<Vector3<f64>>) {
         let mut x0 = vec![Vector3::new(1.0, -2.0, 0.5)];
         let mut x = x0.clone();
         let mut seed = 12345u64;
@@ -460,6 +510,36 @@ mod tests {
                 assert_eq!(base, best);
                 assert_eq!(base[..], slots[2 * b * LANES..2 * (b + 1) * LANES]);
             }
+        }
+    }
+
+    #[test]
+    fn forces_with_dashpots_in_one_pass_equal_each_truss_alone_bit_for_bit() {
+        // Three pieces, the last partial with a scalar tail of 1.
+        let count = 2 * crate::TRUSS_PIECE + 41;
+        let (t, x) = spread_n(laws()[2], count);
+        let v: Vec<_> = (0..x.len())
+            .map(|i| random_rotation(i as u64 + 3) * Vector3::new(1.0 + i as f64 * 1e-3, 0.5, 0.0))
+            .collect();
+        let c: Vec<f64> = (0..count).map(|e| 1e-4 * (1.0 + (e % 7) as f64)).collect();
+        let mut fused = vec![Vector3::repeat(f64::NAN); 2 * count];
+        t.forces_with_damping_into(&x, Some((&v, &c)), &mut fused)
+            .unwrap();
+        let mut apart = vec![Vector3::repeat(f64::NAN); 2 * count];
+        t.forces_into(&x, &mut apart).unwrap();
+        t.add_damping_into(&x, &v, &c, &mut apart);
+        // Stated round-off: none. The reference is each truss on its own:
+        // its elastic force, then its dashpot N_d = c·n·(v₂ − v₁) added.
+        for e in 0..count {
+            let mut f = t.element_force(e, &x).unwrap();
+            let [i, j] = t.nodes[e].map(|n| n as usize);
+            let d = x[j] - x[i];
+            let n = d / d.norm();
+            let fd = n * (c[e] * n.dot(&(v[j] - v[i])));
+            f[0] -= fd;
+            f[1] += fd;
+            assert_eq!(fused[2 * e..2 * e + 2], f, "truss {e}");
+            assert_eq!(apart[2 * e..2 * e + 2], f, "truss {e}");
         }
     }
 

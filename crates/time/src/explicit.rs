@@ -13,6 +13,20 @@ use crate::profile::{Pass, ProfileClock, Profiler, StepProfile};
 use crate::shared::{self, Constraints, ForcePass};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
+/// Nodes per task of the per-node checks (≈ 15–35 instructions a node).
+const CHECK_PIECE: usize = 8192;
+
+/// The lowest node `i < n` for which `bad(i)` holds: pieces of
+/// [`CHECK_PIECE`] nodes searched in parallel, each by a plain loop (rayon's
+/// `position_first` checks a shared bound at every node and ran three times
+/// the instructions of the loop), the lowest find kept whatever the split.
+pub(crate) fn first_node(n: usize, bad: impl Fn(usize) -> bool + Sync) -> Option<usize> {
+    (0..n.div_ceil(CHECK_PIECE))
+        .into_par_iter()
+        .map(|c| (c * CHECK_PIECE..((c + 1) * CHECK_PIECE).min(n)).find(|&i| bad(i)))
+        .reduce(|| None, |a, b| a.or(b))
+}
+
 /// Settings of an explicit run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExplicitSettings {
@@ -375,13 +389,14 @@ impl<'m> Explicit<'m> {
     /// whether or not a time step is forced.
     fn estimated_time_step(&self, x: &[Vector3<f64>]) -> f64 {
         let model = self.model;
-        let smallest = |len: usize, dt_e: &(dyn Fn(usize) -> f64 + Sync)| {
-            // An element's estimate costs about a force evaluation (a quad
-            // ~1 µs), so pieces of 256 pay for a fork; the minimum does not
-            // depend on how the range is split.
+        // Pieces of about 100 k instructions (callgrind, 200 × 200 blank:
+        // ≈ 1 700 per quad, ≈ 45 per truss): enough to pay for
+        // waking a second thread, and the minimum does not depend on how
+        // the range is split.
+        let smallest = |len: usize, piece: usize, dt_e: &(dyn Fn(usize) -> f64 + Sync)| {
             (0..len)
                 .into_par_iter()
-                .with_min_len(256)
+                .with_min_len(piece)
                 .map(dt_e)
                 .reduce(|| f64::INFINITY, f64::min)
         };
@@ -397,7 +412,7 @@ impl<'m> Explicit<'m> {
             .zip(&self.truss_mass)
             .enumerate()
             .map(|(k, (b, m))| {
-                smallest(b.len(), &|e| b.element_stable_time_step(e, x, m[e]))
+                smallest(b.len(), 2048, &|e| b.element_stable_time_step(e, x, m[e]))
                     * self.damped_step_factor(k)
             })
             .fold(f64::INFINITY, f64::min));
@@ -405,7 +420,7 @@ impl<'m> Explicit<'m> {
             .membranes
             .iter()
             .zip(&self.membrane_scale)
-            .map(|(b, s)| smallest(b.len(), &|e| b.element_stable_time_step(e, x) * s[e]))
+            .map(|(b, s)| smallest(b.len(), 64, &|e| b.element_stable_time_step(e, x) * s[e]))
             .fold(f64::INFINITY, f64::min));
         add(model
             .springs
@@ -417,7 +432,7 @@ impl<'m> Explicit<'m> {
             .bending
             .iter()
             .zip(&self.bending_mass)
-            .map(|(b, m)| smallest(b.len(), &|e| b.element_stable_time_step(e, x, m[e])))
+            .map(|(b, m)| smallest(b.len(), 2048, &|e| b.element_stable_time_step(e, x, m[e])))
             .fold(f64::INFINITY, f64::min));
         self.settings.safety_factor / inverse_square.sqrt()
     }
@@ -592,10 +607,12 @@ impl<'m> Explicit<'m> {
                     &self.forces.f_int,
                     &self.f_ext,
                 );
+                // ≈ 30 instructions a node: pieces of 4 096 nodes pay for a
+                // second thread's wake-up, pieces of 1 024 did not.
                 self.x_new
                     .par_iter_mut()
                     .zip(self.v_new.par_iter_mut())
-                    .with_min_len(1024)
+                    .with_min_len(4096)
                     .enumerate()
                     .for_each(|(i, (xn, vn))| {
                         let a = (f_ext[i] - f_int[i]) / m[i];
@@ -702,9 +719,11 @@ impl<'m> Explicit<'m> {
                 t_new,
                 self.profiler.as_mut(),
             )?;
-            if let Some(i) = (0..n).find(|&i| {
-                !(self.x_new[i].iter().all(|v| v.is_finite())
-                    && self.forces.f_int[i].iter().all(|v| v.is_finite()))
+            // The lowest such node whatever the split; in parallel, as a
+            // sequential scan was a serial part of a large model's step.
+            let (x_new, f_int) = (&self.x_new, &self.forces.f_int);
+            if let Some(i) = first_node(n, |i| {
+                !(x_new[i].iter().all(|v| v.is_finite()) && f_int[i].iter().all(|v| v.is_finite()))
             }) {
                 return Err(RunError::NonFinite {
                     step: state.step + 1,

@@ -465,9 +465,9 @@ impl Guard {
             self.high.add_scalar(self.reach),
         );
         let limit = self.speed_limit_squared;
-        // Sequential: two comparisons a node cost less than rayon's split
-        // at the sizes drape runs (the step's element pass dominates).
-        let bad = (0..x.len()).find(|&i| {
+        // In pieces of 8 192 nodes: a small model's check stays on one
+        // thread, a large model's is no serial part of its step.
+        let bad = crate::explicit::first_node(x.len(), |i| {
             let p = &x[i];
             let outside = (0..3).any(|k| p[k] < low[k] || p[k] > high[k]);
             outside || (movable[i] && v[i].norm_squared() > limit)

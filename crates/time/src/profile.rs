@@ -12,7 +12,11 @@
 //! each for the wall clock, more for thread CPU time), which is noise on
 //! a step of the hemisphere scene but not on a step of a ten-element
 //! model; and with more than one thread each pass is timed on the driver's
-//! thread, i.e. as wall time until the pass's last task ends.
+//! thread, i.e. as wall time until the pass's last task ends. A profiled
+//! step runs the truss and membrane passes one after the other, so each
+//! has its own time; an unprofiled step runs them side by side (see
+//! `shared::ForcePass::evaluate`), so on two threads it can be shorter
+//! than the profile's sum says.
 //!
 //! The clock is a plain function, the wall clock unless the caller passes
 //! another ([`ProfileClock`]): the benches pass the calling thread's CPU
@@ -48,10 +52,8 @@ pub enum Pass {
     Works,
     /// Gravity and nodal loads.
     Loads,
-    /// Truss forces.
+    /// Truss forces, with the dashpots of kinked yarns (one pass).
     Trusses,
-    /// The dashpots of kinked yarns.
-    TrussDashpots,
     /// Membrane forces (resin, embedded fibres) and their new history.
     Membranes,
     /// Holding springs.
@@ -70,7 +72,7 @@ pub enum Pass {
 
 impl Pass {
     /// Every pass, in step order.
-    pub const ALL: [Pass; 15] = [
+    pub const ALL: [Pass; 14] = [
         Pass::StableStep,
         Pass::Update,
         Pass::BoundaryConditions,
@@ -78,7 +80,6 @@ impl Pass {
         Pass::Works,
         Pass::Loads,
         Pass::Trusses,
-        Pass::TrussDashpots,
         Pass::Membranes,
         Pass::Springs,
         Pass::Bending,
@@ -97,8 +98,7 @@ impl Pass {
             Pass::Contact => "contact",
             Pass::Works => "works (energy sums)",
             Pass::Loads => "gravity and loads",
-            Pass::Trusses => "element forces: trusses",
-            Pass::TrussDashpots => "element forces: yarn dashpots",
+            Pass::Trusses => "element forces: trusses, dashpots",
             Pass::Membranes => "element forces: membranes",
             Pass::Springs => "element forces: springs",
             Pass::Bending => "element forces: yarn bending",

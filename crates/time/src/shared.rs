@@ -6,6 +6,7 @@
 //! Not here: anything about how a driver advances time (central
 //! differences, Newton increments) or treats contact.
 
+use drape_elements::ElementError;
 use drape_model::{Model, Motion, SlotLayout, State};
 use nalgebra::Vector3;
 
@@ -111,6 +112,30 @@ pub(crate) struct ForcePass {
     pub f_int: Vec<Vector3<f64>>,
     /// The membranes' histories of the last evaluation.
     pub history_new: Vec<Vec<f64>>,
+    /// Estimated instructions of the truss and of the membrane pass.
+    work: (usize, usize),
+}
+
+/// Instructions below which a kind's pass is not worth a task of its own
+/// (about what waking a second thread costs, with a margin): the pieces of
+/// the element passes are sized alike (`drape-elements`).
+const SIDE_BY_SIDE_WORK: usize = 100_000;
+
+/// Estimated instructions of the truss and of the membrane pass of `model`
+/// (callgrind, 200 × 200 blank: ≈ 125 per truss on the lanes, ≈ 950 per
+/// quad on the lanes; a quad with embedded fibres or a Prony table the
+/// lanes do not take about twice that; a triangle about a quarter of it).
+fn pass_work(model: &Model) -> (usize, usize) {
+    let trusses = model.trusses.iter().map(|b| 125 * b.len()).sum();
+    let membranes = model
+        .membranes
+        .iter()
+        .map(|b| match b.shape() {
+            drape_elements::MembraneShape::Quad => 1000 * b.len(),
+            drape_elements::MembraneShape::Triangle => 250 * b.len(),
+        })
+        .sum();
+    (trusses, membranes)
 }
 
 impl ForcePass {
@@ -125,6 +150,7 @@ impl ForcePass {
                 .iter()
                 .map(|b| b.initial_history())
                 .collect(),
+            work: pass_work(model),
         }
     }
 
@@ -147,7 +173,8 @@ impl ForcePass {
         time: f64,
         mut profiler: Option<&mut Profiler>,
     ) -> Result<(), RunError> {
-        let fail = |batch: String, error| RunError::Element {
+        let profiled = profiler.is_some();
+        let fail = |batch: String, error: ElementError| RunError::Element {
             step,
             time,
             batch,
@@ -158,29 +185,64 @@ impl ForcePass {
                 p.lap(pass);
             }
         };
-        for (i, b) in model.trusses.iter().enumerate() {
-            let start = self.layout.truss_offsets[i];
-            let slots = &mut self.slots[start..start + 2 * b.len()];
-            b.forces_into(x, slots)
-                .map_err(|e| fail(format!("truss batch {i}"), e))?;
-            lap(Pass::Trusses);
-            if let Some((v, c)) = dashpots.filter(|(_, c)| !c[i].is_empty()) {
-                b.add_damping_into(x, v, &c[i], slots);
-                lap(Pass::TrussDashpots);
+        let truss_slots = self.layout.membrane_offsets.first().copied();
+        let (truss_work, membrane_work) = self.work;
+        match truss_slots {
+            // Unprofiled, trusses and membranes in one parallel region when
+            // both are worth a task of their own: on a small model each
+            // kind alone is one or two tasks, and two passes one after the
+            // other leave the second thread idle (or asleep) for most of
+            // the step. The larger kind runs on this thread, the smaller
+            // is offered to the other: if waking it takes longer than the
+            // larger kind, this thread runs both, as in sequence. Each
+            // slot and history entry is written by the same operations
+            // either way, so the bits do not depend on this choice; a truss
+            // failure is reported before a membrane one, as in sequence.
+            Some(split) if !profiled && truss_work.min(membrane_work) >= SIDE_BY_SIDE_WORK => {
+                let (truss_part, rest) = self.slots.split_at_mut(split);
+                let history_new = &mut self.history_new;
+                let layout = &self.layout;
+                let trusses = || truss_forces(model, x, dashpots, truss_part, &fail, &mut |_| {});
+                let membranes = || {
+                    membrane_forces(
+                        model,
+                        x,
+                        history,
+                        history_new,
+                        dt,
+                        rest,
+                        layout,
+                        split,
+                        &fail,
+                        &mut |_| {},
+                    )
+                };
+                let (trusses, membranes) = if membrane_work >= truss_work {
+                    let (m, t) = rayon::join(membranes, trusses);
+                    (t, m)
+                } else {
+                    rayon::join(trusses, membranes)
+                };
+                trusses?;
+                membranes?;
             }
-        }
-        for (i, b) in model.membranes.iter().enumerate() {
-            let start = self.layout.membrane_offsets[i];
-            let n = b.shape().nodes() * b.len();
-            b.forces_into(
-                x,
-                &history[i],
-                &mut self.history_new[i],
-                dt,
-                &mut self.slots[start..start + n],
-            )
-            .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
-            lap(Pass::Membranes);
+            _ => {
+                let split = truss_slots.unwrap_or(self.layout.len);
+                let (truss_part, rest) = self.slots.split_at_mut(split);
+                truss_forces(model, x, dashpots, truss_part, &fail, &mut lap)?;
+                membrane_forces(
+                    model,
+                    x,
+                    history,
+                    &mut self.history_new,
+                    dt,
+                    rest,
+                    &self.layout,
+                    split,
+                    &fail,
+                    &mut lap,
+                )?;
+            }
         }
         for (i, b) in model.springs.iter().enumerate() {
             let start = self.layout.spring_offsets[i];
@@ -197,6 +259,61 @@ impl ForcePass {
         lap(Pass::Gather);
         Ok(())
     }
+}
+
+/// The truss batches' forces (and dashpots) into `slots`, the slots of
+/// every truss batch (the layout puts them first).
+fn truss_forces(
+    model: &Model,
+    x: &[Vector3<f64>],
+    dashpots: Option<Dashpots<'_>>,
+    slots: &mut [Vector3<f64>],
+    fail: &(dyn Fn(String, ElementError) -> RunError + Sync),
+    lap: &mut dyn FnMut(Pass),
+) -> Result<(), RunError> {
+    let mut start = 0;
+    for (i, b) in model.trusses.iter().enumerate() {
+        let end = start + 2 * b.len();
+        let dashpots = dashpots
+            .filter(|(_, c)| !c[i].is_empty())
+            .map(|(v, c)| (v, c[i].as_slice()));
+        b.forces_with_damping_into(x, dashpots, &mut slots[start..end])
+            .map_err(|e| fail(format!("truss batch {i}"), e))?;
+        lap(Pass::Trusses);
+        start = end;
+    }
+    Ok(())
+}
+
+/// The membrane batches' forces into `slots` (which begin at slot `base`
+/// of `layout`) and their new histories into `history_new`.
+#[allow(clippy::too_many_arguments)]
+fn membrane_forces(
+    model: &Model,
+    x: &[Vector3<f64>],
+    history: &[Vec<f64>],
+    history_new: &mut [Vec<f64>],
+    dt: f64,
+    slots: &mut [Vector3<f64>],
+    layout: &SlotLayout,
+    base: usize,
+    fail: &(dyn Fn(String, ElementError) -> RunError + Sync),
+    lap: &mut dyn FnMut(Pass),
+) -> Result<(), RunError> {
+    for (i, b) in model.membranes.iter().enumerate() {
+        let start = layout.membrane_offsets[i] - base;
+        let n = b.shape().nodes() * b.len();
+        b.forces_into(
+            x,
+            &history[i],
+            &mut history_new[i],
+            dt,
+            &mut slots[start..start + n],
+        )
+        .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
+        lap(Pass::Membranes);
+    }
+    Ok(())
 }
 
 /// Gravity and the nodal loads at time `t` into `f_ext`.

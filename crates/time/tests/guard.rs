@@ -222,6 +222,32 @@ fn the_scenes_speed_and_reach_come_from_its_motions() {
 }
 
 #[test]
+fn the_lowest_offending_node_is_named_on_any_thread_count() {
+    // Enough nodes that the check runs in several pieces (8 192 nodes
+    // each): offenders in the second and third piece, the lower named.
+    let model = pulled(0.01);
+    let mut guard = Guard::new(&model, GuardSettings::default(), 0.02);
+    let state = model.initial_state();
+    guard.begin(&state);
+    let n = 3 * 8192 + 5;
+    let x: Vec<_> = (0..n).map(|i| state.x[i % state.x.len()]).collect();
+    let mut v = vec![Vector3::zeros(); n];
+    let movable = vec![true; n];
+    v[20_000] = Vector3::new(0.0, 0.0, 200.0 * guard.speed_scale());
+    v[9_000] = v[20_000];
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        match pool.install(|| guard.nodes(&x, &v, &movable)) {
+            Err(Instability::Speed { node: 9_000, .. }) => {}
+            other => panic!("{threads} threads: {other:?}"),
+        }
+    }
+}
+
+#[test]
 fn a_scene_declared_quasi_static_stops_when_inertia_dominates() {
     // The right edge pulled 2 mm in 0.1 ms, then held, with the run going
     // on: the blank rings, its kinetic energy comparable to its strain.

@@ -71,6 +71,16 @@ use crate::{
 const EASY: usize = 6;
 const HARD: usize = 12;
 
+/// Newton iterations of an increment after which a slipping pair needs a
+/// reversal of [`SETTLED_REVERSAL`] times the increment's largest
+/// displacement to stick again (and sticks from where it is, not from tₙ).
+/// Chosen on the hemisphere 10×10 (0/90, μ = 0.1): after 4 iterations
+/// with 1e-4 the run takes 4 783 Newton iterations and 88 cutbacks instead
+/// of 8 675 and 148, and its maximum shear moves by 0.03°, the draw-ins by
+/// 0.01 mm; after 2, the end yarn tension moved by 14 %.
+const SETTLE: usize = 4;
+const SETTLED_REVERSAL: f64 = 1e-4;
+
 /// Settings of an implicit run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImplicitSettings {
@@ -880,7 +890,27 @@ impl<'m> Implicit<'m> {
                 Ok(()) => {
                     if let Some(contact) = &mut self.contact {
                         if step_taken {
-                            friction_changes = contact.update_friction(&self.x);
+                            // Stick and slip settle pair by pair, but pairs
+                            // at the edge of the friction cone that slip
+                            // together can cycle stick → slip → stick until
+                            // the attempt is cut (the hemisphere 10×10 cut
+                            // 148 increments so). After `SETTLE` iterations
+                            // a slip must run along its friction force by a
+                            // `SETTLED_REVERSAL` fraction of the
+                            // increment's motion before the pair sticks
+                            // again, and it then sticks where it is.
+                            let reversal = if newton >= SETTLE {
+                                SETTLED_REVERSAL
+                                    * self
+                                        .x
+                                        .iter()
+                                        .zip(&state.x)
+                                        .map(|(a, b)| (a - b).amax())
+                                        .fold(0.0, f64::max)
+                            } else {
+                                0.0
+                            };
+                            friction_changes = contact.update_friction(&self.x, reversal);
                         }
                         contact.linearise(&self.x, &state.x);
                     }

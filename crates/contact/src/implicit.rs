@@ -1648,6 +1648,71 @@ mod tests {
         assert!(open >= 1);
     }
 
+    /// A node pressed on a floor with μ = 0.3, slipping at tₙ with its
+    /// friction force along +x, has moved `dx` along x in the increment.
+    /// Returns the pass after `update_friction(reversal)` and the number
+    /// of changes.
+    fn slipping_node(dx: f64, reversal: f64) -> (ImplicitContact, usize) {
+        let floor = plane("floor", 0.0, true, 0.3, ToolMotion::Fixed);
+        let settings = ImplicitContactSettings {
+            offset: OFFSET,
+            margin: 0.5,
+            tolerance: 1e-13,
+            max_iterations: 100,
+        };
+        let mut contact = ImplicitContact::new(vec![floor], 1, settings);
+        let carried = vec![CarriedPair {
+            tool: 0,
+            node: 0,
+            lambda: 2.0,
+            stick: [0.0; 3],
+            slip_direction: [1.0, 0.0, 0.0],
+            friction: Friction::Slip,
+        }];
+        contact.restore(carried, &[ToolState::default()], &[0.0], 0.0);
+        let inc = Increment {
+            t_new: 0.01,
+            h: 0.01,
+            beta: 0.25,
+            gamma: 0.5,
+            alpha_m: 0.0,
+        };
+        let x_n = vec![Vector3::new(0.0, 0.0, OFFSET)];
+        let x = vec![Vector3::new(dx, 0.0, OFFSET)];
+        contact.begin(&x, &[true], inc);
+        contact.linearise(&x, &x_n);
+        let changes = contact.update_friction(&x, reversal);
+        (contact, changes)
+    }
+
+    #[test]
+    fn a_settled_slip_sticks_again_only_beyond_the_band_and_where_it_is() {
+        // Running along its friction force by 1e-3 mm reverses the slip
+        // when no band is given...
+        let (contact, changes) = slipping_node(1e-3, 0.0);
+        assert_eq!(changes, 1);
+        assert_eq!(contact.pairs[0].friction, Friction::Stick);
+        // ...sticking from tₙ: the stick rows would pull it back.
+        assert_eq!(contact.pairs[0].anchor, Vector3::new(0.0, 0.0, OFFSET));
+        // Within a band of 2e-3 mm it keeps slipping.
+        let (contact, changes) = slipping_node(1e-3, 2e-3);
+        assert_eq!(changes, 0);
+        assert_eq!(contact.pairs[0].friction, Friction::Slip);
+        // Beyond a band of 5e-4 mm it sticks where it is now.
+        let (mut contact, changes) = slipping_node(1e-3, 5e-4);
+        assert_eq!(changes, 1);
+        assert_eq!(contact.pairs[0].friction, Friction::Stick);
+        let here = vec![Vector3::new(1e-3, 0.0, OFFSET)];
+        contact.linearise(&here, &[Vector3::new(0.0, 0.0, OFFSET)]);
+        assert!(contact.pairs[0].slip.norm() <= 1e-15);
+        // Moving against its friction force is no reversal, band or not.
+        for band in [0.0, 5e-4] {
+            let (contact, changes) = slipping_node(-1e-3, band);
+            assert_eq!(changes, 0);
+            assert_eq!(contact.pairs[0].friction, Friction::Slip);
+        }
+    }
+
     #[test]
     fn the_condensed_solve_equals_the_direct_saddle_point_solve() {
         for seed in 1..=4 {

@@ -28,7 +28,10 @@
 //! correction within `displacement_tolerance` times the increment's largest
 //! displacement, no node deeper than `gap_tolerance` in a tool nor a
 //! sticking one slipping more, no friction state changed, and every
-//! force-driven tool balanced. A step that more than doubles the residual
+//! force-driven tool balanced. After a few iterations a slipping pair
+//! needs a reversal beyond a small band to stick again (see `SETTLE`):
+//! pairs at the edge of the friction cone would otherwise cycle between
+//! stick and slip. A step that more than doubles the residual
 //! (or inverts an element) is halved, up to four times (line search),
 //! unless friction states changed with it.
 //!

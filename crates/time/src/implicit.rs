@@ -77,9 +77,9 @@ const HARD: usize = 12;
 /// Newton iterations of an increment after which a slipping pair needs a
 /// reversal of [`SETTLED_REVERSAL`] times the increment's largest
 /// displacement to stick again. Measured on the hemisphere 10×10 (0/90,
-/// μ = 0.1, one run together with a row scaling of the contact solve
-/// that was not kept): 7 357 Newton iterations and 129 cutbacks instead
-/// of 8 675 and 148; maximum shear 19.16° (19.15°), draw-ins unchanged.
+/// μ = 0.1, max increment 0.05 s): 628 increments, 7 574 Newton
+/// iterations and 1 791 more in 124 cutbacks, instead of 721, 8 675 and
+/// 2 479 in 148; maximum shear 19.14° (19.15°), draw-ins unchanged.
 /// Sticking again from where the pair is (rather than from tₙ) cut the
 /// run further (4 783 iterations, 88 cutbacks) but let slipping nodes
 /// stick: the capstan and pinching cases failed with it.

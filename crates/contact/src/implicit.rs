@@ -214,6 +214,18 @@ pub struct SolveStats {
     pub active: usize,
     /// Largest projected-gradient component left (mm).
     pub residual: f64,
+    /// Of the products: conjugate gradient steps on the free set.
+    pub cg_steps: usize,
+    /// Expansion steps (a step cut at a bound, then a projected gradient
+    /// step): two products each.
+    pub expansions: usize,
+    /// Proportioning steps (bound multipliers released).
+    pub proportionings: usize,
+    /// Products spent estimating ‖A‖ for the projected gradient step.
+    pub norm_products: usize,
+    /// Normal rows whose multiplier changed from zero to positive or back
+    /// against the warm start.
+    pub active_changes: usize,
 }
 
 /// The condensed solve did not converge, or met a direction of
@@ -703,6 +715,7 @@ impl ImplicitContact {
             &mut s.lambda,
             &mut apply,
             Work {
+                stats: &mut stats,
                 g: &mut s.g,
                 p: &mut s.p,
                 ap: &mut s.ap,
@@ -716,7 +729,6 @@ impl ImplicitContact {
         let residual = result?;
         stats.residual = residual;
         // Δx = K̂⁻¹·(r + Cᵀλ) = Δx₀ + K̂⁻¹·Cᵀλ.
-        let s = &mut self.scratch;
         s.w.iter_mut().for_each(|x| *x = 0.0);
         let mut tool_f = vec![0.0; n_tools];
         for (row, &l) in self.rows.iter().zip(&s.lambda) {
@@ -740,6 +752,14 @@ impl ImplicitContact {
                     0.0
                 };
         }
+        stats.active_changes = self
+            .rows
+            .iter()
+            .zip(&s.lambda)
+            .filter(|(row, l)| {
+                row.bounded && (**l > 0.0) != (self.pairs[row.pair as usize].lambda > 0.0)
+            })
+            .count();
         // Multipliers back to the pairs.
         for pair in &mut self.pairs {
             pair.lambda = 0.0;
@@ -769,8 +789,13 @@ impl ImplicitContact {
     /// The return mapping after a solve, at the new iterate `x`: a stick
     /// force beyond μ·λ_N turns the pair to slip in its direction; a slip
     /// that runs along its friction force turns back to stick; a pair that
-    /// left contact forgets its friction. Returns how many pairs changed.
-    pub fn update_friction(&mut self, x: &[Vector3<f64>]) -> usize {
+    /// left contact forgets its friction. A slip counts as reversed when
+    /// it runs along the friction force by more than `reversal` (mm), or
+    /// by more than noise of the solve if that is larger (the driver
+    /// widens the band after the first iterations of an increment, see
+    /// its `SETTLE`). Returns how many pairs changed.
+    pub fn update_friction(&mut self, x: &[Vector3<f64>], reversal: f64) -> usize {
+        let reversal = reversal.max(SLIP_NOISE * self.settings.tolerance);
         let mut changes = 0;
         for pair in &mut self.pairs {
             let tool = &self.tools[pair.tool as usize];
@@ -827,7 +852,7 @@ impl ImplicitContact {
                     // last increment's slip): recomputed from a slip that
                     // may still be round-off, it would turn at random and
                     // Newton would not converge.
-                    if slip.dot(&pair.slip_direction) > SLIP_NOISE * self.settings.tolerance {
+                    if slip.dot(&pair.slip_direction) > reversal {
                         // Sticking from where it was at tₙ (or where it
                         // closed): from where it stopped it would keep
                         // the slip it made against a force it did not
@@ -1138,6 +1163,8 @@ impl ImplicitContact {
 
 /// The MPRGP work vectors.
 struct Work<'a> {
+    /// Where the products are counted by kind.
+    stats: &'a mut SolveStats,
     g: &'a mut [f64],
     p: &'a mut [f64],
     ap: &'a mut [f64],
@@ -1160,7 +1187,13 @@ fn mprgp(
     max_iterations: usize,
 ) -> Result<f64, SolveError> {
     let n = c.len();
-    let Work { g, p, ap, phi } = work;
+    let Work {
+        stats,
+        g,
+        p,
+        ap,
+        phi,
+    } = work;
     // Γ of the proportioning test.
     const GAMMA: f64 = 1.0;
     for k in 0..n {
@@ -1217,6 +1250,7 @@ fn mprgp(
             }
             apply(p, ap);
             products += 1;
+            stats.cg_steps += 1;
             let pap: f64 = (0..n).map(|k| p[k] * ap[k]).sum();
             if pap <= 0.0 {
                 return Err(SolveError::Indefinite);
@@ -1255,6 +1289,7 @@ fn mprgp(
                     None => {
                         let (norm, used) = norm_estimate(n, apply, p, ap);
                         products += used;
+                        stats.norm_products += used;
                         let a = 1.0 / norm;
                         alpha_bar = Some(a);
                         a
@@ -1269,6 +1304,7 @@ fn mprgp(
                 }
                 apply(lambda, g);
                 products += 1;
+                stats.expansions += 1;
                 for k in 0..n {
                     g[k] += c[k];
                 }
@@ -1285,6 +1321,7 @@ fn mprgp(
             }
             apply(p, ap);
             products += 1;
+            stats.proportionings += 1;
             let pap: f64 = (0..n).map(|k| p[k] * ap[k]).sum();
             if pap <= 0.0 {
                 return Err(SolveError::Indefinite);
@@ -1602,6 +1639,69 @@ mod tests {
         let k3 = owners.iter().position(|o| *o == (0, 3, None)).unwrap();
         assert_eq!(lambda_ref[k3], 0.0);
         assert!(open >= 1);
+    }
+
+    /// A node pressed on a floor with μ = 0.3, slipping at tₙ with its
+    /// friction force along +x, has moved `dx` along x in the increment.
+    /// Returns the pass after `update_friction(reversal)` and the number
+    /// of changes.
+    fn slipping_node(dx: f64, reversal: f64) -> (ImplicitContact, usize) {
+        let floor = plane("floor", 0.0, true, 0.3, ToolMotion::Fixed);
+        let settings = ImplicitContactSettings {
+            offset: OFFSET,
+            margin: 0.5,
+            tolerance: 1e-13,
+            max_iterations: 100,
+        };
+        let mut contact = ImplicitContact::new(vec![floor], 1, settings);
+        let carried = vec![CarriedPair {
+            tool: 0,
+            node: 0,
+            lambda: 2.0,
+            stick: [0.0; 3],
+            slip_direction: [1.0, 0.0, 0.0],
+            friction: Friction::Slip,
+        }];
+        contact.restore(carried, &[ToolState::default()], &[0.0], 0.0);
+        let inc = Increment {
+            t_new: 0.01,
+            h: 0.01,
+            beta: 0.25,
+            gamma: 0.5,
+            alpha_m: 0.0,
+        };
+        let x_n = vec![Vector3::new(0.0, 0.0, OFFSET)];
+        let x = vec![Vector3::new(dx, 0.0, OFFSET)];
+        contact.begin(&x, &[true], inc);
+        contact.linearise(&x, &x_n);
+        let changes = contact.update_friction(&x, reversal);
+        (contact, changes)
+    }
+
+    #[test]
+    fn a_settled_slip_sticks_again_only_beyond_the_band() {
+        // Running along its friction force by 1e-3 mm reverses the slip
+        // when no band is given...
+        let (contact, changes) = slipping_node(1e-3, 0.0);
+        assert_eq!(changes, 1);
+        assert_eq!(contact.pairs[0].friction, Friction::Stick);
+        // ...sticking from tₙ: the stick rows would pull it back.
+        assert_eq!(contact.pairs[0].anchor, Vector3::new(0.0, 0.0, OFFSET));
+        // Within a band of 2e-3 mm it keeps slipping.
+        let (contact, changes) = slipping_node(1e-3, 2e-3);
+        assert_eq!(changes, 0);
+        assert_eq!(contact.pairs[0].friction, Friction::Slip);
+        // Beyond a band of 5e-4 mm it sticks, from tₙ.
+        let (contact, changes) = slipping_node(1e-3, 5e-4);
+        assert_eq!(changes, 1);
+        assert_eq!(contact.pairs[0].friction, Friction::Stick);
+        assert_eq!(contact.pairs[0].anchor, Vector3::new(0.0, 0.0, OFFSET));
+        // Moving against its friction force is no reversal, band or not.
+        for band in [0.0, 5e-4] {
+            let (contact, changes) = slipping_node(-1e-3, band);
+            assert_eq!(changes, 0);
+            assert_eq!(contact.pairs[0].friction, Friction::Slip);
+        }
     }
 
     #[test]

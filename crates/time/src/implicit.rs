@@ -28,7 +28,10 @@
 //! correction within `displacement_tolerance` times the increment's largest
 //! displacement, no node deeper than `gap_tolerance` in a tool nor a
 //! sticking one slipping more, no friction state changed, and every
-//! force-driven tool balanced. A step that more than doubles the residual
+//! force-driven tool balanced. After a few iterations a slipping pair
+//! needs a reversal beyond a small band to stick again (see `SETTLE`):
+//! pairs at the edge of the friction cone would otherwise cycle between
+//! stick and slip. A step that more than doubles the residual
 //! (or inverts an element) is halved, up to four times (line search),
 //! unless friction states changed with it.
 //!
@@ -70,6 +73,18 @@ use crate::{
 /// is no reason to shrink.
 const EASY: usize = 6;
 const HARD: usize = 12;
+
+/// Newton iterations of an increment after which a slipping pair needs a
+/// reversal of [`SETTLED_REVERSAL`] times the increment's largest
+/// displacement to stick again. Measured on the hemisphere 10×10 (0/90,
+/// μ = 0.1, max increment 0.05 s): 628 increments, 7 574 Newton
+/// iterations and 1 791 more in 124 cutbacks, instead of 721, 8 675 and
+/// 2 479 in 148; maximum shear 19.14° (19.15°), draw-ins unchanged.
+/// Sticking again from where the pair is (rather than from tₙ) cut the
+/// run further (4 783 iterations, 88 cutbacks) but let slipping nodes
+/// stick: the capstan and pinching cases failed with it.
+const SETTLE: usize = 4;
+const SETTLED_REVERSAL: f64 = 1e-4;
 
 /// Settings of an implicit run.
 #[derive(Debug, Clone, PartialEq)]
@@ -880,7 +895,26 @@ impl<'m> Implicit<'m> {
                 Ok(()) => {
                     if let Some(contact) = &mut self.contact {
                         if step_taken {
-                            friction_changes = contact.update_friction(&self.x);
+                            // Stick and slip settle pair by pair, but pairs
+                            // at the edge of the friction cone that slip
+                            // together can cycle stick → slip → stick until
+                            // the attempt is cut. After `SETTLE` iterations
+                            // a slip must run along its friction force by a
+                            // `SETTLED_REVERSAL` fraction of the
+                            // increment's motion before the pair sticks
+                            // again.
+                            let reversal = if newton >= SETTLE {
+                                SETTLED_REVERSAL
+                                    * self
+                                        .x
+                                        .iter()
+                                        .zip(&state.x)
+                                        .map(|(a, b)| (a - b).amax())
+                                        .fold(0.0, f64::max)
+                            } else {
+                                0.0
+                            };
+                            friction_changes = contact.update_friction(&self.x, reversal);
                         }
                         contact.linearise(&self.x, &state.x);
                     }

@@ -1376,6 +1376,16 @@ mod tests {
 
     const OFFSET: f64 = 0.1;
 
+    /// A 10 ms increment of the trapezoidal rule (β = ¼, γ = ½, no Bossak
+    /// shift), the tests' time step.
+    const TRAPEZOIDAL_STEP: Increment = Increment {
+        t_new: 0.01,
+        h: 0.01,
+        beta: 0.25,
+        gamma: 0.5,
+        alpha_m: 0.0,
+    };
+
     fn plane(name: &str, z: f64, up: bool, friction: f64, motion: ToolMotion) -> Tool {
         let normal = if up { Vector3::z() } else { -Vector3::z() };
         Tool {
@@ -1505,13 +1515,7 @@ mod tests {
             &vec![0.0; tools.len()],
             0.0,
         );
-        let inc = Increment {
-            t_new: 0.01,
-            h: 0.01,
-            beta: 0.25,
-            gamma: 0.5,
-            alpha_m: 0.0,
-        };
+        let inc = TRAPEZOIDAL_STEP;
         contact.begin(&x, &[true; 5], inc);
         // Slip of the last increment: the nodes moved from x_n.
         let x_n: Vec<Vector3<f64>> = x
@@ -1663,13 +1667,7 @@ mod tests {
             friction: Friction::Slip,
         }];
         contact.restore(carried, &[ToolState::default()], &[0.0], 0.0);
-        let inc = Increment {
-            t_new: 0.01,
-            h: 0.01,
-            beta: 0.25,
-            gamma: 0.5,
-            alpha_m: 0.0,
-        };
+        let inc = TRAPEZOIDAL_STEP;
         let x_n = vec![Vector3::new(0.0, 0.0, OFFSET)];
         let x = vec![Vector3::new(dx, 0.0, OFFSET)];
         contact.begin(&x, &[true], inc);

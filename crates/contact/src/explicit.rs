@@ -180,7 +180,8 @@ impl std::fmt::Display for ContactFault {
                 f,
                 ", more than the {limit:.3e} mm the contact resolves in one step (the fabric's thickness): \
                  the tool or the node moves too fast for the step (was the tool forced through the blank?), \
-                 so it is not pushed out"
+                 so it is not pushed out; a shorter step (less mass scaling) or a slower tool keeps each \
+                 step's travel within it"
             ),
         }
     }
@@ -1253,6 +1254,8 @@ mod tests {
         assert!(matches!(fault.kind, FaultKind::Overrun { limit } if limit == 0.2));
         assert!((fault.tool_travel - 5.0).abs() < 1e-12 && fault.node_travel == 0.0);
         assert!((fault.gap + 4.9).abs() < 1e-12);
+        // The message says what a user can change.
+        assert!(fault.to_string().contains("less mass scaling"), "{fault}");
         assert_eq!(x[0], Vector3::zeros());
         // Absorbed when nothing limits the travel.
         plate(f64::INFINITY)

@@ -82,8 +82,8 @@ pub const CASES: &[Case] = &[
         quick: false,
         run: hemisphere_agreement,
     },
-    // Not quick yet: on 2 loaded cores the implicit ±45 run alone takes
-    // ~13 min (1 375 increments, 296 cutbacks, 1.9 M PCG iterations).
+    // Not quick yet: on 2 idle cores the implicit ±45 run alone takes
+    // 5.4 min (1 083 increments, 231 cutbacks, 1.5 M PCG iterations).
     Case {
         name: "implicit/hemisphere-agreement-coarse",
         quick: false,

@@ -13,20 +13,6 @@ use crate::profile::{Pass, ProfileClock, Profiler, StepProfile};
 use crate::shared::{self, Constraints, ForcePass};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
-/// Nodes per task of the per-node checks (≈ 15–35 instructions a node).
-const CHECK_PIECE: usize = 8192;
-
-/// The lowest node `i < n` for which `bad(i)` holds: pieces of
-/// [`CHECK_PIECE`] nodes searched in parallel, each by a plain loop (rayon's
-/// `position_first` checks a shared bound at every node and ran three times
-/// the instructions of the loop), the lowest find kept whatever the split.
-pub(crate) fn first_node(n: usize, bad: impl Fn(usize) -> bool + Sync) -> Option<usize> {
-    (0..n.div_ceil(CHECK_PIECE))
-        .into_par_iter()
-        .map(|c| (c * CHECK_PIECE..((c + 1) * CHECK_PIECE).min(n)).find(|&i| bad(i)))
-        .reduce(|| None, |a, b| a.or(b))
-}
-
 /// Settings of an explicit run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExplicitSettings {
@@ -722,7 +708,7 @@ impl<'m> Explicit<'m> {
             // The lowest such node whatever the split; in parallel, as a
             // sequential scan was a serial part of a large model's step.
             let (x_new, f_int) = (&self.x_new, &self.forces.f_int);
-            if let Some(i) = first_node(n, |i| {
+            if let Some(i) = shared::first_node(n, |i| {
                 !(x_new[i].iter().all(|v| v.is_finite()) && f_int[i].iter().all(|v| v.is_finite()))
             }) {
                 return Err(RunError::NonFinite {

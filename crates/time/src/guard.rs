@@ -467,7 +467,7 @@ impl Guard {
         let limit = self.speed_limit_squared;
         // In pieces of 8 192 nodes: a small model's check stays on one
         // thread, a large model's is no serial part of its step.
-        let bad = crate::explicit::first_node(x.len(), |i| {
+        let bad = crate::shared::first_node(x.len(), |i| {
             let p = &x[i];
             let outside = (0..3).any(|k| p[k] < low[k] || p[k] > high[k]);
             outside || (movable[i] && v[i].norm_squared() > limit)

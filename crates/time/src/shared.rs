@@ -316,6 +316,21 @@ fn membrane_forces(
     Ok(())
 }
 
+/// Nodes per task of the per-node checks (≈ 15–35 instructions a node).
+const CHECK_PIECE: usize = 8192;
+
+/// The lowest node `i < n` for which `bad(i)` holds: pieces of
+/// [`CHECK_PIECE`] nodes searched in parallel, each by a plain loop (rayon's
+/// `position_first` checks a shared bound at every node and ran three times
+/// the instructions of the loop), the lowest find kept whatever the split.
+pub(crate) fn first_node(n: usize, bad: impl Fn(usize) -> bool + Sync) -> Option<usize> {
+    use rayon::prelude::*;
+    (0..n.div_ceil(CHECK_PIECE))
+        .into_par_iter()
+        .map(|c| (c * CHECK_PIECE..((c + 1) * CHECK_PIECE).min(n)).find(|&i| bad(i)))
+        .reduce(|| None, |a, b| a.or(b))
+}
+
 /// Gravity and the nodal loads at time `t` into `f_ext`.
 pub(crate) fn external_forces(model: &Model, t: f64, f_ext: &mut [Vector3<f64>]) {
     // Weight from the physical mass: mass scaling adds inertia only.

@@ -661,6 +661,45 @@ impl Model {
         layout
     }
 
+    /// Whether `history` has one array of the right length per membrane
+    /// batch.
+    pub fn history_fits(&self, history: &[Vec<f64>]) -> bool {
+        history.len() == self.membranes.len()
+            && self
+                .membranes
+                .iter()
+                .zip(history)
+                .all(|(b, h)| h.len() == b.len() * b.element_history_len())
+    }
+
+    /// Each membrane batch's history element after element (as
+    /// [`MembraneBatch::element_history`] gives an element's), whatever order
+    /// the batch keeps it in: the order of a file that must read back into
+    /// any build (checkpoints).
+    ///
+    /// # Panics
+    /// If `history` does not fit the model ([`Self::history_fits`]).
+    pub fn history_to_element_major(&self, history: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        assert!(self.history_fits(history), "a history of this model");
+        self.membranes
+            .iter()
+            .zip(history)
+            .map(|(b, h)| b.history_to_element_major(h))
+            .collect()
+    }
+
+    /// The inverse of [`Self::history_to_element_major`]; `None` if
+    /// `history` does not fit the model.
+    pub fn history_from_element_major(&self, history: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+        self.history_fits(history).then(|| {
+            self.membranes
+                .iter()
+                .zip(history)
+                .map(|(b, h)| b.history_from_element_major(h))
+                .collect()
+        })
+    }
+
     /// The undeformed state at rest at t = 0.
     pub fn initial_state(&self) -> State {
         State {
@@ -676,9 +715,8 @@ impl Model {
     pub fn element_fields(&self, state: &State) -> Result<ElementFields, ElementError> {
         let mut out = ElementFields::default();
         for (b, h) in self.membranes.iter().zip(&state.history) {
-            let eh = b.element_history_len();
             for e in 0..b.len() {
-                let o = b.element_output(e, &state.x, &h[e * eh..(e + 1) * eh])?;
+                let o = b.element_output(e, &state.x, &b.element_history(h, e))?;
                 out.shear.push(o.shear_angle);
                 out.fibre_stretch.push(o.fibre_stretch);
                 out.fibre_direction.push(o.fibre_direction);

@@ -388,7 +388,7 @@ pub(crate) fn check_model(model: &Model, end_time: f64) -> Result<(), RunError> 
 
 /// Checks that `state` belongs to `model`.
 pub(crate) fn check_state(model: &Model, state: &State) -> Result<(), RunError> {
-    if state.x.len() != model.node_count() || state.history.len() != model.membranes.len() {
+    if state.x.len() != model.node_count() || !model.history_fits(&state.history) {
         return Err(RunError::Setup(
             "the state does not belong to this model".into(),
         ));

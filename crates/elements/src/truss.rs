@@ -6,8 +6,7 @@ use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
 
 use crate::lanes::LANES;
-use crate::truss_lanes::{self, Dashpots};
-use crate::{ElementError, KinematicsError, TRUSS_PIECE, lowest_error};
+use crate::{ElementError, KinematicsError, TRUSS_PIECE, lowest_error, truss_lanes};
 
 /// A batch of trusses of one fibre law, usually one yarn family.
 ///
@@ -160,18 +159,23 @@ impl TrussBatch {
             slots
                 .par_chunks_mut(2 * TRUSS_PIECE)
                 .enumerate()
-                .map(|(c, out)| self.piece_forces_into(c * TRUSS_PIECE, x, dashpots, out)),
+                .map(|(c, out)| {
+                    let first = c * TRUSS_PIECE;
+                    self.piece_forces_into(first, x, out)?;
+                    if let Some((v, coefficient)) = dashpots {
+                        self.piece_damping_into(first, x, v, coefficient, out);
+                    }
+                    Ok(())
+                }),
         )
     }
 
     /// The forces of trusses `first..first + out.len() / 2` into `out`,
-    /// blocks of [`LANES`] on the lanes, with their dashpots if given (on
-    /// the lanes in the same kernel, which has each truss's n already).
+    /// blocks of [`LANES`] on the lanes.
     fn piece_forces_into(
         &self,
         first: usize,
         x: &[Vector3<f64>],
-        dashpots: Dashpots<'_>,
         out: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
         let done = out.len() / (2 * LANES) * LANES;
@@ -179,28 +183,18 @@ impl TrussBatch {
         for (b, block) in blocks.by_ref().enumerate() {
             let e0 = first + b * LANES;
             let range = e0..e0 + LANES;
-            let fused = dashpots.map(|(v, c)| (v, &c[range.clone()]));
             if !truss_lanes::block_forces(
                 &self.law,
                 &self.nodes[range.clone()],
                 &self.length[range.clone()],
                 &self.section[range],
                 x,
-                fused,
                 block,
             ) {
                 self.scalar_forces_into(e0, x, block)?;
-                if let Some((v, coefficient)) = dashpots {
-                    self.piece_damping_into(e0, x, v, coefficient, block);
-                }
             }
         }
-        let rest = blocks.into_remainder();
-        self.scalar_forces_into(first + done, x, rest)?;
-        if let Some((v, coefficient)) = dashpots {
-            self.piece_damping_into(first + done, x, v, coefficient, rest);
-        }
-        Ok(())
+        self.scalar_forces_into(first + done, x, blocks.into_remainder())
     }
 
     /// The forces of trusses `first..` into `slots` (2 per truss), one by
@@ -508,10 +502,10 @@ mod tests {
                 let mut best = [Vector3::zeros(); 2 * LANES];
                 let args = (&t.nodes[r.clone()], &t.length[r.clone()], &t.section[r]);
                 assert!(truss_lanes::block_forces_lanes(
-                    &t.law, args.0, args.1, args.2, &x, None, &mut base
+                    &t.law, args.0, args.1, args.2, &x, &mut base
                 ));
                 assert!(truss_lanes::block_forces(
-                    &t.law, args.0, args.1, args.2, &x, None, &mut best
+                    &t.law, args.0, args.1, args.2, &x, &mut best
                 ));
                 assert_eq!(base, best);
                 assert_eq!(base[..], slots[2 * b * LANES..2 * (b + 1) * LANES]);
@@ -546,22 +540,6 @@ mod tests {
             f[1] += fd;
             assert_eq!(fused[2 * e..2 * e + 2], f, "truss {e}");
             assert_eq!(apart[2 * e..2 * e + 2], f, "truss {e}");
-        }
-        // The blocks ran on the lanes, in both builds of the kernel.
-        for b in 0..count / LANES {
-            let r = b * LANES..(b + 1) * LANES;
-            let dashpots = Some((&v[..], &c[r.clone()]));
-            let (mut base, mut best) =
-                ([Vector3::zeros(); 2 * LANES], [Vector3::zeros(); 2 * LANES]);
-            let args = (&t.nodes[r.clone()], &t.length[r.clone()], &t.section[r]);
-            assert!(truss_lanes::block_forces_lanes(
-                &t.law, args.0, args.1, args.2, &x, dashpots, &mut base
-            ));
-            assert!(truss_lanes::block_forces(
-                &t.law, args.0, args.1, args.2, &x, dashpots, &mut best
-            ));
-            assert_eq!(base, best);
-            assert_eq!(base[..], fused[2 * b * LANES..2 * (b + 1) * LANES]);
         }
     }
 

@@ -21,17 +21,11 @@ use nalgebra::Vector3;
 
 use crate::lanes::{LANES, f64x4};
 
-/// Velocities and the block's dashpot coefficients (N·s/mm, one per truss)
-/// of the dashpots along the trusses ([`crate::TrussBatch::damping_coefficient`]).
-pub(crate) type Dashpots<'a> = Option<(&'a [Vector3<f64>], &'a [f64])>;
-
 /// The forces [f₁, f₂] = [−N·n, N·n] of the block of [`LANES`] trusses
 /// `nodes` (reference lengths `length`, sections `section`) into `slots`
-/// (2 per truss), with the dashpots' N_d = c·n·(v₂ − v₁) added if
-/// `dashpots` are given (as `TrussBatch::piece_damping_into` adds them:
-/// f₁ = −N·n − N_d·n, f₂ = N·n + N_d·n). Returns false, having written
-/// nothing meaningful, if a truss of the block is non-finite or collapsed
-/// (the caller then runs the block on the scalar path, which names it).
+/// (2 per truss). Returns false, having written nothing meaningful, if a
+/// truss of the block is non-finite or collapsed (the caller then runs the
+/// block on the scalar path, which names it).
 #[inline]
 pub(crate) fn block_forces(
     law: &FibreLaw,
@@ -39,15 +33,14 @@ pub(crate) fn block_forces(
     length: &[f64],
     section: &[f64],
     x: &[Vector3<f64>],
-    dashpots: Dashpots<'_>,
     slots: &mut [Vector3<f64>],
 ) -> bool {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2 (checked just above).
-        return unsafe { block_forces_avx2(law, nodes, length, section, x, dashpots, slots) };
+        return unsafe { block_forces_avx2(law, nodes, length, section, x, slots) };
     }
-    block_forces_lanes(law, nodes, length, section, x, dashpots, slots)
+    block_forces_lanes(law, nodes, length, section, x, slots)
 }
 
 /// [`block_forces`] compiled with AVX2.
@@ -59,10 +52,9 @@ fn block_forces_avx2(
     length: &[f64],
     section: &[f64],
     x: &[Vector3<f64>],
-    dashpots: Dashpots<'_>,
     slots: &mut [Vector3<f64>],
 ) -> bool {
-    block_forces_lanes(law, nodes, length, section, x, dashpots, slots)
+    block_forces_lanes(law, nodes, length, section, x, slots)
 }
 
 /// [`block_forces`] for the target's baseline instruction set.
@@ -73,7 +65,6 @@ pub(crate) fn block_forces_lanes(
     length: &[f64],
     section: &[f64],
     x: &[Vector3<f64>],
-    dashpots: Dashpots<'_>,
     slots: &mut [Vector3<f64>],
 ) -> bool {
     let nodes: &[[u32; 2]; LANES] = nodes.try_into().expect("a block's trusses");
@@ -107,33 +98,14 @@ pub(crate) fn block_forces_lanes(
     let tau = stress(law, eps);
     // N = A₀·τ/λ, f₂ = −f₁ = N·n.
     let force = f64x4::new(*section) * tau / stretch;
-    let f = [n[0] * force, n[1] * force, n[2] * force];
-    let Some((v, coefficient)) = dashpots else {
-        for k in 0..LANES {
-            let f = Vector3::new(f[0].0[k], f[1].0[k], f[2].0[k]);
-            slots[2 * k] = -f;
-            slots[2 * k + 1] = f;
-        }
-        return true;
-    };
-    // The dashpots from the same n (l > 0 on the lanes): N_d = c·(n·Δv),
-    // the dot product summed as nalgebra's.
-    let coefficient: &[f64; LANES] = coefficient.try_into().expect("a block's dashpots");
-    let mut dv = [f64x4::splat(0.0); 3];
-    for (k, &[i, j]) in nodes.iter().enumerate() {
-        let (p, q) = (&v[i as usize], &v[j as usize]);
-        for (c, dc) in dv.iter_mut().enumerate() {
-            dc.0[k] = q[c] - p[c];
-        }
-    }
-    let rate = n[0] * dv[0] + n[1] * dv[1] + n[2] * dv[2];
-    let damping = f64x4::new(*coefficient) * rate;
-    let fd = [n[0] * damping, n[1] * damping, n[2] * damping];
-    let first = [-f[0] - fd[0], -f[1] - fd[1], -f[2] - fd[2]];
-    let second = [f[0] + fd[0], f[1] + fd[1], f[2] + fd[2]];
     for k in 0..LANES {
-        slots[2 * k] = Vector3::new(first[0].0[k], first[1].0[k], first[2].0[k]);
-        slots[2 * k + 1] = Vector3::new(second[0].0[k], second[1].0[k], second[2].0[k]);
+        let f = Vector3::new(
+            n[0].0[k] * force.0[k],
+            n[1].0[k] * force.0[k],
+            n[2].0[k] * force.0[k],
+        );
+        slots[2 * k] = -f;
+        slots[2 * k + 1] = f;
     }
     true
 }

@@ -150,6 +150,8 @@ pub struct MembraneBatch {
 #[derive(Debug, Clone)]
 pub struct ElementHistory<'h>(HistoryValues<'h>);
 
+// The copy lives on the stack: reading an element allocates nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 enum HistoryValues<'h> {
     Borrowed(&'h [f64]),

@@ -88,7 +88,9 @@ pub struct Checkpoint {
     /// Steps between checkpoints, kept by a resumed run.
     #[serde(default)]
     pub checkpoint_every: Option<u64>,
-    /// The state.
+    /// The state, each membrane batch's history element after element
+    /// ([`drape_model::Model::history_to_element_major`]): the order every
+    /// drape has written, whatever order its kernels keep the history in.
     pub state: State,
     /// The driver's carried state.
     pub driver: DriverState,
@@ -202,6 +204,13 @@ impl Checkpoint {
                 scene.model.node_count()
             ));
         }
+        if !scene.model.history_fits(&self.state.history) {
+            return Err(
+                "the checkpoint's element history does not fit its scene's model: a damaged \
+                 checkpoint"
+                    .to_owned(),
+            );
+        }
         Ok(scene)
     }
 
@@ -227,6 +236,8 @@ pub struct RunOptions {
 }
 
 struct Recorder<'a> {
+    /// The model run (its batches say how they keep their history).
+    model: &'a drape_model::Model,
     results: ResultsDir,
     record: SceneRecord,
     /// The step of the last checkpoint written (or resumed from).
@@ -303,7 +314,12 @@ impl Observer for Recorder<'_> {
             scene: r.scene.clone(),
             inputs: r.inputs.clone(),
             checkpoint_every: r.checkpoint_every,
-            state: state.clone(),
+            state: State {
+                history: self.model.history_to_element_major(&state.history),
+                x: state.x.clone(),
+                v: state.v.clone(),
+                ..*state
+            },
             driver: driver.clone(),
             rows: self.rows.clone(),
             frames: self.results.frames(),
@@ -429,7 +445,14 @@ pub fn run_in(
                 inputs: c.inputs,
                 checkpoint_every: options.checkpoint_every.or(c.checkpoint_every),
             },
-            c.state,
+            // (A history that does not fit is left for the driver's state
+            // check to report.)
+            State {
+                history: model
+                    .history_from_element_major(&c.state.history)
+                    .unwrap_or(c.state.history),
+                ..c.state
+            },
             c.rows,
             Some(c.driver),
             None,
@@ -464,6 +487,7 @@ pub fn run_in(
     let mut settings = scene.settings.clone();
     settings.checkpoint_every = record.checkpoint_every;
     let mut recorder = Recorder {
+        model,
         results,
         record,
         last_checkpoint,

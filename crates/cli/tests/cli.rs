@@ -331,6 +331,19 @@ fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
     assert_eq!(first.summary.status, "stopped");
     let checkpoint = Checkpoint::read(&out).unwrap();
     assert_eq!(checkpoint.state.step, 280);
+    // The file keeps the membranes' history element after element, not in
+    // the lane blocks the run keeps it in (quads of four elements): the
+    // state of a run stopped at that step, converted.
+    let mut at_checkpoint = scene.clone();
+    at_checkpoint.settings.max_steps = Some(280);
+    let same = run_scene(&at_checkpoint, &dir.join("at-checkpoint"), &mut |_| {
+        RunControl::Continue
+    })
+    .unwrap();
+    assert_eq!(same.state.step, 280);
+    let history = scene.model.history_to_element_major(&same.state.history);
+    assert_ne!(history, same.state.history, "the run keeps lane blocks");
+    assert_eq!(checkpoint.state.history, history);
     let options = RunOptions {
         resume: Some(checkpoint),
         ..RunOptions::default()

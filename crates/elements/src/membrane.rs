@@ -26,6 +26,12 @@ const MAX_NODES: usize = 4;
 const FIBRES: [Vector2<f64>; 2] = [Vector2::new(1.0, 0.0), Vector2::new(0.0, 1.0)];
 /// 1/√3, the 2×2 Gauss abscissa.
 const GAUSS: f64 = 0.577_350_269_189_625_8;
+/// Prony terms whose step factors a pass computes once (a resin with more
+/// computes them at every point, on the scalar path).
+const PRONY_TABLE: usize = 8;
+/// The most history values of an element the lanes carry: four points of
+/// U, τ̄, the shear stress and [`PRONY_TABLE`] Prony terms.
+const LANE_ELEMENT_HISTORY: usize = 4 * (KINEMATIC_HISTORY + 1 + PRONY_TABLE);
 
 /// The fabric a membrane batch is made of, and whether its yarns are
 /// embedded in the membrane (else trusses carry them and the membrane is
@@ -105,10 +111,22 @@ pub struct MembraneOutput {
 /// Each integration point works in a local frame whose first axis is the
 /// reference warp, so τ̄ and the outputs are in fibre axes.
 ///
-/// History per integration point (flat, [`Self::history_stride`] values):
-/// the right stretch U and the rotated stress τ̄ of the last committed
-/// state, then the resin's Prony history. Build the start with
+/// History per integration point ([`Self::history_stride`] values): the
+/// right stretch U and the rotated stress τ̄ of the last committed state,
+/// then the resin's Prony history. Build the start with
 /// [`Self::initial_history`].
+///
+/// A batch's history is one flat array of [`Self::element_history_len`]
+/// values per element, but not always element after element: in a batch
+/// that runs on the lanes (resin-only quads) each whole block of four
+/// elements keeps its values value-major, `[point][value][lane]`, so that
+/// the kernel loads one value of four elements at once. Read an element's
+/// history with [`Self::element_history`] (the point-after-point order
+/// [`Self::element_force`], [`Self::element_tangent`], [`Self::element_output`]
+/// and [`Self::element_energy`] take), write it with
+/// [`Self::set_element_history`]; [`Self::history_to_element_major`] and
+/// [`Self::history_from_element_major`] convert a whole batch's (for
+/// files that must not depend on the kernels' order).
 #[derive(Debug, Clone)]
 pub struct MembraneBatch {
     /// The fabric.
@@ -122,6 +140,32 @@ pub struct MembraneBatch {
     /// The struct-of-arrays lanes of resin-only quads (none otherwise), see
     /// [`crate::quad_lanes`].
     lanes: Option<QuadLanes>,
+    /// The elements whose history is in lane blocks (the first ones).
+    blocked: usize,
+}
+
+/// One element's history, point after point, as [`MembraneBatch`]'s
+/// element functions read it: borrowed where the batch stores it so,
+/// copied out of its lane block otherwise. Dereferences to `[f64]`.
+#[derive(Debug, Clone)]
+pub struct ElementHistory<'h>(HistoryValues<'h>);
+
+// The copy lives on the stack: reading an element allocates nothing.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone)]
+enum HistoryValues<'h> {
+    Borrowed(&'h [f64]),
+    Copied([f64; LANE_ELEMENT_HISTORY], usize),
+}
+
+impl std::ops::Deref for ElementHistory<'_> {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        match &self.0 {
+            HistoryValues::Borrowed(h) => h,
+            HistoryValues::Copied(values, len) => &values[..*len],
+        }
+    }
 }
 
 /// A step's Δt and its Prony factors (e^(−Δt/τₖ), gₖ·φ): computed once
@@ -260,11 +304,14 @@ impl MembraneBatch {
         }
         let stride = KINEMATIC_HISTORY + section.material.resin.history_len();
         // The lanes carry the paper's resin only: a shear-locking law (an
-        // option beyond the paper) keeps its quads on the scalar path.
+        // option beyond the paper) keeps its quads on the scalar path, and
+        // so does a resin with more Prony terms than a pass's factor table.
         let lanes = (shape == MembraneShape::Quad
             && !section.embedded_fibres
-            && section.material.resin.shear_locking.is_none())
-        .then(|| QuadLanes::new(&grad_n, &area, count));
+            && section.material.resin.shear_locking.is_none()
+            && section.material.resin.prony.len() <= PRONY_TABLE)
+            .then(|| QuadLanes::new(&grad_n, &area, count));
+        let blocked = lanes.as_ref().map_or(0, |l| l.blocks() * LANES);
         Ok(Self {
             section,
             shape,
@@ -274,6 +321,7 @@ impl MembraneBatch {
             nodal_area,
             stride,
             lanes,
+            blocked,
         })
     }
 
@@ -323,11 +371,76 @@ impl MembraneBatch {
     /// The undeformed, stress-free history of the whole batch (U = I, τ̄ = 0).
     pub fn initial_history(&self) -> Vec<f64> {
         let mut h = vec![0.0; self.len() * self.element_history_len()];
-        for point in h.chunks_mut(self.stride) {
-            point[0] = 1.0;
-            point[1] = 1.0;
+        for e in 0..self.len() {
+            for p in 0..self.shape.points() {
+                h[self.history_index(e, p, 0)] = 1.0;
+                h[self.history_index(e, p, 1)] = 1.0;
+            }
         }
         h
+    }
+
+    /// Where value `i` of point `p` of element `e` is in the batch's
+    /// history (see the layout in [`MembraneBatch`]).
+    #[inline]
+    fn history_index(&self, e: usize, p: usize, i: usize) -> usize {
+        let at = p * self.stride + i;
+        if e < self.blocked {
+            (e / LANES) * LANES * self.element_history_len() + at * LANES + e % LANES
+        } else {
+            e * self.element_history_len() + at
+        }
+    }
+
+    /// Element `e`'s history, point after point, from the batch's history
+    /// `h` (whatever order the batch keeps it in).
+    pub fn element_history<'h>(&self, h: &'h [f64], e: usize) -> ElementHistory<'h> {
+        let eh = self.element_history_len();
+        if e >= self.blocked {
+            return ElementHistory(HistoryValues::Borrowed(&h[e * eh..(e + 1) * eh]));
+        }
+        let block = &h[(e / LANES) * LANES * eh..(e / LANES + 1) * LANES * eh];
+        let mut values = [0.0; LANE_ELEMENT_HISTORY];
+        for (j, v) in values[..eh].iter_mut().enumerate() {
+            *v = block[j * LANES + e % LANES];
+        }
+        ElementHistory(HistoryValues::Copied(values, eh))
+    }
+
+    /// Writes element `e`'s history `values` (point after point, as
+    /// [`Self::element_history`] gives it) into the batch's history `h`.
+    pub fn set_element_history(&self, h: &mut [f64], e: usize, values: &[f64]) {
+        let eh = self.element_history_len();
+        assert_eq!(values.len(), eh, "one element's history");
+        if e >= self.blocked {
+            h[e * eh..(e + 1) * eh].copy_from_slice(values);
+            return;
+        }
+        let block = &mut h[(e / LANES) * LANES * eh..(e / LANES + 1) * LANES * eh];
+        for (j, v) in values.iter().enumerate() {
+            block[j * LANES + e % LANES] = *v;
+        }
+    }
+
+    /// The batch's history `h` element after element (each as
+    /// [`Self::element_history`] gives it).
+    pub fn history_to_element_major(&self, h: &[f64]) -> Vec<f64> {
+        assert_eq!(h.len(), self.len() * self.element_history_len());
+        (0..self.len())
+            .flat_map(|e| self.element_history(h, e).to_vec())
+            .collect()
+    }
+
+    /// The batch's history from `h` element after element: the inverse of
+    /// [`Self::history_to_element_major`].
+    pub fn history_from_element_major(&self, h: &[f64]) -> Vec<f64> {
+        let eh = self.element_history_len();
+        assert_eq!(h.len(), self.len() * eh);
+        let mut out = vec![0.0; h.len()];
+        for (e, values) in h.chunks_exact(eh.max(1)).enumerate() {
+            self.set_element_history(&mut out, e, values);
+        }
+        out
     }
 
     #[inline]
@@ -548,7 +661,7 @@ impl MembraneBatch {
         assert_eq!(h_in.len(), eh * self.len());
         assert_eq!(h_out.len(), eh * self.len());
         let resin = &self.section.material.resin;
-        let mut table = [(0.0, 0.0); 8];
+        let mut table = [(0.0, 0.0); PRONY_TABLE];
         let factors: &[(f64, f64)] = if resin.prony.len() <= table.len() {
             resin.prony_factors(dt, &mut table);
             &table[..resin.prony.len()]
@@ -557,11 +670,10 @@ impl MembraneBatch {
         };
         let step = Step { dt, prony: factors };
         if let Some(lanes) = &self.lanes {
-            if factors.len() == resin.prony.len() {
-                return self
-                    .forces_into_lanes(lanes, x, h_in, h_out, step, slots)
-                    .map_err(|error| self.diagnose(error, x));
-            }
+            // (A lane batch's Prony terms fit the table.)
+            return self
+                .forces_into_lanes(lanes, x, h_in, h_out, step, slots)
+                .map_err(|error| self.diagnose(error, x));
         }
         lowest_error(
             slots
@@ -620,16 +732,23 @@ impl MembraneBatch {
                     if lanes.block_forces(b, nodes, x, h, out, self.stride, &resin, f) {
                         return Ok(());
                     }
+                    // The cold path: each lane's history out of the block
+                    // and back (the block is `out`, history of elements
+                    // e0.. as the batch keeps them).
+                    let mut next = [0.0; LANE_ELEMENT_HISTORY];
                     for k in 0..LANES {
                         let e = e0 + k;
                         self.element_force_with(
                             e,
                             x,
-                            &h_in[e * eh..(e + 1) * eh],
-                            &mut out[k * eh..(k + 1) * eh],
+                            &self.element_history(h_in, e),
+                            &mut next[..eh],
                             step,
                             &mut f[k * nn..(k + 1) * nn],
                         )?;
+                        for (j, v) in next[..eh].iter().enumerate() {
+                            out[j * LANES + k] = *v;
+                        }
                     }
                     Ok(())
                 }),
@@ -771,9 +890,8 @@ impl MembraneBatch {
 
     /// Total strain energy of the batch with history `h`.
     pub fn energy(&self, x: &[Vector3<f64>], h: &[f64]) -> Result<f64, ElementError> {
-        let eh = self.element_history_len();
         (0..self.len())
-            .map(|e| self.element_energy(e, x, &h[e * eh..(e + 1) * eh]))
+            .map(|e| self.element_energy(e, x, &self.element_history(h, e)))
             .sum()
     }
 

@@ -91,8 +91,9 @@ impl QuadLanes {
     }
 
     /// Forces and new history of block `b`: `nodes` its elements' nodes
-    /// (4 per element), `h_in`/`h_out` their histories (`stride` per point,
-    /// element after element), `slots` their nodal forces (4 per element).
+    /// (4 per element), `h_in`/`h_out` the block's history (`stride` values
+    /// per point, value-major: value `i` of point `p` of lane `k` at
+    /// `(p·stride + i)·4 + k`), `slots` their nodal forces (4 per element).
     /// Returns false, having written nothing meaningful, if a point of the
     /// block is non-finite or degenerate: the caller then runs the block on
     /// the scalar path, which names the element.
@@ -190,17 +191,16 @@ impl QuadLanes {
                 }
             }
             // Polar decomposition (closed form of right_stretch).
-            for row in &f {
-                for v in row {
-                    ok &= v.all_finite();
-                }
-            }
             let c00 = f[0][0] * f[0][0] + f[1][0] * f[1][0] + f[2][0] * f[2][0];
             let c01 = f[0][0] * f[0][1] + f[1][0] * f[1][1] + f[2][0] * f[2][1];
             let c11 = f[0][1] * f[0][1] + f[1][1] * f[1][1] + f[2][1] * f[2][1];
             let det_c = c00 * c11 - c01 * c01;
             let tr_c = c00 + c11;
-            ok &= det_c.all_finite() & tr_c.all_finite();
+            // One test stands for the scalar path's finiteness and
+            // degeneracy checks: tr C is the sum of the squares of F, so a
+            // NaN in F, C or det C fails the comparison, and an infinite
+            // (or overflowing) entry makes its right side +∞, which nothing
+            // exceeds. Every point it passes is one the scalar path accepts.
             ok &= det_c.all_gt(f64x4::splat(DEGENERATE_DET_C) * tr_c * tr_c);
             let det_u = det_c.sqrt();
             let s = (tr_c + f64x4::splat(2.0) * det_u).sqrt();
@@ -211,15 +211,22 @@ impl QuadLanes {
                 (zero - u01) / det_u,
                 (tr_u - u11) / det_u,
             );
-            // Rotated strain increment from the committed U. Each lane's
-            // point history as a slice of `used` values, its first six as
-            // an array: one bounds check per lane, not one per value.
-            let at = p * stride;
-            let hk = |k: usize| &h_in[k * eh + at..k * eh + at + used];
-            let (h0, h1, h2, h3) = (hk(0), hk(1), hk(2), hk(3));
-            let fixed = |h: &[f64]| -> [f64; 6] { h[..6].try_into().expect("six values") };
-            let (g0, g1, g2, g3) = (fixed(h0), fixed(h1), fixed(h2), fixed(h3));
-            let un = |i: usize| lanes([g0[i], g1[i], g2[i], g3[i]]);
+            // Rotated strain increment from the committed U. The block's
+            // history is value-major ([point][value][lane], see
+            // `MembraneBatch`'s layout), so each value of the four lanes
+            // is one load; the first six as a fixed array, one bounds check.
+            let at = p * stride * LANES;
+            let fixed: &[f64; 6 * LANES] = h_in[at..at + 6 * LANES]
+                .try_into()
+                .expect("a point's six values");
+            let un = |i: usize| {
+                lanes([
+                    fixed[LANES * i],
+                    fixed[LANES * i + 1],
+                    fixed[LANES * i + 2],
+                    fixed[LANES * i + 3],
+                ])
+            };
             let (n00, n11, n01) = (un(0), un(1), un(2));
             let (m00, m01, m11) = ((n00 + u00) * half, (n01 + u01) * half, (n11 + u11) * half);
             let det_m = m00 * m11 - m01 * m01;
@@ -244,23 +251,25 @@ impl QuadLanes {
             let t00 = un(3) + k * (e00 + nu * e11);
             let t11 = un(4) + k * (nu * e00 + e11);
             let d_s0 = f64x4::splat(resin.shear_modulus) * (e01 + e10);
-            let mut out = point_history(h_out, eh, at, used);
+            let (out_fixed, out_tail) = h_out[at..at + used * LANES].split_at_mut(6 * LANES);
             let t01 = if resin.prony.is_empty() {
                 un(5) + d_s0
             } else {
-                let tail = |i: usize| lanes([h0[i], h1[i], h2[i], h3[i]]);
-                let s0 = tail(6) + d_s0;
+                let tail = &h_in[at + 6 * LANES..at + used * LANES];
+                let s0 = load(tail, 0) + d_s0;
                 let mut relaxing = zero;
                 for (q, &(decay, weight)) in resin.prony.iter().enumerate() {
-                    let qk = f64x4::splat(decay) * tail(7 + q) + f64x4::splat(weight) * d_s0;
+                    let qk = f64x4::splat(decay) * load(tail, 1 + q) + f64x4::splat(weight) * d_s0;
                     relaxing += qk;
-                    write_lanes(&mut out, 7 + q, qk);
+                    store(out_tail, 1 + q, qk);
                 }
-                write_lanes(&mut out, 6, s0);
+                store(out_tail, 0, s0);
                 f64x4::splat(resin.long_term) * s0 + relaxing
             };
+            let out_fixed: &mut [f64; 6 * LANES] =
+                out_fixed.try_into().expect("a point's six values");
             for (i, v) in [u00, u11, u01, t00, t11, t01].into_iter().enumerate() {
-                write_lanes(&mut out, i, v);
+                out_fixed[LANES * i..LANES * (i + 1)].copy_from_slice(&v.0);
             }
             // P = F·(U⁻¹·τ̄·U⁻¹)·h_m.
             let a00 = ui00 * t00 + ui01 * t01;
@@ -296,25 +305,17 @@ impl QuadLanes {
     }
 }
 
-/// The `used` history values at offset `at` of each lane's element
-/// (`eh` values each) in a block's `h`.
+/// Value `i` of the four lanes in a value-major run of history `h`.
 #[inline(always)]
-fn point_history(h: &mut [f64], eh: usize, at: usize, used: usize) -> [&mut [f64]; LANES] {
-    let (h0, rest) = h.split_at_mut(eh);
-    let (h1, rest) = rest.split_at_mut(eh);
-    let (h2, h3) = rest.split_at_mut(eh);
-    [
-        &mut h0[at..at + used],
-        &mut h1[at..at + used],
-        &mut h2[at..at + used],
-        &mut h3[at..at + used],
-    ]
+fn load(h: &[f64], i: usize) -> f64x4 {
+    let v: &[f64; LANES] = h[LANES * i..LANES * (i + 1)]
+        .try_into()
+        .expect("four lanes");
+    f64x4::new(*v)
 }
 
+/// Writes value `i` of the four lanes into a value-major run of history `h`.
 #[inline(always)]
-fn write_lanes(out: &mut [&mut [f64]; LANES], i: usize, v: f64x4) {
-    out[0][i] = v.0[0];
-    out[1][i] = v.0[1];
-    out[2][i] = v.0[2];
-    out[3][i] = v.0[3];
+fn store(h: &mut [f64], i: usize, v: f64x4) {
+    h[LANES * i..LANES * (i + 1)].copy_from_slice(&v.0);
 }

@@ -232,16 +232,23 @@ impl SlotLayout {
     /// fₙ = Σ of node n's slots, in ascending slot order: the same sums in
     /// the same order whatever the number of threads.
     pub fn gather(&self, slots: &[Vector3<f64>], forces: &mut [Vector3<f64>]) {
+        // Tasks of 1 024 nodes, each a plain loop: a per-node parallel
+        // iterator called a closure at every node and doubled the pass's
+        // instructions.
+        const PIECE: usize = 1024;
         forces
-            .par_iter_mut()
-            .with_min_len(1024)
+            .par_chunks_mut(PIECE)
             .enumerate()
-            .for_each(|(n, f)| {
-                let mut sum = Vector3::zeros();
-                for &s in &self.node_slots[self.node_ptr[n]..self.node_ptr[n + 1]] {
-                    sum += slots[s as usize];
+            .for_each(|(c, out)| {
+                let first = c * PIECE;
+                let ptr = &self.node_ptr[first..=first + out.len()];
+                for (f, range) in out.iter_mut().zip(ptr.windows(2)) {
+                    let mut sum = Vector3::zeros();
+                    for &s in &self.node_slots[range[0]..range[1]] {
+                        sum += slots[s as usize];
+                    }
+                    *f = sum;
                 }
-                *f = sum;
             });
     }
 }
@@ -661,6 +668,45 @@ impl Model {
         layout
     }
 
+    /// Whether `history` has one array of the right length per membrane
+    /// batch.
+    pub fn history_fits(&self, history: &[Vec<f64>]) -> bool {
+        history.len() == self.membranes.len()
+            && self
+                .membranes
+                .iter()
+                .zip(history)
+                .all(|(b, h)| h.len() == b.len() * b.element_history_len())
+    }
+
+    /// Each membrane batch's history element after element (as
+    /// [`MembraneBatch::element_history`] gives an element's), whatever order
+    /// the batch keeps it in: the order of a file that must read back into
+    /// any build (checkpoints).
+    ///
+    /// # Panics
+    /// If `history` does not fit the model ([`Self::history_fits`]).
+    pub fn history_to_element_major(&self, history: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        assert!(self.history_fits(history), "a history of this model");
+        self.membranes
+            .iter()
+            .zip(history)
+            .map(|(b, h)| b.history_to_element_major(h))
+            .collect()
+    }
+
+    /// The inverse of [`Self::history_to_element_major`]; `None` if
+    /// `history` does not fit the model.
+    pub fn history_from_element_major(&self, history: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+        self.history_fits(history).then(|| {
+            self.membranes
+                .iter()
+                .zip(history)
+                .map(|(b, h)| b.history_from_element_major(h))
+                .collect()
+        })
+    }
+
     /// The undeformed state at rest at t = 0.
     pub fn initial_state(&self) -> State {
         State {
@@ -676,9 +722,8 @@ impl Model {
     pub fn element_fields(&self, state: &State) -> Result<ElementFields, ElementError> {
         let mut out = ElementFields::default();
         for (b, h) in self.membranes.iter().zip(&state.history) {
-            let eh = b.element_history_len();
             for e in 0..b.len() {
-                let o = b.element_output(e, &state.x, &h[e * eh..(e + 1) * eh])?;
+                let o = b.element_output(e, &state.x, &b.element_history(h, e))?;
                 out.shear.push(o.shear_angle);
                 out.fibre_stretch.push(o.fibre_stretch);
                 out.fibre_direction.push(o.fibre_direction);

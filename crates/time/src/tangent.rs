@@ -381,11 +381,10 @@ impl SparseTangent {
             .map_err(|e| (format!("truss batch {i}"), e))?;
         }
         for (i, b) in model.membranes.iter().enumerate() {
-            let eh = b.element_history_len();
             let h = &history[i];
             let slots = batch_slots(&mut self.slots, &self.membranes[i], b.len());
             assemble_batch(slots, &mut self.membrane_scratch[i], |e, k| {
-                b.element_tangent(e, x, &h[e * eh..(e + 1) * eh], dt, k)
+                b.element_tangent(e, x, &b.element_history(h, e), dt, k)
             })
             .map_err(|e| (format!("membrane batch {i} ({:?})", b.shape()), e))?;
         }

@@ -43,9 +43,8 @@ fn omega_max(model: &Model, x: &[Vector3<f64>]) -> f64 {
     for (b, h) in model.membranes.iter().zip(&state.history) {
         let m = 3 * b.shape().nodes();
         let mut ke = DMatrix::zeros(m, m);
-        let eh = b.element_history_len();
         for e in 0..b.len() {
-            b.element_tangent(e, x, &h[e * eh..(e + 1) * eh], 0.0, &mut ke)
+            b.element_tangent(e, x, &b.element_history(h, e), 0.0, &mut ke)
                 .unwrap();
             add(b.element_nodes(e), &ke);
         }

@@ -195,6 +195,7 @@ fn patch_test_uniform_strain_gives_uniform_stress() {
             b.forces_into(&x, &h0, &mut h1, 0.01, &mut slots).unwrap();
             // Every point's history (U and τ̄ in fibre axes) is the same.
             let stride = b.history_stride();
+            let h1 = b.history_to_element_major(&h1);
             let first = &h1[..stride];
             let scale = first.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for point in h1.chunks(stride) {
@@ -522,9 +523,8 @@ fn output_fibre_directions_are_the_deformed_yarns() {
         let (b, x0, _) = patch(shape, true);
         let x: Vec<_> = x0.iter().map(|p| a * p).collect();
         let h = b.initial_history();
-        let eh = b.element_history_len();
         for e in 0..b.len() {
-            let o = b.element_output(e, &x, &h[e * eh..(e + 1) * eh]).unwrap();
+            let o = b.element_output(e, &x, &b.element_history(&h, e)).unwrap();
             let [w, f] = o.fibre_direction;
             assert!(
                 (w - (a * warp).normalize()).norm() < 1e-13,
@@ -556,9 +556,8 @@ fn output_fibre_directions_show_the_output_shear_under_a_varying_deformation() {
         let (b, x0, _) = patch(shape, true);
         let x: Vec<_> = x0.iter().map(map).collect();
         let h = b.initial_history();
-        let eh = b.element_history_len();
         for e in 0..b.len() {
-            let o = b.element_output(e, &x, &h[e * eh..(e + 1) * eh]).unwrap();
+            let o = b.element_output(e, &x, &b.element_history(&h, e)).unwrap();
             let [w, f] = o.fibre_direction;
             assert!((w.norm() - 1.0).abs() < 1e-14 && (f.norm() - 1.0).abs() < 1e-14);
             let angle = w.cross(&f).norm().atan2(w.dot(&f));
@@ -615,7 +614,8 @@ fn lane_grid(material: Material) -> (MembraneBatch, Vec<Vector3<f64>>) {
 }
 
 /// The scalar path of the whole batch, element by element, with the same
-/// step factors as `forces_into`.
+/// step factors as `forces_into`: the slots, and the new history element
+/// after element (as `history_to_element_major` gives a batch's).
 fn scalar_forces(
     b: &MembraneBatch,
     x: &[Vector3<f64>],
@@ -631,12 +631,12 @@ fn scalar_forces(
         prony: &table[..resin.prony.len()],
     };
     let mut slots = vec![Vector3::zeros(); nn * b.len()];
-    let mut h_out = h_in.to_vec();
+    let mut h_out = vec![f64::NAN; h_in.len()];
     for e in 0..b.len() {
         b.element_force_with(
             e,
             x,
-            &h_in[e * eh..(e + 1) * eh],
+            &b.element_history(h_in, e),
             &mut h_out[e * eh..(e + 1) * eh],
             step,
             &mut slots[e * nn..(e + 1) * nn],
@@ -718,7 +718,8 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                 assert_eq!(f, g, "slot {e}, step {step}");
                 assert!(f.norm() > 0.0);
             }
-            for (k, (v, w)) in h_out.iter().zip(&expected_h).enumerate() {
+            let h_elements = b.history_to_element_major(&h_out);
+            for (k, (v, w)) in h_elements.iter().zip(&expected_h).enumerate() {
                 assert_eq!(v.to_bits(), w.to_bits(), "history value {k}, step {step}");
             }
             h = h_out;
@@ -879,5 +880,52 @@ fn a_batch_with_the_locking_law_feels_it_in_every_element() {
             (f - p).norm() > 1e-6 * p.norm(),
             "slot {e}: no law in the force"
         );
+    }
+}
+
+#[test]
+fn lane_blocks_keep_history_value_major_behind_the_element_accessor() {
+    let (b, _) = lane_grid(carbon());
+    let (eh, stride) = (b.element_history_len(), b.history_stride());
+    assert_eq!((b.blocked, eh), (8, 4 * stride));
+    // Every element starts at U = I, τ̄ = 0, whatever its storage.
+    let h0 = b.initial_history();
+    for e in 0..b.len() {
+        let h = b.element_history(&h0, e);
+        for p in 0..4 {
+            let point = &h[p * stride..(p + 1) * stride];
+            assert_eq!(point[..2], [1.0, 1.0], "element {e} point {p}");
+            assert!(point[2..].iter().all(|&v| v == 0.0));
+        }
+    }
+    // Distinct values element after element: the batch keeps value i of
+    // point p of element e (in a block) at (e/4)·4·eh + (p·stride + i)·4 + e%4,
+    // and the tail (elements 8..11) element after element.
+    let values: Vec<f64> = (0..b.len() * eh).map(|k| k as f64).collect();
+    let h = b.history_from_element_major(&values);
+    for e in 0..b.len() {
+        for p in 0..4 {
+            for i in 0..stride {
+                let at = if e < 8 {
+                    (e / 4) * 4 * eh + (p * stride + i) * 4 + e % 4
+                } else {
+                    e * eh + p * stride + i
+                };
+                assert_eq!(h[at], values[e * eh + p * stride + i], "{e} {p} {i}");
+            }
+        }
+        assert_eq!(*b.element_history(&h, e), values[e * eh..(e + 1) * eh]);
+    }
+    assert_eq!(b.history_to_element_major(&h), values);
+    // Writing one element leaves the others as they were.
+    let mut written = h.clone();
+    b.set_element_history(&mut written, 5, &vec![-1.0; eh]);
+    for e in 0..b.len() {
+        let expected = if e == 5 {
+            vec![-1.0; eh]
+        } else {
+            values[e * eh..(e + 1) * eh].to_vec()
+        };
+        assert_eq!(*b.element_history(&written, e), expected, "element {e}");
     }
 }

@@ -147,6 +147,9 @@ pub(super) struct Outcome {
     pub(super) draw_in: DrawIn,
     /// Largest |shear| anywhere (degrees).
     pub(super) max_shear_deg: f64,
+    /// The current centroid of the element where it occurs (mm; NaN when
+    /// the measures could not be taken).
+    pub(super) max_shear_at: [f64; 3],
     /// Largest |shear| over the elements whose reference centroid is more
     /// than [`AWAY_FROM_HOLDING_MM`] from every node held by a spring or
     /// loaded by a nodal load (degrees); the same as anywhere without
@@ -219,9 +222,14 @@ fn execute(run: &Run) -> Outcome {
         dy: f64::NAN,
         dd: f64::NAN,
     });
-    let (max_shear_deg, profile_diagonal, profile_median) = match measures {
-        Some(m) => (m.max_shear_deg, m.profile_diagonal, m.profile_median),
-        None => (f64::NAN, Vec::new(), Vec::new()),
+    let (max_shear_deg, max_shear_at, profile_diagonal, profile_median) = match measures {
+        Some(m) => (
+            m.max_shear_deg,
+            m.max_shear_at,
+            m.profile_diagonal,
+            m.profile_median,
+        ),
+        None => (f64::NAN, [f64::NAN; 3], Vec::new(), Vec::new()),
     };
     let max_shear_away_deg = scene.model.element_fields(&state).map_or(f64::NAN, |f| {
         max_shear_away(
@@ -240,6 +248,7 @@ fn execute(run: &Run) -> Outcome {
         energy,
         draw_in,
         max_shear_deg,
+        max_shear_at,
         max_shear_away_deg,
         profile_diagonal,
         profile_median,

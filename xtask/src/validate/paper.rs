@@ -1027,10 +1027,13 @@ const MEASURES: [Measure; 7] = [
 /// Observed order and Richardson extrapolation from three values on meshes
 /// refined by 2 (coarse, medium, fine): p = log2((f_c − f_m)/(f_m − f_f)),
 /// f* = f_f + (f_f − f_m)/(2^p − 1). None when the differences do not keep
-/// their sign (no asymptotic range) or vanish.
+/// their sign, do not shrink (no asymptotic range) or vanish.
 fn richardson(coarse: f64, medium: f64, fine: f64) -> Option<(f64, f64)> {
     let ratio = (coarse - medium) / (medium - fine);
-    if !(ratio.is_finite() && ratio > 0.0) || ratio == 1.0 {
+    // Differences that do not shrink (ratio ≤ 1, order ≤ 0) are not in the
+    // asymptotic range: extrapolating them runs away from the data (the
+    // point springs' maximum gave −232°).
+    if !(ratio.is_finite() && ratio > 1.0) {
         return None;
     }
     let p = ratio.log2();
@@ -1185,6 +1188,9 @@ mod tests {
         // Oscillating differences have no order.
         assert!(richardson(1.0, 2.0, 1.5).is_none());
         assert!(richardson(1.0, 1.0, 1.0).is_none());
+        // Growing differences (order ≤ 0) have none either.
+        assert!(richardson(18.7, 24.2, 30.9).is_none());
+        assert!(richardson(1.0, 2.0, 3.0).is_none());
     }
 
     #[test]

@@ -881,3 +881,93 @@ fn a_batch_with_the_locking_law_feels_it_in_every_element() {
         );
     }
 }
+
+#[test]
+fn tension_only_tangent_has_no_negative_stiffness_out_of_a_compressed_plane() {
+    // A flat element squeezed along x (fibres embedded, so the fibre's
+    // transverse term is in too), then pulled: compressed, its exact
+    // tangent out of the plane (the z rows and columns, only the
+    // initial-stress terms) has a negative eigenvalue and the tension-only
+    // one none, and what the tension-only tangent adds is positive
+    // semidefinite (the negative part of the stress taken out); in
+    // tension the two tangents are equal.
+    for shape in [MembraneShape::Triangle, MembraneShape::Quad] {
+        let (_, x0) = single(shape, carbon(), true);
+        let flat: Vec<Vector3<f64>> = x0.iter().map(|p| Vector3::new(p.x, p.y, 0.0)).collect();
+        let (b, x0) = match shape {
+            MembraneShape::Triangle => (
+                MembraneBatch::triangles(
+                    FabricSection::new(carbon(), true),
+                    &flat,
+                    vec![[0, 1, 2]],
+                    &[Vector3::x()],
+                )
+                .unwrap(),
+                flat,
+            ),
+            MembraneShape::Quad => (
+                MembraneBatch::quads(
+                    FabricSection::new(carbon(), true),
+                    &flat,
+                    vec![[0, 1, 2, 3]],
+                    &[Vector3::x()],
+                )
+                .unwrap(),
+                flat,
+            ),
+        };
+        let nodes = shape.nodes();
+        let d = 3 * nodes;
+        for sx in [0.98, 1.02] {
+            let x: Vec<Vector3<f64>> = x0
+                .iter()
+                .map(|p| Vector3::new(sx * p.x, p.y, 0.0))
+                .collect();
+            let h0 = b.initial_history();
+            let dt = 0.01;
+            let (mut exact, mut positive) = (DMatrix::zeros(d, d), DMatrix::zeros(d, d));
+            b.element_tangent(0, &x, &h0, dt, &mut exact).unwrap();
+            b.element_tangent_with(
+                0,
+                &x,
+                &h0,
+                dt,
+                GeometricStiffness::TensionOnly,
+                &mut positive,
+            )
+            .unwrap();
+            let scale = exact.amax();
+            let pick = |k: &DMatrix<f64>, comps: &[usize]| {
+                let idx: Vec<usize> = (0..nodes)
+                    .flat_map(|a| comps.iter().map(move |c| 3 * a + c))
+                    .collect();
+                let m = DMatrix::from_fn(idx.len(), idx.len(), |i, j| k[(idx[i], idx[j])]);
+                (&m + m.transpose()) * 0.5
+            };
+            let (z_exact, z_positive) = (pick(&exact, &[2]), pick(&positive, &[2]));
+            let added = pick(&(&positive - &exact), &[0, 1, 2]).symmetric_eigenvalues();
+            assert!(
+                added.min() >= -1e-12 * scale,
+                "{shape:?} {sx}: {:e}",
+                added.min()
+            );
+            if sx < 1.0 {
+                assert!(added.max() > 1e-6 * scale, "{shape:?}: nothing dropped");
+                let lowest = z_exact.symmetric_eigenvalues().min();
+                assert!(
+                    lowest < -1e-6 * scale,
+                    "{shape:?}: exact out of plane {lowest:e}"
+                );
+                let lowest = z_positive.symmetric_eigenvalues().min();
+                assert!(
+                    lowest >= -1e-12 * scale,
+                    "{shape:?}: tension-only {lowest:e}"
+                );
+            } else {
+                let diff = (&positive - &exact).amax();
+                assert!(diff <= 1e-12 * scale, "{shape:?} in tension: {diff:e}");
+                assert!(z_exact.symmetric_eigenvalues().min() >= -1e-12 * scale);
+            }
+        }
+    }
+}

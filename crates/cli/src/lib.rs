@@ -627,7 +627,6 @@ pub fn run_in(
                     contact_iterations: t.contact_iterations,
                     factorisations: t.factorisations,
                     indefinite: t.indefinite,
-                    tension_only: t.tension_only,
                     cutbacks: t.cutbacks,
                     factor_s: t.factor_seconds,
                     assembly_s: t.assembly_seconds,

@@ -71,28 +71,6 @@ pub use membrane::{FabricSection, MembraneBatch, MembraneOutput, MembraneShape};
 pub use spring::{ForceTable, ForceTableError, SpringBatch};
 pub use truss::{TrussBatch, TrussOutput};
 
-/// The stress in a tangent's geometric (initial-stress) terms.
-///
-/// A compressed yarn or membrane has a negative geometric stiffness across
-/// its line or out of its plane: the exact tangent, and with it the
-/// implicit driver's K̂, can then be indefinite, and the condensed contact
-/// solve (conjugate gradients on C·K̂⁻¹·Cᵀ) needs K̂ positive definite.
-/// [`Self::TensionOnly`] keeps the material terms and the geometric terms of
-/// tensile stress, and drops those of compressive stress: a positive
-/// tangent for a modified Newton step, whose converged answer is the same
-/// because the residual stays exact.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum GeometricStiffness {
-    /// The exact tangent, ∂f/∂x.
-    #[default]
-    Exact,
-    /// The geometric terms of the stress's positive part only: a truss's
-    /// transverse stiffness with max(τ, 0), a membrane's initial-stress
-    /// term with the positive part of its 2nd Piola–Kirchhoff stress, an
-    /// embedded fibre's transverse term with max(τ, 0).
-    TensionOnly,
-}
-
 /// An element that could not be evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error("element {element} (integration point {point}): {cause}")]

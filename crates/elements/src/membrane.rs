@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::lanes::LANES;
 use crate::quad_lanes::{QuadLanes, ResinStep};
-use crate::{ElementError, GeometricStiffness, MIN_CHUNK, lowest_error};
+use crate::{ElementError, MIN_CHUNK, lowest_error};
 
 mod locking;
 use locking::LockingPoint;
@@ -660,24 +660,6 @@ impl MembraneBatch {
         dt: f64,
         k_out: &mut DMatrix<f64>,
     ) -> Result<(), ElementError> {
-        self.element_tangent_with(e, x, h_in, dt, GeometricStiffness::Exact, k_out)
-    }
-
-    /// [`Self::element_tangent`] with the geometric terms `geometric`. With
-    /// [`GeometricStiffness::TensionOnly`] the initial-stress term
-    /// dF·S (S = U⁻¹·τ·U⁻¹, the only stiffness of a flat membrane out of
-    /// its plane) takes the positive part of S, and an embedded fibre's
-    /// term across its direction max(τ_f, 0); the material terms stay.
-    pub fn element_tangent_with(
-        &self,
-        e: usize,
-        x: &[Vector3<f64>],
-        h_in: &[f64],
-        dt: f64,
-        geometric: GeometricStiffness,
-        k_out: &mut DMatrix<f64>,
-    ) -> Result<(), ElementError> {
-        let tension_only = geometric == GeometricStiffness::TensionOnly;
         let nn = self.shape.nodes();
         let m = &self.section.material;
         let (h_m, t_f) = (m.resin_thickness(), m.family_thickness());
@@ -701,7 +683,6 @@ impl MembraneBatch {
             let mid_inv = mid.try_inverse().expect("mean of two s.p.d. stretches");
             let l = (u - r.u_n) * mid_inv;
             let s = u_inv * r.tau * u_inv;
-            let s_geometric = if tension_only { positive_part(&s) } else { s };
             for (b, gb) in grads.iter().enumerate() {
                 for i in 0..3 {
                     let mut d_f = Matrix3x2::zeros();
@@ -717,18 +698,16 @@ impl MembraneBatch {
                     let d_tau = Matrix2::new(d_tau_v[0], d_tau_v[2], d_tau_v[2], d_tau_v[1]);
                     let d_s =
                         d_u_inv * r.tau * u_inv + u_inv * d_tau * u_inv + u_inv * r.tau * d_u_inv;
-                    let mut d_p = (d_f * s_geometric + r.f * d_s) * h_m;
+                    let mut d_p = (d_f * s + r.f * d_s) * h_m;
                     if self.section.embedded_fibres {
                         for (k, fib) in r.fibres.iter().enumerate() {
                             let (tau_f, e_t) = r.fibre_law[k];
                             let n_ref = &FIBRES[k];
                             let d_fn = d_f * n_ref;
                             let l2 = fib.stretch * fib.stretch;
-                            // Along the fibre (e_t − τ)/λ², across it τ/λ².
-                            let across = if tension_only { tau_f.max(0.0) } else { tau_f };
                             let d_dir = fib.direction
-                                * ((e_t - tau_f - across) / l2 * fib.direction.dot(&d_fn))
-                                + d_fn * (across / l2);
+                                * ((e_t - 2.0 * tau_f) / l2 * fib.direction.dot(&d_fn))
+                                + d_fn * (tau_f / l2);
                             d_p += d_dir * n_ref.transpose() * t_f;
                         }
                     }
@@ -942,14 +921,6 @@ impl MembraneBatch {
         }
         Ok(out)
     }
-}
-
-/// The positive part of a symmetric 2×2 matrix: its negative eigenvalues
-/// set to zero.
-fn positive_part(s: &Matrix2<f64>) -> Matrix2<f64> {
-    let eigen = nalgebra::SymmetricEigen::new(*s);
-    let clipped = eigen.eigenvalues.map(|v| v.max(0.0));
-    eigen.eigenvectors * Matrix2::from_diagonal(&clipped) * eigen.eigenvectors.transpose()
 }
 
 #[cfg(test)]

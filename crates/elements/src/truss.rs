@@ -6,9 +6,7 @@ use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
 
 use crate::lanes::LANES;
-use crate::{
-    ElementError, GeometricStiffness, KinematicsError, TRUSS_PIECE, lowest_error, truss_lanes,
-};
+use crate::{ElementError, KinematicsError, TRUSS_PIECE, lowest_error, truss_lanes};
 
 /// A batch of trusses of one fibre law, usually one yarn family.
 ///
@@ -111,34 +109,11 @@ impl TrussBatch {
         x: &[Vector3<f64>],
         k_out: &mut DMatrix<f64>,
     ) -> Result<(), ElementError> {
-        self.element_tangent_with(e, x, GeometricStiffness::Exact, k_out)
-    }
-
-    /// [`Self::element_tangent`] with the geometric term `geometric`: along
-    /// the yarn K₂₂ = A₀/(λ²L₀)·(E_t − τ) (material, kept), across it
-    /// A₀/(λ²L₀)·τ, which [`GeometricStiffness::TensionOnly`] takes as
-    /// A₀/(λ²L₀)·max(τ, 0) (a compressed yarn gets no negative transverse
-    /// stiffness).
-    pub fn element_tangent_with(
-        &self,
-        e: usize,
-        x: &[Vector3<f64>],
-        geometric: GeometricStiffness,
-        k_out: &mut DMatrix<f64>,
-    ) -> Result<(), ElementError> {
         let k = self.kinematics(e, x)?;
         let (tau, e_t) = self.law.stress_and_tangent(k.log_strain);
         let scale = self.section[e] / (k.stretch * k.stretch * self.length[e]);
         let nn = k.direction * k.direction.transpose();
-        let block: Matrix3<f64> = match geometric {
-            GeometricStiffness::Exact => {
-                (nn * (e_t - 2.0 * tau) + Matrix3::identity() * tau) * scale
-            }
-            GeometricStiffness::TensionOnly => {
-                let across = tau.max(0.0);
-                (nn * (e_t - tau - across) + Matrix3::identity() * across) * scale
-            }
-        };
+        let block: Matrix3<f64> = (nn * (e_t - 2.0 * tau) + Matrix3::identity() * tau) * scale;
         k_out.fill(0.0);
         for (a, b, sign) in [(0, 0, 1.0), (0, 1, -1.0), (1, 0, -1.0), (1, 1, 1.0)] {
             k_out
@@ -383,56 +358,6 @@ mod tests {
                     |x| t.element_force(0, x).unwrap().to_vec(),
                     &[0, 1],
                 );
-            }
-        }
-    }
-
-    #[test]
-    fn tension_only_tangent_drops_the_compressed_yarns_transverse_stiffness() {
-        let law = FibreLaw {
-            compression_factor: 0.2,
-            ..FibreLaw::new(75_000.0, 0.0).unwrap()
-        };
-        let (t, _) = batch(law);
-        let q = random_rotation(5);
-        for stretch in [1.01, 0.98] {
-            let x = vec![
-                Vector3::new(1.0, 2.0, 3.0),
-                Vector3::new(1.0, 2.0, 3.0) + q * Vector3::new(4.0 * stretch, 0.0, 0.0),
-            ];
-            let (mut exact, mut positive) = (DMatrix::zeros(6, 6), DMatrix::zeros(6, 6));
-            t.element_tangent(0, &x, &mut exact).unwrap();
-            t.element_tangent_with(0, &x, GeometricStiffness::TensionOnly, &mut positive)
-                .unwrap();
-            let n = q * Vector3::x();
-            let across = q * Vector3::y();
-            let block = |k: &DMatrix<f64>| k.fixed_view::<3, 3>(3, 3).into_owned();
-            // Along the yarn both are the exact tangent.
-            let scale = exact.amax();
-            assert!(
-                (n.dot(&(block(&positive) * n)) - n.dot(&(block(&exact) * n))).abs()
-                    <= 1e-12 * scale
-            );
-            let (k_exact, k_positive) = (
-                across.dot(&(block(&exact) * across)),
-                across.dot(&(block(&positive) * across)),
-            );
-            if stretch > 1.0 {
-                // In tension nothing changes.
-                assert!((&positive - &exact).amax() <= 1e-12 * scale);
-                assert!(k_exact > 0.0);
-            } else {
-                // In compression the exact transverse stiffness is the
-                // negative τ·A₀/(λ²L₀); the tension-only one is zero and
-                // the matrix positive semidefinite.
-                let tau = t.law.stress(stretch.ln());
-                let expected = tau * t.section[0] / (stretch * stretch * t.length[0]);
-                assert!(expected < 0.0);
-                assert!((k_exact - expected).abs() <= 1e-9 * expected.abs());
-                assert!(k_positive.abs() <= 1e-12 * scale);
-                let lowest = positive.symmetric_eigenvalues().min();
-                assert!(lowest >= -1e-12 * scale, "{lowest:e}");
-                assert!(exact.symmetric_eigenvalues().min() < 0.0);
             }
         }
     }

@@ -173,10 +173,6 @@ pub struct ImplicitRunInfo {
     pub factorisations: u64,
     /// Of which were not positive definite (LDLᵀ).
     pub indefinite: u64,
-    /// Newton steps whose contact solve was done again with the
-    /// tension-only tangent (the exact one was indefinite).
-    #[serde(default)]
-    pub tension_only: u64,
     /// Increments cut back.
     pub cutbacks: u64,
     /// Seconds in numeric factorisations.

@@ -130,10 +130,6 @@ pub struct ImplicitTotals {
     pub factorisations: u64,
     /// Of which fell back to LDLᵀ (indefinite tangent).
     pub indefinite: u64,
-    /// Newton steps whose contact solve met non-positive curvature with
-    /// the exact (indefinite) tangent and was done again with the
-    /// tension-only one.
-    pub tension_only: u64,
     /// Increments cut back.
     pub cutbacks: u64,
     /// Seconds in numeric factorisations.

@@ -53,7 +53,7 @@
 
 use std::time::Instant;
 
-use drape_contact::{ImplicitContact, ImplicitContactSettings, Increment, SolveError};
+use drape_contact::{ImplicitContact, ImplicitContactSettings, Increment};
 use drape_model::{Model, State};
 use nalgebra::Vector3;
 use rayon::prelude::*;
@@ -61,12 +61,11 @@ use rayon::prelude::*;
 use crate::energy::{chunked_sum, chunked_sums};
 use crate::guard::{self, Guard, GuardSettings};
 use crate::shared::{self, Constraints, ForcePass};
-use crate::tangent::{Factorisation, SparseTangent};
+use crate::tangent::SparseTangent;
 use crate::{
     Control, DriverState, Energies, Frame, ImplicitCarry, ImplicitTotals, IncrementReport,
     Observer, Progress, RunError, RunSummary,
 };
-use drape_elements::GeometricStiffness;
 
 /// Newton iterations of an easy increment (the next one grows) and of a
 /// hard one (the next one shrinks), not counting those that followed a
@@ -520,15 +519,7 @@ impl<'m> Implicit<'m> {
         // The stiffness at the start sets the force floor of the
         // convergence test before the first Newton step assembles it.
         self.tangent
-            .assemble(
-                model,
-                &state.x,
-                &state.history,
-                0.0,
-                &model.mass,
-                0.0,
-                GeometricStiffness::Exact,
-            )
+            .assemble(model, &state.x, &state.history, 0.0, &model.mass, 0.0)
             .map_err(|(batch, error)| RunError::Element {
                 step: state.step,
                 time: state.time,
@@ -1018,79 +1009,54 @@ impl<'m> Implicit<'m> {
                     ),
                 );
             }
-            // The Newton step with the exact tangent; if it is indefinite
-            // and the contact solve meets non-positive curvature, again
-            // with the tension-only tangent (see `GeometricStiffness`).
-            let mut geometric = GeometricStiffness::Exact;
-            loop {
-                let assembly = Instant::now();
-                let assembled = self.tangent.assemble(
-                    model,
-                    &self.x,
-                    &state.history,
-                    h,
-                    &model.mass,
-                    mass_factor,
-                    geometric,
+            // The Newton step.
+            let assembly = Instant::now();
+            let assembled =
+                self.tangent
+                    .assemble(model, &self.x, &state.history, h, &model.mass, mass_factor);
+            self.totals.assembly_seconds += assembly.elapsed().as_secs_f64();
+            if let Err((batch, e)) = assembled {
+                return fail(newton, &mut self.totals, format!("tangent of {batch}: {e}"));
+            }
+            if let Err(e) = self.tangent.factorise() {
+                return fail(
+                    newton,
+                    &mut self.totals,
+                    format!(
+                        "the tangent has a zero pivot at node {} (component {})",
+                        e.dof / 3,
+                        e.dof % 3
+                    ),
                 );
-                self.totals.assembly_seconds += assembly.elapsed().as_secs_f64();
-                if let Err((batch, e)) = assembled {
-                    return fail(newton, &mut self.totals, format!("tangent of {batch}: {e}"));
+            }
+            let fixed = &self.fixed;
+            let tangent = &mut self.tangent;
+            let mut solve = |w: &mut [f64]| {
+                for (wi, &f) in w.iter_mut().zip(fixed) {
+                    if f {
+                        *wi = 0.0;
+                    }
                 }
-                let factorised = match self.tangent.factorise() {
-                    Ok(kind) => kind,
-                    Err(e) => {
-                        return fail(
-                            newton,
-                            &mut self.totals,
-                            format!(
-                                "the tangent has a zero pivot at node {} (component {})",
-                                e.dof / 3,
-                                e.dof % 3
-                            ),
-                        );
+                tangent.solve(w);
+                for (wi, &f) in w.iter_mut().zip(fixed) {
+                    if f {
+                        *wi = 0.0;
                     }
-                };
-                let fixed = &self.fixed;
-                let tangent = &mut self.tangent;
-                let mut solve = |w: &mut [f64]| {
-                    for (wi, &f) in w.iter_mut().zip(fixed) {
-                        if f {
-                            *wi = 0.0;
-                        }
+                }
+            };
+            match &mut self.contact {
+                Some(contact) => {
+                    let started = Instant::now();
+                    let solved = contact.solve(&self.r, &mut solve, &mut self.dx);
+                    self.totals.contact_seconds += started.elapsed().as_secs_f64();
+                    match solved {
+                        Ok(stats) => contact_iterations += stats.iterations,
+                        Err(e) => return fail(newton, &mut self.totals, e.to_string()),
                     }
-                    tangent.solve(w);
-                    for (wi, &f) in w.iter_mut().zip(fixed) {
-                        if f {
-                            *wi = 0.0;
-                        }
-                    }
-                };
-                match &mut self.contact {
-                    Some(contact) => {
-                        let started = Instant::now();
-                        let solved = contact.solve(&self.r, &mut solve, &mut self.dx);
-                        self.totals.contact_seconds += started.elapsed().as_secs_f64();
-                        match solved {
-                            Ok(stats) => {
-                                contact_iterations += stats.iterations;
-                                break;
-                            }
-                            Err(SolveError::Indefinite)
-                                if factorised == Factorisation::Ldlt
-                                    && geometric == GeometricStiffness::Exact =>
-                            {
-                                geometric = GeometricStiffness::TensionOnly;
-                                self.totals.tension_only += 1;
-                            }
-                            Err(e) => return fail(newton, &mut self.totals, e.to_string()),
-                        }
-                    }
-                    None => {
-                        self.dx.copy_from_slice(&self.r);
-                        solve(&mut self.dx);
-                        break;
-                    }
+                }
+                None => {
+                    self.dx.copy_from_slice(&self.r);
+                    solve(&mut self.dx);
                 }
             }
             newton += 1;

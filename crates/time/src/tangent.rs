@@ -25,7 +25,7 @@
 
 use std::time::Instant;
 
-use drape_elements::{ElementError, GeometricStiffness};
+use drape_elements::ElementError;
 use drape_model::Model;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -362,10 +362,8 @@ impl SparseTangent {
     }
 
     /// Assembles K̂ = diag(`mass_factor`·m) + sym(K) at positions `x`, the
-    /// membranes from their committed `history` over a step `dt`, with the
-    /// trusses' and membranes' geometric terms `geometric`; an identity
-    /// block for the constrained dofs.
-    #[allow(clippy::too_many_arguments)]
+    /// membranes from their committed `history` over a step `dt`; an
+    /// identity block for the constrained dofs.
     pub fn assemble(
         &mut self,
         model: &Model,
@@ -374,12 +372,11 @@ impl SparseTangent {
         dt: f64,
         mass: &[f64],
         mass_factor: f64,
-        geometric: GeometricStiffness,
     ) -> Result<(), (String, ElementError)> {
         for (i, b) in model.trusses.iter().enumerate() {
             let slots = batch_slots(&mut self.slots, &self.trusses[i], b.len());
             assemble_batch(slots, &mut self.truss_scratch[i], |e, k| {
-                b.element_tangent_with(e, x, geometric, k)
+                b.element_tangent(e, x, k)
             })
             .map_err(|e| (format!("truss batch {i}"), e))?;
         }
@@ -388,7 +385,7 @@ impl SparseTangent {
             let h = &history[i];
             let slots = batch_slots(&mut self.slots, &self.membranes[i], b.len());
             assemble_batch(slots, &mut self.membrane_scratch[i], |e, k| {
-                b.element_tangent_with(e, x, &h[e * eh..(e + 1) * eh], dt, geometric, k)
+                b.element_tangent(e, x, &h[e * eh..(e + 1) * eh], dt, k)
             })
             .map_err(|e| (format!("membrane batch {i} ({:?})", b.shape()), e))?;
         }
@@ -643,16 +640,7 @@ mod tests {
             constrained[4] = true; // node 1, y
             let mut k = SparseTangent::new(&model, constrained.clone()).unwrap();
             let (mass, factor) = (&model.mass, 3.0e4);
-            k.assemble(
-                &model,
-                &x,
-                &history,
-                dt,
-                mass,
-                factor,
-                GeometricStiffness::Exact,
-            )
-            .unwrap();
+            k.assemble(&model, &x, &history, dt, mass, factor).unwrap();
             // Central differences of the gathered internal forces.
             let h = 1e-6;
             let mut jac = vec![vec![0.0; n]; n];
@@ -716,7 +704,6 @@ mod tests {
                 0.01,
                 &model.mass,
                 factor / model.mass[0],
-                GeometricStiffness::Exact,
             )
             .unwrap();
             assert_eq!(k.factorise().unwrap(), kind);

@@ -30,9 +30,22 @@
 //! Friction (SPEC §6): a sticking pair carries its tangential rows in the
 //! same condensed system; after the solve, a stick force beyond μ·λ_N
 //! turns the pair to slip, in the stick force's direction. A slipping pair
-//! has no tangential row: the driver applies μ·λ_N against its slip as a
-//! force, with λ_N from the last solve; it sticks again when its slip runs
-//! along its friction force (reversal). A new contact starts sticking.
+//! has no stick rows: the driver applies μ·λ_N as a force, with λ_N from
+//! the last solve. A new contact starts sticking.
+//!
+//! The stick is regularised when `elastic_slip` δ > 0 (the driver's
+//! default): a tangential spring k_t = μ·λ_N/δ from where the pair was at
+//! tₙ carrying the friction force it had there, f_n, so that a stick row
+//! holds t·(s + Δx) + (λ − t·f_n)/k_t = 0 (its compliance 1/k_t on A's
+//! diagonal). The return mapping then uses the spring's trial force
+//! f = f_n − k_t·s: inside the cone the pair sticks, outside it slides
+//! with μ·λ_N along f, and a slipping pair gets one row across its slip
+//! direction with the stiffness of that direction's turn (see
+//! `linearise_rows`). The friction force is a continuous function of the
+//! slip, so pairs at the edge of the cone do not cycle. With δ = 0 the
+//! stick is rigid: a slipping pair slides along a direction fixed for the
+//! increment and sticks again when its slip runs along its friction force
+//! (reversal).
 //!
 //! A force-driven tool (a blank holder) is an extra unknown, its
 //! displacement along its axis, with the same Newmark update as the nodes
@@ -119,6 +132,12 @@ pub struct ImplicitContactSettings {
     pub tolerance: f64,
     /// Products with A (solves with the factors) allowed per solve.
     pub max_iterations: usize,
+    /// Elastic slip at the friction limit (mm): a sticking pair is held by
+    /// a tangential spring of stiffness k_t = μ·λ_N/`elastic_slip` rather
+    /// than rigidly (0: rigid stick), stiffer if the node's inertia asks for
+    /// it ([`STICK_OVER_INERTIA`]), so the elastic slip is at most this.
+    /// See [`ImplicitContact::update_friction`].
+    pub elastic_slip: f64,
 }
 
 impl Default for ImplicitContactSettings {
@@ -128,6 +147,7 @@ impl Default for ImplicitContactSettings {
             margin: 5.0,
             tolerance: 1e-10,
             max_iterations: 2000,
+            elastic_slip: 0.0,
         }
     }
 }
@@ -168,6 +188,16 @@ struct Pair {
     anchor_tool: f64,
     /// Pressed at tₙ (carried from the last increment).
     since_start: bool,
+    /// Tangential friction force on the node at tₙ (N): where the
+    /// tangential spring of a regularised stick starts the increment.
+    force_n: Vector3<f64>,
+    /// k_t of a regularised stick (N/mm), fixed from the first λ_N the
+    /// pair needs it with in the increment (0: not yet), so that the
+    /// spring is linear over the increment and Newton converges on it.
+    stick_stiffness: f64,
+    /// |f_n − k_t·s| at the last return mapping of a regularised slip
+    /// (N; 0: not yet mapped in this increment).
+    trial: f64,
 }
 
 /// A pair's state carried from one increment to the next (and through a
@@ -200,6 +230,9 @@ struct Row {
     target: f64,
     /// λ ≥ 0 (normal) or free (tangential).
     bounded: bool,
+    /// 1/k_t of a regularised stick row (0 otherwise): the row holds
+    /// t·(s + Δx) + (λ − t·f_n)/k_t = 0.
+    compliance: f64,
 }
 
 /// What a condensed solve did.
@@ -287,6 +320,8 @@ pub struct ImplicitContact {
     force_floor: f64,
     rows: Vec<Row>,
     scratch: Scratch,
+    /// Nodal masses for the regularised stick's inertia floor (empty: none).
+    mass: Vec<f64>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -299,6 +334,35 @@ struct Scratch {
     phi: Vec<f64>,
     w: Vec<f64>,
     tool_w: Vec<f64>,
+}
+
+/// A regularised stick's spring is at least this many times the node's
+/// inertia stiffness m·(1 − α_m)/(β·h²): its tangential vibration
+/// (ω² = k_t/m) is then beyond what the increment resolves (ω·h ≥ 14 with
+/// ρ∞ = 0), where the Bossak scheme removes it, and a node that lands and
+/// sticks does not ring on the spring. Measured: without it a blank
+/// dropped on a plane (μ = 0.5, 1e-3 N per node) still rang with 0.9 % of
+/// the applied force at the end of the no-penetration case.
+pub const STICK_OVER_INERTIA: f64 = 100.0;
+
+/// The inertia floor stiffens a regularised stick by at most this factor:
+/// a slipping pair's direction turns by k_t·Δs/|f|, and with k_t unbounded
+/// (the floor grows as 1/h² when increments are cut) the Δs that carries
+/// the turn fell below the positions' round-off and Newton stalled (the
+/// capstan and no-penetration cases at h ≈ 1e-11 s).
+const INERTIA_FLOOR_CAP: f64 = 1e3;
+
+/// k_t of a regularised stick: μ·λ_N/δ for a pair at the friction limit
+/// `cone` = μ·λ_N and elastic slip δ, and at least
+/// [`STICK_OVER_INERTIA`] times the node's inertia stiffness when its
+/// `mass` is known, up to [`INERTIA_FLOOR_CAP`] times μ·λ_N/δ.
+fn stick_stiffness(cone: f64, elastic_slip: f64, mass: Option<f64>, inc: Option<Increment>) -> f64 {
+    let inertia = match (mass, inc) {
+        (Some(m), Some(inc)) => STICK_OVER_INERTIA * m * inc.mass_factor(),
+        _ => 0.0,
+    };
+    let k = cone / elastic_slip;
+    k.max(inertia.min(INERTIA_FLOOR_CAP * k))
 }
 
 /// Two unit tangents of the plane normal to `n`.
@@ -338,7 +402,15 @@ impl ImplicitContact {
             force_floor: 0.0,
             rows: Vec::new(),
             scratch: Scratch::default(),
+            mass: Vec::new(),
         }
+    }
+
+    /// The nodal masses: a regularised stick's spring is then at least
+    /// [`STICK_OVER_INERTIA`] times the node's inertia stiffness in the
+    /// increment (see [`ImplicitContactSettings::elastic_slip`]).
+    pub fn set_mass(&mut self, mass: &[f64]) {
+        self.mass = mass.to_vec();
     }
 
     /// The pass's outputs, as a frame shows them.
@@ -519,6 +591,9 @@ impl ImplicitContact {
                     anchor: x[iu],
                     anchor_tool: d,
                     since_start: false,
+                    force_n: Vector3::zeros(),
+                    stick_stiffness: 0.0,
+                    trial: 0.0,
                 };
                 if old < self.pairs.len() && (self.pairs[old].tool, self.pairs[old].node) == key {
                     let o = &self.pairs[old];
@@ -529,6 +604,9 @@ impl ImplicitContact {
                     pair.anchor = o.anchor;
                     pair.anchor_tool = o.anchor_tool;
                     pair.since_start = o.since_start;
+                    pair.force_n = o.force_n;
+                    pair.stick_stiffness = o.stick_stiffness;
+                    pair.trial = o.trial;
                 } else if carried < self.carried.len()
                     && (self.carried[carried].tool, self.carried[carried].node) == key
                 {
@@ -541,6 +619,11 @@ impl ImplicitContact {
                     pair.anchor = x_n[iu];
                     pair.anchor_tool = self.tool_state[t].displacement;
                     pair.since_start = true;
+                    let mu = tool.friction;
+                    pair.force_n = match c.friction {
+                        Friction::Stick => pair.stick,
+                        Friction::Slip => pair.slip_direction * (mu * c.lambda),
+                    };
                 }
                 let s = x[iu] - pair.anchor - axis * (d - pair.anchor_tool);
                 pair.slip = s - p.normal * p.normal.dot(&s);
@@ -586,7 +669,13 @@ impl ImplicitContact {
                 && pair.lambda > self.force_floor
                 && self.tools[pair.tool as usize].friction > 0.0;
             if sticking {
-                slip = slip.max(pair.slip.norm());
+                // A regularised stick's spring takes (f_n − f)/k_t.
+                let elastic = match self.stick_compliance(pair) {
+                    Some(c) => (pair.force_n - pair.stick) * c,
+                    None => Vector3::zeros(),
+                };
+                let elastic = elastic - pair.normal * pair.normal.dot(&elastic);
+                slip = slip.max((pair.slip - elastic).norm());
             }
         }
         (pen, slip)
@@ -705,7 +794,8 @@ impl ImplicitContact {
                 let pair = &pairs[row.pair as usize];
                 let i = 3 * pair.node as usize;
                 y[k] = row.direction.dot(&Vector3::new(w[i], w[i + 1], w[i + 2]))
-                    + row.tool_coefficient * tool_w[pair.tool as usize];
+                    + row.tool_coefficient * tool_w[pair.tool as usize]
+                    + row.compliance * v[k];
             }
         };
         let bounded: Vec<bool> = rows.iter().map(|r| r.bounded).collect();
@@ -796,6 +886,7 @@ impl ImplicitContact {
     /// its `SETTLE`). Returns how many pairs changed.
     pub fn update_friction(&mut self, x: &[Vector3<f64>], reversal: f64) -> usize {
         let reversal = reversal.max(SLIP_NOISE * self.settings.tolerance);
+        let elastic_slip = self.settings.elastic_slip;
         let mut changes = 0;
         for pair in &mut self.pairs {
             let tool = &self.tools[pair.tool as usize];
@@ -836,8 +927,39 @@ impl ImplicitContact {
                     if f > mu * pair.lambda * (1.0 + CONE_SLACK) {
                         pair.friction = Friction::Slip;
                         pair.slip_direction = pair.stick / f;
+                        pair.trial = f;
                         pair.stick = Vector3::zeros();
                         changes += 1;
+                    }
+                }
+                Friction::Slip if elastic_slip > 0.0 => {
+                    // Regularised: the spring's trial force from tₙ decides,
+                    // f = f_n − k_t·s; inside the cone the pair sticks (with
+                    // that force, continuous across the switch), outside it
+                    // slides along it.
+                    let axis = tool.motion.direction();
+                    let s = x[i] - pair.anchor - axis * (here.1 - pair.anchor_tool);
+                    let slip = s - pair.normal * pair.normal.dot(&s);
+                    let f_n = pair.force_n - pair.normal * pair.normal.dot(&pair.force_n);
+                    if pair.stick_stiffness == 0.0 {
+                        pair.stick_stiffness = stick_stiffness(
+                            mu * pair.lambda,
+                            elastic_slip,
+                            self.mass.get(i).copied(),
+                            self.increment,
+                        );
+                    }
+                    let trial = f_n - slip * pair.stick_stiffness;
+                    let size = trial.norm();
+                    // The force of the row across the slip (see
+                    // `linearise_rows`) is now in the direction.
+                    pair.stick = Vector3::zeros();
+                    if size <= mu * pair.lambda {
+                        pair.friction = Friction::Stick;
+                        changes += 1;
+                    } else {
+                        pair.slip_direction = trial / size;
+                        pair.trial = size;
                     }
                 }
                 Friction::Slip => {
@@ -915,7 +1037,7 @@ impl ImplicitContact {
             // The next increment starts sliding against this one's slip,
             // when it is more than noise.
             let mut direction = pair.slip_direction;
-            if sliding {
+            if sliding && self.settings.elastic_slip == 0.0 {
                 let tool = &self.tools[pair.tool as usize];
                 let i = pair.node as usize;
                 let dd = self.trial[pair.tool as usize] - displacement_n[pair.tool as usize];
@@ -1137,22 +1259,77 @@ impl ImplicitContact {
                 tool_coefficient: if free { -pair.normal.dot(&axis) } else { 0.0 },
                 target: pair.gap,
                 bounded: true,
+                compliance: 0.0,
             });
             pair.stick_rows = tool.friction > 0.0
                 && pair.friction == Friction::Stick
                 && pair.lambda > self.force_floor;
             if pair.stick_rows {
+                let compliance = if self.initial || self.settings.elastic_slip == 0.0 {
+                    0.0
+                } else {
+                    if pair.stick_stiffness == 0.0 {
+                        pair.stick_stiffness = stick_stiffness(
+                            tool.friction * pair.lambda,
+                            self.settings.elastic_slip,
+                            self.mass.get(pair.node as usize).copied(),
+                            self.increment,
+                        );
+                    }
+                    1.0 / pair.stick_stiffness
+                };
                 for t in tangents(&pair.normal) {
                     self.rows.push(Row {
                         pair: k as u32,
                         direction: t,
                         tool_coefficient: if free { -t.dot(&axis) } else { 0.0 },
-                        target: t.dot(&pair.slip),
+                        target: t.dot(&pair.slip) - compliance * t.dot(&pair.force_n),
                         bounded: false,
+                        compliance,
+                    });
+                }
+            } else if !self.initial
+                && self.settings.elastic_slip > 0.0
+                && tool.friction > 0.0
+                && pair.friction == Friction::Slip
+                && pair.lambda > self.force_floor
+            {
+                // A regularised slip's force μ·λ_N·(f_n − k_t·s)/|f_n − k_t·s|
+                // turns with the slip: across its direction d it changes
+                // by −k⊥·Δs, k⊥ = μ·λ_N·k_t/|f_n − k_t·s|. That stiffness
+                // as a row t⊥·Δx + λ/k⊥ = 0 (t⊥ = n × d) puts the turn in
+                // the Newton step: without it the direction lags one
+                // iteration behind and Newton does not converge when k_t
+                // is stiff.
+                if pair.stick_stiffness == 0.0 {
+                    pair.stick_stiffness = stick_stiffness(
+                        tool.friction * pair.lambda,
+                        self.settings.elastic_slip,
+                        self.mass.get(pair.node as usize).copied(),
+                        self.increment,
+                    );
+                }
+                let cone = tool.friction * pair.lambda;
+                let trial = if pair.trial > 0.0 { pair.trial } else { cone };
+                let across = pair.normal.cross(&pair.slip_direction);
+                if let Some(t) = across.try_normalize(1e-12) {
+                    self.rows.push(Row {
+                        pair: k as u32,
+                        direction: t,
+                        tool_coefficient: if free { -t.dot(&axis) } else { 0.0 },
+                        target: 0.0,
+                        bounded: false,
+                        compliance: trial / (cone * pair.stick_stiffness),
                     });
                 }
             }
         }
+    }
+
+    /// 1/k_t of a sticking pair's regularised stick, if regularised.
+    fn stick_compliance(&self, pair: &Pair) -> Option<f64> {
+        (self.settings.elastic_slip > 0.0 && !self.initial && pair.stick_stiffness > 0.0)
+            .then(|| 1.0 / pair.stick_stiffness)
     }
 
     /// Whether a force-driven tool is among the tools.
@@ -1409,14 +1586,15 @@ mod tests {
         &b.transpose() * &b + DMatrix::identity(n, n) * 0.5
     }
 
-    /// The reference: the saddle-point system [K̃ −Cᵀ; C 0] solved directly
+    /// The reference: the saddle-point system [K̃ −Cᵀ; C D] (D the rows'
+    /// compliances, zero but for regularised stick rows) solved directly
     /// for every subset of closed normal rows (tangential rows always
     /// closed), keeping the one that satisfies the complementarity
     /// conditions. K̃ includes the tool unknowns.
     fn direct(
         k: &DMatrix<f64>,
         rhs: &DVector<f64>,
-        c: &[(DVector<f64>, f64, bool)],
+        c: &[(DVector<f64>, f64, bool, f64)],
     ) -> (DVector<f64>, Vec<f64>) {
         let normals: Vec<usize> = (0..c.len()).filter(|&i| c[i].2).collect();
         let n = k.nrows();
@@ -1438,6 +1616,7 @@ mod tests {
                     a[(n + j, q)] = c[i].0[q];
                 }
                 b[n + j] = -c[i].1;
+                a[(n + j, n + j)] = c[i].3;
             }
             // Dependent rows (a node between two tools and the holder on
             // it closed together) have no unique multipliers: skip them.
@@ -1466,7 +1645,7 @@ mod tests {
     /// Five nodes over a floor (some inside it) and, optionally, a
     /// force-driven holder over two of them; some pairs sticking from a
     /// last increment. Returns the condensed solution and the direct one.
-    fn compare(with_holder: bool, friction: f64, seed: u64) {
+    fn compare(with_holder: bool, friction: f64, elastic_slip: f64, seed: u64) {
         let heights = [0.01, -0.02, 0.0, 0.05, -0.01];
         let x: Vec<Vector3<f64>> = heights
             .iter()
@@ -1495,16 +1674,19 @@ mod tests {
             margin: 0.5,
             tolerance: 1e-13,
             max_iterations: 1000,
+            elastic_slip,
         };
         let mut contact = ImplicitContact::new(tools.clone(), nodes, settings);
-        // Nodes 0 and 2 stuck at the last increment.
+        // Nodes 0 and 2 stuck at the last increment, with a tangential
+        // force (where a regularised stick's spring starts).
+        let stick_n = Vector3::new(0.1, -0.05, 0.0);
         let carried: Vec<CarriedPair> = [0u32, 2]
             .iter()
             .map(|&node| CarriedPair {
                 tool: 0,
                 node,
                 lambda: 1.0,
-                stick: [0.0; 3],
+                stick: stick_n.into(),
                 slip_direction: [0.0; 3],
                 friction: Friction::Stick,
             })
@@ -1560,7 +1742,7 @@ mod tests {
             kt[(n + j, n + j)] = mass * inc.mass_factor();
             rhs[n + j] = force;
         }
-        let mut rows: Vec<(DVector<f64>, f64, bool)> = Vec::new();
+        let mut rows: Vec<(DVector<f64>, f64, bool, f64)> = Vec::new();
         let mut owners = Vec::new();
         for (t, tool) in tools.iter().enumerate() {
             for (i, p) in x.iter().enumerate() {
@@ -1575,16 +1757,20 @@ mod tests {
                 if let Some(j) = free_tools.iter().position(|&f| f == t) {
                     row[n + j] = -q.normal.dot(&tool.motion.direction());
                 }
-                rows.push((row, q.gap - OFFSET, true));
+                rows.push((row, q.gap - OFFSET, true, 0.0));
                 owners.push((t, i, None));
                 if friction > 0.0 && t == 0 && (i == 0 || i == 2) {
                     let s = x[i] - x_n[i];
+                    // t·(s + Δx) + (λ_t − t·f_n)/k_t = 0, k_t = μ·λ_N/δ
+                    // with the carried λ_N = 1.
+                    let compliance = elastic_slip / friction;
                     for (k, e) in [Vector3::x(), Vector3::y()].iter().enumerate() {
                         let mut row = DVector::zeros(big);
                         for c in 0..3 {
                             row[3 * i + c] = e[c];
                         }
-                        rows.push((row, e.dot(&s), false));
+                        let target = e.dot(&s) - compliance * e.dot(&stick_n);
+                        rows.push((row, target, false, compliance));
                         owners.push((t, i, Some(k)));
                     }
                 }
@@ -1650,12 +1836,23 @@ mod tests {
     /// Returns the pass after `update_friction(reversal)` and the number
     /// of changes.
     fn slipping_node(dx: f64, reversal: f64) -> (ImplicitContact, usize) {
+        slipping_node_regularised(Vector3::new(dx, 0.0, 0.0), reversal, 0.0)
+    }
+
+    /// [`slipping_node`] moved by `d` in the floor's plane, with a
+    /// regularised stick of `elastic_slip` (mm; 0: rigid).
+    fn slipping_node_regularised(
+        d: Vector3<f64>,
+        reversal: f64,
+        elastic_slip: f64,
+    ) -> (ImplicitContact, usize) {
         let floor = plane("floor", 0.0, true, 0.3, ToolMotion::Fixed);
         let settings = ImplicitContactSettings {
             offset: OFFSET,
             margin: 0.5,
             tolerance: 1e-13,
             max_iterations: 100,
+            elastic_slip,
         };
         let mut contact = ImplicitContact::new(vec![floor], 1, settings);
         let carried = vec![CarriedPair {
@@ -1669,7 +1866,7 @@ mod tests {
         contact.restore(carried, &[ToolState::default()], &[0.0], 0.0);
         let inc = TRAPEZOIDAL_STEP;
         let x_n = vec![Vector3::new(0.0, 0.0, OFFSET)];
-        let x = vec![Vector3::new(dx, 0.0, OFFSET)];
+        let x = vec![x_n[0] + d];
         contact.begin(&x, &[true], inc);
         contact.linearise(&x, &x_n);
         let changes = contact.update_friction(&x, reversal);
@@ -1703,12 +1900,69 @@ mod tests {
     }
 
     #[test]
+    fn a_regularised_slip_follows_its_trial_force() {
+        // μ·λ_N = 0.6 N along +x at tₙ, k_t = μ·λ_N/δ = 60 N/mm: the
+        // trial force is 0.6·x̂ − 60·d.
+        let delta = 1e-2;
+        let x = Vector3::x();
+        let cases = [
+            // Sliding on (against its friction force): stays slipping.
+            (x * -1e-3, Friction::Slip, Some(x)),
+            // Back by 1e-3 mm: 0.54 N, inside the cone: sticks, with
+            // its anchor at tₙ (the spring holds 0.54 N there).
+            (x * 1e-3, Friction::Stick, None),
+            // Back by 3e-2 mm: −1.2 N, beyond the cone the other way:
+            // slides back.
+            (x * 3e-2, Friction::Slip, Some(-x)),
+            // Sideways by 5e-3 mm: (0.6, −0.3) N, 0.67 N > 0.6 N: slips
+            // along the trial force.
+            (
+                Vector3::y() * 5e-3,
+                Friction::Slip,
+                Some(Vector3::new(0.6, -0.3, 0.0).normalize()),
+            ),
+        ];
+        for (d, friction, direction) in cases {
+            let (contact, changes) = slipping_node_regularised(d, 0.0, delta);
+            let pair = &contact.pairs[0];
+            assert_eq!(pair.friction, friction, "{d:?}");
+            assert_eq!(changes, usize::from(friction == Friction::Stick), "{d:?}");
+            if let Some(dir) = direction {
+                assert!((pair.slip_direction - dir).norm() <= 1e-12, "{d:?}");
+            } else {
+                assert_eq!(pair.anchor, Vector3::new(0.0, 0.0, OFFSET));
+            }
+        }
+        // Rigid stick (δ = 0): the same sideways slip keeps sliding along
+        // the carried direction (no reversal along it).
+        let (contact, changes) = slipping_node_regularised(Vector3::y() * 5e-3, 0.0, 0.0);
+        assert_eq!((changes, contact.pairs[0].friction), (0, Friction::Slip));
+        assert_eq!(contact.pairs[0].slip_direction, x);
+    }
+
+    #[test]
+    fn the_stick_spring_is_the_cone_over_the_elastic_slip_or_above_the_inertia() {
+        // TRAPEZOIDAL_STEP: m·(1 − α_m)/(β·h²) = 4e4·m.
+        let inc = Some(TRAPEZOIDAL_STEP);
+        assert_eq!(stick_stiffness(0.6, 1e-2, None, inc), 60.0);
+        assert_eq!(stick_stiffness(0.6, 1e-2, Some(1e-6), inc), 60.0);
+        let heavy = stick_stiffness(0.6, 1e-2, Some(1e-3), inc);
+        assert!((heavy - STICK_OVER_INERTIA * 40.0).abs() <= 1e-9 * heavy);
+        // Capped at 1e3 × μ·λ_N/δ.
+        assert_eq!(stick_stiffness(0.6, 1e-2, Some(1.0), inc), 6e4);
+    }
+
+    #[test]
     fn the_condensed_solve_equals_the_direct_saddle_point_solve() {
         for seed in 1..=4 {
-            compare(false, 0.0, seed);
-            compare(false, 0.3, seed);
-            compare(true, 0.0, seed);
-            compare(true, 0.3, seed);
+            compare(false, 0.0, 0.0, seed);
+            compare(false, 0.3, 0.0, seed);
+            compare(true, 0.0, 0.0, seed);
+            compare(true, 0.3, 0.0, seed);
+            // A regularised stick: its rows' compliance δ/(μ·λ_N) on A's
+            // diagonal and the carried force in their targets.
+            compare(false, 0.3, 0.05, seed);
+            compare(true, 0.3, 0.05, seed);
         }
     }
 }

@@ -63,7 +63,7 @@ pub use energy::Energies;
 pub use error::{ImplicitTotals, RunError, RunSummary};
 pub use explicit::{Explicit, ExplicitSettings};
 pub use guard::{Guard, GuardSettings, Instability};
-pub use implicit::{Implicit, ImplicitSettings, NewtonRecord};
+pub use implicit::{ELASTIC_SLIP, Implicit, ImplicitSettings, NewtonRecord};
 pub use observer::{
     Control, DriverState, Frame, ImplicitCarry, IncrementReport, NoObserver, Observer, Progress,
 };

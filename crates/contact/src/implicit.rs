@@ -200,6 +200,29 @@ struct Pair {
     trial: f64,
 }
 
+impl Pair {
+    /// k_t of the pair's regularised stick: fixed at its first use in the
+    /// increment, from the friction limit μ·λ_N it has then (see
+    /// [`stick_stiffness`]), so the spring is linear over the increment.
+    fn stick_spring(
+        &mut self,
+        mu: f64,
+        elastic_slip: f64,
+        mass: &[f64],
+        inc: Option<Increment>,
+    ) -> f64 {
+        if self.stick_stiffness == 0.0 {
+            self.stick_stiffness = stick_stiffness(
+                mu * self.lambda,
+                elastic_slip,
+                mass.get(self.node as usize).copied(),
+                inc,
+            );
+        }
+        self.stick_stiffness
+    }
+}
+
 /// A pair's state carried from one increment to the next (and through a
 /// checkpoint).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -941,15 +964,8 @@ impl ImplicitContact {
                     let s = x[i] - pair.anchor - axis * (here.1 - pair.anchor_tool);
                     let slip = s - pair.normal * pair.normal.dot(&s);
                     let f_n = pair.force_n - pair.normal * pair.normal.dot(&pair.force_n);
-                    if pair.stick_stiffness == 0.0 {
-                        pair.stick_stiffness = stick_stiffness(
-                            mu * pair.lambda,
-                            elastic_slip,
-                            self.mass.get(i).copied(),
-                            self.increment,
-                        );
-                    }
-                    let trial = f_n - slip * pair.stick_stiffness;
+                    let k_t = pair.stick_spring(mu, elastic_slip, &self.mass, self.increment);
+                    let trial = f_n - slip * k_t;
                     let size = trial.norm();
                     // The force of the row across the slip (see
                     // `linearise_rows`) is now in the direction.
@@ -1268,15 +1284,8 @@ impl ImplicitContact {
                 let compliance = if self.initial || self.settings.elastic_slip == 0.0 {
                     0.0
                 } else {
-                    if pair.stick_stiffness == 0.0 {
-                        pair.stick_stiffness = stick_stiffness(
-                            tool.friction * pair.lambda,
-                            self.settings.elastic_slip,
-                            self.mass.get(pair.node as usize).copied(),
-                            self.increment,
-                        );
-                    }
-                    1.0 / pair.stick_stiffness
+                    let elastic_slip = self.settings.elastic_slip;
+                    1.0 / pair.stick_spring(tool.friction, elastic_slip, &self.mass, self.increment)
                 };
                 for t in tangents(&pair.normal) {
                     self.rows.push(Row {
@@ -1301,14 +1310,9 @@ impl ImplicitContact {
                 // the Newton step: without it the direction lags one
                 // iteration behind and Newton does not converge when k_t
                 // is stiff.
-                if pair.stick_stiffness == 0.0 {
-                    pair.stick_stiffness = stick_stiffness(
-                        tool.friction * pair.lambda,
-                        self.settings.elastic_slip,
-                        self.mass.get(pair.node as usize).copied(),
-                        self.increment,
-                    );
-                }
+                let elastic_slip = self.settings.elastic_slip;
+                let k_t =
+                    pair.stick_spring(tool.friction, elastic_slip, &self.mass, self.increment);
                 let cone = tool.friction * pair.lambda;
                 let trial = if pair.trial > 0.0 { pair.trial } else { cone };
                 let across = pair.normal.cross(&pair.slip_direction);
@@ -1319,7 +1323,7 @@ impl ImplicitContact {
                         tool_coefficient: if free { -t.dot(&axis) } else { 0.0 },
                         target: 0.0,
                         bounded: false,
-                        compliance: trial / (cone * pair.stick_stiffness),
+                        compliance: trial / (cone * k_t),
                     });
                 }
             }

@@ -309,7 +309,7 @@ impl<'m> Implicit<'m> {
             .collect();
         let tangent = SparseTangent::new(model, fixed.clone()).map_err(RunError::Setup)?;
         let contact = (!model.tools.is_empty()).then(|| {
-            ImplicitContact::new(
+            let mut contact = ImplicitContact::new(
                 model.tools.clone(),
                 n,
                 ImplicitContactSettings {
@@ -321,11 +321,9 @@ impl<'m> Implicit<'m> {
                     elastic_slip: settings.elastic_slip,
                     ..ImplicitContactSettings::default()
                 },
-            )
-        });
-        let contact = contact.map(|mut c| {
-            c.set_mass(&model.mass);
-            c
+            );
+            contact.set_mass(&model.mass);
+            contact
         });
         let (alpha_m, beta, gamma) = bossak(settings.spectral_radius);
         let zeros = vec![Vector3::zeros(); n];

@@ -123,6 +123,27 @@ fn a_draping_run_writes_what_the_engineer_carries_on() {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     let s = json(&out.join("summary.json"));
+    // A 4 ms stroke ends with the blank still moving (E_kin/E_int ≈ 1.7):
+    // the run says its answer carries inertia, on the screen and in the
+    // summary.
+    let share = s["energy"]["kinetic_to_internal"].as_f64().unwrap();
+    assert!(share > drape::QUASI_STATIC_KINETIC_SHARE, "{s}");
+    let moving = format!(
+        "the kinetic energy at the end is {:.1} % of the internal energy",
+        100.0 * share
+    );
+    assert!(
+        s["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains(&moving)),
+        "{s}"
+    );
+    assert!(
+        said.contains(&format!("warning           {moving}")),
+        "{said}"
+    );
     let (end, peak) = (
         s["max_shear_deg"].as_f64().unwrap(),
         s["peak"]["max_shear_deg"].as_f64().unwrap(),

@@ -705,7 +705,7 @@ pub const QUASI_STATIC_KINETIC_SHARE: f64 = 0.05;
 /// the added over the physical mass) or a fast tool put there. None
 /// within [`QUASI_STATIC_KINETIC_SHARE`].
 pub fn inertia_warning(kinetic_to_internal: f64, added_mass: f64) -> Option<String> {
-    if !(kinetic_to_internal > QUASI_STATIC_KINETIC_SHARE) {
+    if kinetic_to_internal.is_nan() || kinetic_to_internal <= QUASI_STATIC_KINETIC_SHARE {
         return None;
     }
     let cause = if added_mass > 0.0 {

@@ -215,6 +215,34 @@ fn profile_picture(file: &str, title: &str, curves: &[(String, &[ProfilePoint])]
     }
 }
 
+/// The paper's profile figures of `experiment` (`hemisphere` or
+/// `deep-drawing`): 0/90 along the diagonal and ±45 along the median, as
+/// its `figure`, one curve per run that `curves` picks for an orientation
+/// and a line; the Markdown that names the PNGs.
+fn paper_figures<'a>(
+    experiment: &str,
+    figure: &str,
+    cells: usize,
+    curves: impl Fn(Orientation, &str) -> Vec<(String, &'a [ProfilePoint])>,
+) -> String {
+    let mut text = String::new();
+    for (orientation, line, suffix) in [
+        (Orientation::ZeroNinety, "diagonal", "0-90-diagonal"),
+        (Orientation::PlusMinus45, "median", "45-median"),
+    ] {
+        let mut name = experiment.replace('-', " ");
+        name[..1].make_ascii_uppercase();
+        let title = format!(
+            "{name} {}: shear along the {line} (paper {figure}), {cells}×{cells}",
+            orientation.label()
+        );
+        let file = format!("{experiment}-{suffix}.png");
+        text.push_str(&profile_picture(&file, &title, &curves(orientation, line)));
+        text.push('\n');
+    }
+    text
+}
+
 /// The checks every hemisphere run must pass: it reaches the end time with
 /// the punch at its full stroke and the energy balance closes to 1e-3 of
 /// the largest energy. (Not E_kin/E_int < 1e-3 as for the deep drawing:
@@ -349,32 +377,20 @@ fn hemisphere_table_2() -> Vec<Check> {
          whether the paper's did.\n\n",
     );
     text.push_str(&hemisphere_law_table(&outcomes));
-    for (orientation, line, file) in [
-        (
-            Orientation::ZeroNinety,
-            "diagonal",
-            "hemisphere-0-90-diagonal.png",
-        ),
-        (
-            Orientation::PlusMinus45,
-            "median",
-            "hemisphere-45-median.png",
-        ),
-    ] {
-        let curves: Vec<(String, &[ProfilePoint])> = frictions
-            .iter()
-            .map(|mu| {
-                let o = find(&outcomes, orientation, &format!("μ = {mu}"));
-                (format!("μ = {mu}"), o.profile(line))
-            })
-            .collect();
-        let title = format!(
-            "Hemisphere {}: shear along the {line} (paper Fig. 7), {cells}×{cells}",
-            orientation.label()
-        );
-        text.push_str(&profile_picture(file, &title, &curves));
-        text.push('\n');
-    }
+    text.push_str(&paper_figures(
+        "hemisphere",
+        "Fig. 7",
+        cells,
+        |orientation, line| {
+            frictions
+                .iter()
+                .map(|mu| {
+                    let o = find(&outcomes, orientation, &format!("μ = {mu}"));
+                    (format!("μ = {mu}"), o.profile(line))
+                })
+                .collect()
+        },
+    ));
     text.push('\n');
     text.push_str(&run_table(&outcomes));
     note(text);
@@ -600,30 +616,18 @@ fn deep_drawing_table_4() -> Vec<Check> {
          the rows below) and 0/90 DD at μ = 0.01.\n\n",
     );
     text.push_str(&deep_drawing_law_table(&outcomes));
-    for (orientation, line, file) in [
-        (
-            Orientation::ZeroNinety,
-            "diagonal",
-            "deep-drawing-0-90-diagonal.png",
-        ),
-        (
-            Orientation::PlusMinus45,
-            "median",
-            "deep-drawing-45-median.png",
-        ),
-    ] {
-        let curves: Vec<(String, &[ProfilePoint])> = outcomes
-            .iter()
-            .filter(|o| o.run.orientation == orientation)
-            .map(|o| (o.run.label.clone(), o.profile(line)))
-            .collect();
-        let title = format!(
-            "Deep drawing {}: shear along the {line} (paper Fig. 12), {cells}×{cells}",
-            orientation.label()
-        );
-        text.push_str(&profile_picture(file, &title, &curves));
-        text.push('\n');
-    }
+    text.push_str(&paper_figures(
+        "deep-drawing",
+        "Fig. 12",
+        cells,
+        |orientation, line| {
+            outcomes
+                .iter()
+                .filter(|o| o.run.orientation == orientation)
+                .map(|o| (o.run.label.clone(), o.profile(line)))
+                .collect()
+        },
+    ));
     text.push('\n');
     text.push_str(&run_table(&outcomes));
     note(text);

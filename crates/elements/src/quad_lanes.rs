@@ -305,6 +305,197 @@ impl QuadLanes {
     }
 }
 
+/// The natural-coordinate derivatives (∂Nₐ/∂ξ, ∂Nₐ/∂η) of the 2×2 Gauss
+/// points, computed as `drape_kinematics::quad_point` computes them.
+fn gauss_derivatives(gauss: f64) -> [([f64; NODES], [f64; NODES]); POINTS] {
+    let mut out = [([0.0; NODES], [0.0; NODES]); POINTS];
+    for (o, (xi, eta)) in out
+        .iter_mut()
+        .zip([(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)])
+    {
+        let (xi, eta): (f64, f64) = (xi * gauss, eta * gauss);
+        let (xm, xp, em, ep) = (1.0 - xi, 1.0 + xi, 1.0 - eta, 1.0 + eta);
+        *o = (
+            [-0.25 * em, 0.25 * em, 0.25 * ep, -0.25 * ep],
+            [-0.25 * xm, -0.25 * xp, 0.25 * xp, 0.25 * xm],
+        );
+    }
+    out
+}
+
+/// The constants of a resin-only quad batch's stable-step bound (see
+/// `MembraneBatch::element_stable_time_step`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct StepBound {
+    /// The membrane stiffness κ (N/mm).
+    pub kappa: f64,
+    /// Areal density ρh.
+    pub rho_h: f64,
+    /// The 2×2 Gauss abscissa.
+    pub gauss: f64,
+}
+
+impl QuadLanes {
+    /// The stable steps of a block's four quads at positions `x` (`nodes`
+    /// their nodes, `nodal_area` their nodes' reference areas, 4 per
+    /// element): `MembraneBatch::element_stable_time_step` lane by lane,
+    /// operation for operation (`quad_point`'s frame, Jacobian and
+    /// gradients at each Gauss point, the Laplacian, Gershgorin's bound),
+    /// and 0 for a quad whose current shape has a degenerate or non-finite
+    /// point, as there.
+    #[inline]
+    pub(crate) fn block_stable_steps(
+        &self,
+        nodes: &[u32],
+        x: &[Vector3<f64>],
+        nodal_area: &[f64],
+        bound: StepBound,
+    ) -> [f64; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above).
+            return unsafe { block_stable_steps_avx2(nodes, x, nodal_area, bound) };
+        }
+        block_stable_steps_lanes(nodes, x, nodal_area, bound)
+    }
+}
+
+/// [`block_stable_steps_lanes`] compiled with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn block_stable_steps_avx2(
+    nodes: &[u32],
+    x: &[Vector3<f64>],
+    nodal_area: &[f64],
+    bound: StepBound,
+) -> [f64; LANES] {
+    block_stable_steps_lanes(nodes, x, nodal_area, bound)
+}
+
+/// Three components of four lanes.
+type Vec3x4 = [f64x4; 3];
+
+/// nalgebra's 3-vector dot, (a₀b₀ + a₁b₁) + a₂b₂.
+#[inline(always)]
+fn dot3(a: &Vec3x4, b: &Vec3x4) -> f64x4 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// nalgebra's cross product.
+#[inline(always)]
+fn cross3(a: &Vec3x4, b: &Vec3x4) -> Vec3x4 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline(always)]
+fn divided3(a: &Vec3x4, d: f64x4) -> Vec3x4 {
+    [a[0] / d, a[1] / d, a[2] / d]
+}
+
+/// [`QuadLanes::block_stable_steps`] for the target's baseline.
+#[inline(always)]
+pub(crate) fn block_stable_steps_lanes(
+    nodes: &[u32],
+    x: &[Vector3<f64>],
+    nodal_area: &[f64],
+    bound: StepBound,
+) -> [f64; LANES] {
+    let nodes: &[u32; LANES * NODES] = nodes.try_into().expect("a block's nodes");
+    let nodal_area: &[f64; LANES * NODES] = nodal_area.try_into().expect("a block's areas");
+    let zero = f64x4::splat(0.0);
+    let mut xe = [[zero; 3]; NODES];
+    for (a, xa) in xe.iter_mut().enumerate() {
+        for k in 0..LANES {
+            let p = &x[nodes[k * NODES + a] as usize];
+            for (c, v) in xa.iter_mut().enumerate() {
+                v.0[k] = p[c];
+            }
+        }
+    }
+    let mut ok = [true; LANES];
+    let mut lap = [[zero; NODES]; NODES];
+    for (d_xi, d_eta) in gauss_derivatives(bound.gauss) {
+        // reference_point: the tangents, the frame, J, ∇N and the area.
+        let (mut g1, mut g2) = ([zero; 3], [zero; 3]);
+        for (a, xa) in xe.iter().enumerate() {
+            let (s1, s2) = (f64x4::splat(d_xi[a]), f64x4::splat(d_eta[a]));
+            for c in 0..3 {
+                g1[c] += xa[c] * s1;
+                g2[c] += xa[c] * s2;
+            }
+        }
+        let n = cross3(&g1, &g2);
+        let size = dot3(&n, &n).sqrt();
+        let (n1, n2) = (dot3(&g1, &g1).sqrt(), dot3(&g2, &g2).sqrt());
+        let small = f64x4::splat(1e-12) * n1 * n2;
+        for k in 0..LANES {
+            ok[k] &= size.0[k].is_finite() && !(size.0[k] <= small.0[k]);
+        }
+        let normal = divided3(&n, size);
+        let e1 = divided3(&g1, n1);
+        let e2 = cross3(&normal, &e1);
+        let (j00, j10) = (dot3(&e1, &g1), dot3(&e2, &g1));
+        let (j01, j11) = (dot3(&e1, &g2), dot3(&e2, &g2));
+        let det_j = j00 * j11 - j10 * j01;
+        let (t00, t01, t10, t11) = (j11 / det_j, -j10 / det_j, -j01 / det_j, j00 / det_j);
+        let mut grad = [[zero; 2]; NODES];
+        for (a, g) in grad.iter_mut().enumerate() {
+            let (s1, s2) = (f64x4::splat(d_xi[a]), f64x4::splat(d_eta[a]));
+            *g = [t00 * s1 + t01 * s2, t10 * s1 + t11 * s2];
+        }
+        // The area is det J (weight 1). L is symmetric to the bit (the
+        // products and sums commute), so its upper half is computed and
+        // mirrored below.
+        for a in 0..NODES {
+            for b in a..NODES {
+                lap[a][b] += det_j * (grad[a][0] * grad[b][0] + grad[a][1] * grad[b][1]);
+            }
+        }
+    }
+    for a in 1..NODES {
+        for b in 0..a {
+            lap[a][b] = lap[b][a];
+        }
+    }
+    let rho_h = f64x4::splat(bound.rho_h);
+    let area_of = |a: usize| {
+        lanes([
+            nodal_area[a],
+            nodal_area[NODES + a],
+            nodal_area[2 * NODES + a],
+            nodal_area[3 * NODES + a],
+        ])
+    };
+    // ρh·√(mₐ·m_b), symmetric as L.
+    let mut scale = [[zero; NODES]; NODES];
+    for a in 0..NODES {
+        for b in a..NODES {
+            scale[a][b] = rho_h * (area_of(a) * area_of(b)).sqrt();
+            scale[b][a] = scale[a][b];
+        }
+    }
+    let mut lambda = zero;
+    for (row, scale) in lap.iter().zip(&scale) {
+        let mut sum = zero;
+        for (l, s) in row.iter().zip(scale) {
+            sum += l.abs() / *s;
+        }
+        lambda = lambda.max(sum);
+    }
+    let dt = f64x4::splat(2.0) / (f64x4::splat(bound.kappa) * lambda).sqrt();
+    let mut out = dt.0;
+    for k in 0..LANES {
+        if !ok[k] {
+            out[k] = 0.0;
+        }
+    }
+    out
+}
+
 /// Value `i` of the four lanes in a value-major run of history `h`.
 #[inline(always)]
 fn load(h: &[f64], i: usize) -> f64x4 {

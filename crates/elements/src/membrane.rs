@@ -795,49 +795,37 @@ impl MembraneBatch {
                 .zip(block_h.par_chunks_mut(LANES * eh))
                 .with_min_len(MIN_CHUNK / LANES)
                 .enumerate()
-                // Updating in place, each block's committed history is
-                // copied first (to a buffer per task, on the stack): the
-                // kernel reads it there and writes the block, and a block
-                // that fails runs on the scalar path from the copy.
-                .map_init(
-                    || [0.0; LANES * LANE_ELEMENT_HISTORY],
-                    |copy, (b, (f, out))| {
-                        let e0 = b * LANES;
-                        let nodes = &self.nodes[e0 * nn..(e0 + LANES) * nn];
-                        let committed = match h_in {
-                            Some(h_in) => &h_in[e0 * eh..(e0 + LANES) * eh],
-                            None => {
-                                copy[..LANES * eh].copy_from_slice(out);
-                                &copy[..LANES * eh]
-                            }
-                        };
-                        if lanes.block_forces(b, nodes, x, committed, out, self.stride, &resin, f) {
-                            return Ok(());
+                .map(|(b, (f, out))| {
+                    let e0 = b * LANES;
+                    let nodes = &self.nodes[e0 * nn..(e0 + LANES) * nn];
+                    let from = h_in.map(|h| &h[e0 * eh..(e0 + LANES) * eh]);
+                    if lanes.block_forces(b, nodes, x, from, out, self.stride, &resin, f) {
+                        return Ok(());
+                    }
+                    // The cold path (the kernel wrote nothing): each
+                    // lane's history out of the block and back (value `j`
+                    // of lane `k` at `j·LANES + k`, see `history_index`).
+                    let (mut prev, mut next) =
+                        ([0.0; LANE_ELEMENT_HISTORY], [0.0; LANE_ELEMENT_HISTORY]);
+                    for k in 0..LANES {
+                        let committed = from.unwrap_or(out);
+                        for (j, v) in prev[..eh].iter_mut().enumerate() {
+                            *v = committed[j * LANES + k];
                         }
-                        // The cold path: each lane's history out of the
-                        // block and back (value `j` of lane `k` at
-                        // `j·LANES + k`, see `history_index`).
-                        let (mut prev, mut next) =
-                            ([0.0; LANE_ELEMENT_HISTORY], [0.0; LANE_ELEMENT_HISTORY]);
-                        for k in 0..LANES {
-                            for (j, v) in prev[..eh].iter_mut().enumerate() {
-                                *v = committed[j * LANES + k];
-                            }
-                            self.element_force_with(
-                                e0 + k,
-                                x,
-                                Some(&prev[..eh]),
-                                &mut next[..eh],
-                                step,
-                                &mut f[k * nn..(k + 1) * nn],
-                            )?;
-                            for (j, v) in next[..eh].iter().enumerate() {
-                                out[j * LANES + k] = *v;
-                            }
+                        self.element_force_with(
+                            e0 + k,
+                            x,
+                            Some(&prev[..eh]),
+                            &mut next[..eh],
+                            step,
+                            &mut f[k * nn..(k + 1) * nn],
+                        )?;
+                        for (j, v) in next[..eh].iter().enumerate() {
+                            out[j * LANES + k] = *v;
                         }
-                        Ok(())
-                    },
-                ),
+                    }
+                    Ok(())
+                }),
         )?;
         for (k, (f, out)) in tail_slots
             .chunks_mut(nn)

@@ -91,12 +91,14 @@ impl QuadLanes {
     }
 
     /// Forces and new history of block `b`: `nodes` its elements' nodes
-    /// (4 per element), `h_in`/`h_out` the block's history (`stride` values
-    /// per point, value-major: value `i` of point `p` of lane `k` at
-    /// `(p·stride + i)·4 + k`), `slots` their nodal forces (4 per element).
-    /// Returns false, having written nothing meaningful, if a point of the
-    /// block is non-finite or degenerate: the caller then runs the block on
-    /// the scalar path, which names the element.
+    /// (4 per element), `h` the block's history (`stride` values per
+    /// point, value-major: value `i` of point `p` of lane `k` at
+    /// `(p·stride + i)·4 + k`), the committed one read from `h_in`, or
+    /// from `h` itself when None (advanced in place), the new one written
+    /// into `h`; `slots` their nodal forces (4 per element). Returns
+    /// false, having written nothing, if a point of the block is
+    /// non-finite or degenerate: the caller then runs the block on the
+    /// scalar path, which names the element.
     #[allow(clippy::too_many_arguments)]
     #[inline]
     pub(crate) fn block_forces(
@@ -104,8 +106,8 @@ impl QuadLanes {
         b: usize,
         nodes: &[u32],
         x: &[Vector3<f64>],
-        h_in: &[f64],
-        h_out: &mut [f64],
+        h_in: Option<&[f64]>,
+        h: &mut [f64],
         stride: usize,
         resin: &ResinStep<'_>,
         slots: &mut [Vector3<f64>],
@@ -113,11 +115,9 @@ impl QuadLanes {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2 (checked just above).
-            return unsafe {
-                self.block_forces_avx2(b, nodes, x, h_in, h_out, stride, resin, slots)
-            };
+            return unsafe { self.block_forces_avx2(b, nodes, x, h_in, h, stride, resin, slots) };
         }
-        self.block_forces_lanes(b, nodes, x, h_in, h_out, stride, resin, slots)
+        self.block_forces_lanes(b, nodes, x, h_in, h, stride, resin, slots)
     }
 
     /// [`Self::block_forces`] compiled with AVX2.
@@ -129,13 +129,13 @@ impl QuadLanes {
         b: usize,
         nodes: &[u32],
         x: &[Vector3<f64>],
-        h_in: &[f64],
-        h_out: &mut [f64],
+        h_in: Option<&[f64]>,
+        h: &mut [f64],
         stride: usize,
         resin: &ResinStep<'_>,
         slots: &mut [Vector3<f64>],
     ) -> bool {
-        self.block_forces_lanes(b, nodes, x, h_in, h_out, stride, resin, slots)
+        self.block_forces_lanes(b, nodes, x, h_in, h, stride, resin, slots)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -145,8 +145,8 @@ impl QuadLanes {
         b: usize,
         nodes: &[u32],
         x: &[Vector3<f64>],
-        h_in: &[f64],
-        h_out: &mut [f64],
+        h_in: Option<&[f64]>,
+        h: &mut [f64],
         stride: usize,
         resin: &ResinStep<'_>,
         slots: &mut [Vector3<f64>],
@@ -158,7 +158,7 @@ impl QuadLanes {
         let nodes: &[u32; LANES * NODES] = nodes.try_into().expect("a block's nodes");
         let slots: &mut [Vector3<f64>; LANES * NODES] =
             slots.try_into().expect("a block's force slots");
-        assert!(h_in.len() == LANES * eh && h_out.len() == LANES * eh);
+        assert!(h.len() == LANES * eh && h_in.is_none_or(|h_in| h_in.len() == LANES * eh));
         let used = if resin.prony.is_empty() {
             6
         } else {
@@ -177,12 +177,16 @@ impl QuadLanes {
         }
         let zero = f64x4::splat(0.0);
         let half = f64x4::splat(0.5);
-        let mut force = [[zero; 3]; NODES];
+        // First every point's F and C, and the block's check, so that a
+        // block that goes to the scalar path has written nothing (its
+        // history may be the committed one, advanced in place).
+        let mut f_at = [[[zero; 2]; 3]; POINTS];
+        let mut c_at = [[zero; 5]; POINTS];
         let mut ok = true;
         for p in 0..POINTS {
             let grad = &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES];
             // F = Σₐ xₐ ⊗ ∇Nₐ (from zero, node by node).
-            let mut f = [[zero; 2]; 3];
+            let f = &mut f_at[p];
             for (xa, ga) in xe.iter().zip(grad) {
                 for i in 0..3 {
                     for j in 0..2 {
@@ -202,6 +206,16 @@ impl QuadLanes {
             // (or overflowing) entry makes its right side +∞, which nothing
             // exceeds. Every point it passes is one the scalar path accepts.
             ok &= det_c.all_gt(f64x4::splat(DEGENERATE_DET_C) * tr_c * tr_c);
+            c_at[p] = [c00, c01, c11, det_c, tr_c];
+        }
+        if !ok {
+            return false;
+        }
+        let mut force = [[zero; 3]; NODES];
+        for p in 0..POINTS {
+            let grad = &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES];
+            let f = &f_at[p];
+            let [c00, c01, c11, det_c, tr_c] = c_at[p];
             let det_u = det_c.sqrt();
             let s = (tr_c + f64x4::splat(2.0) * det_u).sqrt();
             let (u00, u01, u11) = ((c00 + det_u) / s, (c01 + zero) / s, (c11 + det_u) / s);
@@ -214,9 +228,11 @@ impl QuadLanes {
             // Rotated strain increment from the committed U. The block's
             // history is value-major ([point][value][lane], see
             // `MembraneBatch`'s layout), so each value of the four lanes
-            // is one load; the first six as a fixed array, one bounds check.
+            // is one load; the first six as a fixed array, one bounds
+            // check. Every committed value of the point is read before the
+            // point's new ones are written (the same place when in place).
             let at = p * stride * LANES;
-            let fixed: &[f64; 6 * LANES] = h_in[at..at + 6 * LANES]
+            let fixed: [f64; 6 * LANES] = h_in.unwrap_or(h)[at..at + 6 * LANES]
                 .try_into()
                 .expect("a point's six values");
             let un = |i: usize| {
@@ -251,23 +267,27 @@ impl QuadLanes {
             let t00 = un(3) + k * (e00 + nu * e11);
             let t11 = un(4) + k * (nu * e00 + e11);
             let d_s0 = f64x4::splat(resin.shear_modulus) * (e01 + e10);
-            let (out_fixed, out_tail) = h_out[at..at + used * LANES].split_at_mut(6 * LANES);
             let t01 = if resin.prony.is_empty() {
                 un(5) + d_s0
             } else {
-                let tail = &h_in[at + 6 * LANES..at + used * LANES];
-                let s0 = load(tail, 0) + d_s0;
+                // The shear stress and Prony terms, each read before its
+                // new value is written over it.
+                let tail = at + 6 * LANES;
+                let committed = |h: &[f64], i: usize| load(&h_in.unwrap_or(h)[tail..], i);
+                let s0 = committed(h, 0) + d_s0;
                 let mut relaxing = zero;
                 for (q, &(decay, weight)) in resin.prony.iter().enumerate() {
-                    let qk = f64x4::splat(decay) * load(tail, 1 + q) + f64x4::splat(weight) * d_s0;
+                    let qk =
+                        f64x4::splat(decay) * committed(h, 1 + q) + f64x4::splat(weight) * d_s0;
                     relaxing += qk;
-                    store(out_tail, 1 + q, qk);
+                    store(&mut h[tail..], 1 + q, qk);
                 }
-                store(out_tail, 0, s0);
+                store(&mut h[tail..], 0, s0);
                 f64x4::splat(resin.long_term) * s0 + relaxing
             };
-            let out_fixed: &mut [f64; 6 * LANES] =
-                out_fixed.try_into().expect("a point's six values");
+            let out_fixed: &mut [f64; 6 * LANES] = (&mut h[at..at + 6 * LANES])
+                .try_into()
+                .expect("a point's six values");
             for (i, v) in [u00, u11, u01, t00, t11, t01].into_iter().enumerate() {
                 out_fixed[LANES * i..LANES * (i + 1)].copy_from_slice(&v.0);
             }
@@ -280,12 +300,12 @@ impl QuadLanes {
             let b01 = a00 * ui01 + a01 * ui11;
             let b10 = a10 * ui00 + a11 * ui01;
             let b11 = a10 * ui01 + a11 * ui11;
-            let h = f64x4::splat(resin.thickness);
+            let h_m = f64x4::splat(resin.thickness);
             let mut piola = [[zero; 2]; 3];
-            for (pi, fi) in piola.iter_mut().zip(&f) {
+            for (pi, fi) in piola.iter_mut().zip(f) {
                 *pi = [
-                    (fi[0] * b00 + fi[1] * b10) * h,
-                    (fi[0] * b01 + fi[1] * b11) * h,
+                    (fi[0] * b00 + fi[1] * b10) * h_m,
+                    (fi[0] * b01 + fi[1] * b11) * h_m,
                 ];
             }
             // fₐ += (P·∇Nₐ)·A.
@@ -301,7 +321,7 @@ impl QuadLanes {
                 slots[k * NODES + a] = Vector3::new(fa[0].0[k], fa[1].0[k], fa[2].0[k]);
             }
         }
-        ok
+        true
     }
 }
 

@@ -687,7 +687,7 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                 1,
                 &b.nodes[16..32],
                 &x,
-                &h[4 * eh..8 * eh],
+                Some(&h[4 * eh..8 * eh]),
                 &mut out,
                 b.stride,
                 &resin,
@@ -700,7 +700,7 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                 1,
                 &b.nodes[16..32],
                 &x,
-                &h[4 * eh..8 * eh],
+                Some(&h[4 * eh..8 * eh]),
                 &mut out_base,
                 b.stride,
                 &resin,
@@ -712,6 +712,46 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                     .zip(&out_base)
                     .all(|(a, b)| a.to_bits() == b.to_bits())
             );
+            // And in place, over the committed values.
+            let (mut f_in_place, mut in_place) =
+                ([Vector3::zeros(); 16], h[4 * eh..8 * eh].to_vec());
+            assert!(lanes.block_forces(
+                1,
+                &b.nodes[16..32],
+                &x,
+                None,
+                &mut in_place,
+                b.stride,
+                &resin,
+                &mut f_in_place
+            ));
+            assert_eq!(f, f_in_place);
+            assert!(
+                out.iter()
+                    .zip(&in_place)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+            // A block with a quad squeezed onto a line writes nothing.
+            let mut collapsed = x.clone();
+            let nodes = b.element_nodes(7).to_vec();
+            let (p, q) = (x[nodes[0] as usize], x[nodes[1] as usize]);
+            for (k, &n) in nodes.iter().enumerate() {
+                collapsed[n as usize] = p + (q - p) * (k as f64 * 0.3);
+            }
+            let mut untouched = h[4 * eh..8 * eh].to_vec();
+            let mut f_none = [Vector3::new(7.0, 7.0, 7.0); 16];
+            assert!(!lanes.block_forces(
+                1,
+                &b.nodes[16..32],
+                &collapsed,
+                None,
+                &mut untouched,
+                b.stride,
+                &resin,
+                &mut f_none
+            ));
+            assert_eq!(untouched, h[4 * eh..8 * eh]);
+            assert!(f_none.iter().all(|v| *v == Vector3::new(7.0, 7.0, 7.0)));
             // Stated round-off: none. The lanes do the scalar operations in
             // the scalar order, without fused multiply-adds.
             for (e, (f, g)) in slots.iter().zip(&expected).enumerate() {

@@ -85,6 +85,12 @@ impl QuadLanes {
         Self { grad, area: areas }
     }
 
+    /// ∂N/∂X of the nodes at point `p` of block `b`.
+    #[inline(always)]
+    fn point_grad(&self, b: usize, p: usize) -> &[[f64x4; 2]] {
+        &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES]
+    }
+
     /// Whole blocks.
     pub(crate) fn blocks(&self) -> usize {
         self.area.len() / POINTS
@@ -180,42 +186,30 @@ impl QuadLanes {
         // First every point's F and C, and the block's check, so that a
         // block that goes to the scalar path has written nothing (its
         // history may be the committed one, advanced in place).
-        let mut f_at = [[[zero; 2]; 3]; POINTS];
-        let mut c_at = [[zero; 5]; POINTS];
+        // (Built point by point, not zeroed and filled: a memset call.)
+        let points = [
+            point_gradient(self.point_grad(b, 0), &xe),
+            point_gradient(self.point_grad(b, 1), &xe),
+            point_gradient(self.point_grad(b, 2), &xe),
+            point_gradient(self.point_grad(b, 3), &xe),
+        ];
+        // One test stands for the scalar path's finiteness and degeneracy
+        // checks: tr C is the sum of the squares of F, so a NaN in F, C or
+        // det C fails the comparison, and an infinite (or overflowing)
+        // entry makes its right side +∞, which nothing exceeds. Every
+        // point it passes is one the scalar path accepts.
         let mut ok = true;
-        for p in 0..POINTS {
-            let grad = &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES];
-            // F = Σₐ xₐ ⊗ ∇Nₐ (from zero, node by node).
-            let f = &mut f_at[p];
-            for (xa, ga) in xe.iter().zip(grad) {
-                for i in 0..3 {
-                    for j in 0..2 {
-                        f[i][j] += xa[i] * ga[j];
-                    }
-                }
-            }
-            // Polar decomposition (closed form of right_stretch).
-            let c00 = f[0][0] * f[0][0] + f[1][0] * f[1][0] + f[2][0] * f[2][0];
-            let c01 = f[0][0] * f[0][1] + f[1][0] * f[1][1] + f[2][0] * f[2][1];
-            let c11 = f[0][1] * f[0][1] + f[1][1] * f[1][1] + f[2][1] * f[2][1];
-            let det_c = c00 * c11 - c01 * c01;
-            let tr_c = c00 + c11;
-            // One test stands for the scalar path's finiteness and
-            // degeneracy checks: tr C is the sum of the squares of F, so a
-            // NaN in F, C or det C fails the comparison, and an infinite
-            // (or overflowing) entry makes its right side +∞, which nothing
-            // exceeds. Every point it passes is one the scalar path accepts.
-            ok &= det_c.all_gt(f64x4::splat(DEGENERATE_DET_C) * tr_c * tr_c);
-            c_at[p] = [c00, c01, c11, det_c, tr_c];
+        for (_, [_, _, _, det_c, tr_c]) in &points {
+            ok &= det_c.all_gt(f64x4::splat(DEGENERATE_DET_C) * *tr_c * *tr_c);
         }
         if !ok {
             return false;
         }
         let mut force = [[zero; 3]; NODES];
         for p in 0..POINTS {
-            let grad = &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES];
-            let f = &f_at[p];
-            let [c00, c01, c11, det_c, tr_c] = c_at[p];
+            let grad = self.point_grad(b, p);
+            let (f, [c00, c01, c11, det_c, tr_c]) = &points[p];
+            let (c00, c01, c11, det_c, tr_c) = (*c00, *c01, *c11, *det_c, *tr_c);
             let det_u = det_c.sqrt();
             let s = (tr_c + f64x4::splat(2.0) * det_u).sqrt();
             let (u00, u01, u11) = ((c00 + det_u) / s, (c01 + zero) / s, (c11 + det_u) / s);
@@ -231,8 +225,9 @@ impl QuadLanes {
             // is one load; the first six as a fixed array, one bounds
             // check. Every committed value of the point is read before the
             // point's new ones are written (the same place when in place).
-            let at = p * stride * LANES;
-            let fixed: [f64; 6 * LANES] = h_in.unwrap_or(h)[at..at + 6 * LANES]
+            let range = p * stride * LANES..(p * stride + used) * LANES;
+            let (from, point) = (h_in.map(|h| &h[range.clone()]), &mut h[range]);
+            let fixed: [f64; 6 * LANES] = from.unwrap_or(point)[..6 * LANES]
                 .try_into()
                 .expect("a point's six values");
             let un = |i: usize| {
@@ -272,20 +267,19 @@ impl QuadLanes {
             } else {
                 // The shear stress and Prony terms, each read before its
                 // new value is written over it.
-                let tail = at + 6 * LANES;
-                let committed = |h: &[f64], i: usize| load(&h_in.unwrap_or(h)[tail..], i);
-                let s0 = committed(h, 0) + d_s0;
+                let committed = |point: &[f64], i: usize| load(from.unwrap_or(point), 6 + i);
+                let s0 = committed(point, 0) + d_s0;
                 let mut relaxing = zero;
                 for (q, &(decay, weight)) in resin.prony.iter().enumerate() {
                     let qk =
-                        f64x4::splat(decay) * committed(h, 1 + q) + f64x4::splat(weight) * d_s0;
+                        f64x4::splat(decay) * committed(point, 1 + q) + f64x4::splat(weight) * d_s0;
                     relaxing += qk;
-                    store(&mut h[tail..], 1 + q, qk);
+                    store(point, 7 + q, qk);
                 }
-                store(&mut h[tail..], 0, s0);
+                store(point, 6, s0);
                 f64x4::splat(resin.long_term) * s0 + relaxing
             };
-            let out_fixed: &mut [f64; 6 * LANES] = (&mut h[at..at + 6 * LANES])
+            let out_fixed: &mut [f64; 6 * LANES] = (&mut point[..6 * LANES])
                 .try_into()
                 .expect("a point's six values");
             for (i, v) in [u00, u11, u01, t00, t11, t01].into_iter().enumerate() {
@@ -323,6 +317,28 @@ impl QuadLanes {
         }
         true
     }
+}
+
+/// F = Σₐ xₐ ⊗ ∇Nₐ at a point (from zero, node by node), and C = FᵀF's
+/// C₁₁, C₁₂, C₂₂, det C, tr C as `right_stretch` forms them. A function
+/// with `inline(always)`, not a closure, so that it is inlined into the
+/// kernel's AVX2 build.
+#[inline(always)]
+fn point_gradient(grad: &[[f64x4; 2]], xe: &[[f64x4; 3]; NODES]) -> ([[f64x4; 2]; 3], [f64x4; 5]) {
+    let mut f = [[f64x4::splat(0.0); 2]; 3];
+    for (xa, ga) in xe.iter().zip(grad) {
+        for i in 0..3 {
+            for j in 0..2 {
+                f[i][j] += xa[i] * ga[j];
+            }
+        }
+    }
+    let c00 = f[0][0] * f[0][0] + f[1][0] * f[1][0] + f[2][0] * f[2][0];
+    let c01 = f[0][0] * f[0][1] + f[1][0] * f[1][1] + f[2][0] * f[2][1];
+    let c11 = f[0][1] * f[0][1] + f[1][1] * f[1][1] + f[2][1] * f[2][1];
+    let det_c = c00 * c11 - c01 * c01;
+    let tr_c = c00 + c11;
+    (f, [c00, c01, c11, det_c, tr_c])
 }
 
 /// The natural-coordinate derivatives (∂Nₐ/∂ξ, ∂Nₐ/∂η) of the 2×2 Gauss

@@ -206,9 +206,8 @@ impl QuadLanes {
             return false;
         }
         let mut force = [[zero; 3]; NODES];
-        for p in 0..POINTS {
+        for (p, (f, [c00, c01, c11, det_c, tr_c])) in points.iter().enumerate() {
             let grad = self.point_grad(b, p);
-            let (f, [c00, c01, c11, det_c, tr_c]) = &points[p];
             let (c00, c01, c11, det_c, tr_c) = (*c00, *c01, *c11, *det_c, *tr_c);
             let det_u = det_c.sqrt();
             let s = (tr_c + f64x4::splat(2.0) * det_u).sqrt();
@@ -468,8 +467,10 @@ pub(crate) fn block_stable_steps_lanes(
         let size = dot3(&n, &n).sqrt();
         let (n1, n2) = (dot3(&g1, &g1).sqrt(), dot3(&g2, &g2).sqrt());
         let small = f64x4::splat(1e-12) * n1 * n2;
-        for k in 0..LANES {
-            ok[k] &= size.0[k].is_finite() && !(size.0[k] <= small.0[k]);
+        for (ok, (size, small)) in ok.iter_mut().zip(size.0.into_iter().zip(small.0)) {
+            // As `LocalFrame::from_tangents`: a NaN bound passes there too.
+            let degenerate = size <= small;
+            *ok &= size.is_finite() && !degenerate;
         }
         let normal = divided3(&n, size);
         let e1 = divided3(&g1, n1);
@@ -492,6 +493,7 @@ pub(crate) fn block_stable_steps_lanes(
             }
         }
     }
+    #[allow(clippy::needless_range_loop)] // (a mirror: both orders index it)
     for a in 1..NODES {
         for b in 0..a {
             lap[a][b] = lap[b][a];
@@ -508,6 +510,7 @@ pub(crate) fn block_stable_steps_lanes(
     };
     // ρh·√(mₐ·m_b), symmetric as L.
     let mut scale = [[zero; NODES]; NODES];
+    #[allow(clippy::needless_range_loop)] // (a mirror: both orders index it)
     for a in 0..NODES {
         for b in a..NODES {
             scale[a][b] = rho_h * (area_of(a) * area_of(b)).sqrt();

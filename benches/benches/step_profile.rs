@@ -22,8 +22,13 @@
 //! the stroke. `--filter TEXT` keeps the cases and scenes whose name
 //! contains TEXT; `--profile-scenes` prints the per-pass profile of each
 //! shipped scene too (where a small model's step goes on 2 threads);
-//! `--threads N` profiles on N threads only (for a run under callgrind,
-//! `--toggle-collect='*profile_steps*'`).
+//! `--threads N` profiles on N threads only and `--steps N` profiles
+//! windows of N steps (for a run under callgrind,
+//! `--toggle-collect='*profile_steps*'`: the instructions of a step are
+//! the difference of two windows' divided by the difference of their
+//! steps, which leaves out the driver's set-up, first force pass and last
+//! energies; windows of multiples of 20 steps hold the stable-Δt
+//! estimates at their share).
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -62,6 +67,11 @@ fn main() {
         .position(|a| a == "--threads")
         .and_then(|k| args.get(k + 1))
         .map_or_else(|| vec![1, 2], |n| vec![n.parse().expect("--threads N")]);
+    let steps: Option<u64> = args
+        .iter()
+        .position(|a| a == "--steps")
+        .and_then(|k| args.get(k + 1))
+        .map(|n| n.parse().expect("--steps N"));
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .expect("benches/ sits in the workspace")
@@ -111,7 +121,11 @@ fn main() {
     ];
     for (name, overrides, window) in cases.iter().filter(|c| c.0.contains(&filter)) {
         let scene = load(&hemisphere, overrides);
-        print_profiles(name, &scene, *window, clock, &threads);
+        let window = Window {
+            steps: steps.unwrap_or(window.steps),
+            ..*window
+        };
+        print_profiles(name, &scene, window, clock, &threads);
     }
 
     println!(

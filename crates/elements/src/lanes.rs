@@ -70,6 +70,25 @@ impl f64x4 {
         Self([v[0].sqrt(), v[1].sqrt(), v[2].sqrt(), v[3].sqrt()])
     }
 
+    /// Lane by lane, |v|.
+    #[inline(always)]
+    pub(crate) fn abs(self) -> Self {
+        let v = self.0;
+        Self([v[0].abs(), v[1].abs(), v[2].abs(), v[3].abs()])
+    }
+
+    /// Lane by lane, `f64::max` (a NaN lane takes the other's value).
+    #[inline(always)]
+    pub(crate) fn max(self, rhs: f64x4) -> Self {
+        let (v, w) = (self.0, rhs.0);
+        Self([
+            v[0].max(w[0]),
+            v[1].max(w[1]),
+            v[2].max(w[2]),
+            v[3].max(w[3]),
+        ])
+    }
+
     /// Whether every lane is finite.
     #[inline(always)]
     pub(crate) fn all_finite(self) -> bool {

@@ -28,7 +28,9 @@
 //! are computed once in the constructors; history lives in flat `f64`
 //! arrays read from one buffer and written to another, so an evaluation
 //! never allocates and a trial state (a Newton iteration, a finite
-//! difference) never disturbs the committed one. The explicit force
+//! difference) never disturbs the committed one; the explicit step, which
+//! never goes back, advances it in place instead
+//! ([`MembraneBatch::forces_in_place`], one array streamed instead of two). The explicit force
 //! passes of trusses and resin-only quads run four elements at a time on
 //! SIMD lanes (`truss_lanes`, `quad_lanes`), with the scalar element as
 //! the reference: same operations in the same order, equal bit for bit.

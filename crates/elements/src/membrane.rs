@@ -11,7 +11,7 @@ use nalgebra::{DMatrix, Matrix2, Matrix3x2, Vector2, Vector3};
 use rayon::prelude::*;
 
 use crate::lanes::LANES;
-use crate::quad_lanes::{QuadLanes, ResinStep};
+use crate::quad_lanes::{QuadLanes, ResinStep, StepBound};
 use crate::{ElementError, MIN_CHUNK, lowest_error};
 
 mod locking;
@@ -174,6 +174,26 @@ impl std::ops::Deref for ElementHistory<'_> {
 struct Step<'a> {
     dt: f64,
     prony: &'a [(f64, f64)],
+}
+
+/// A point's history as [`MembraneBatch::point_response`] takes it: the
+/// committed values only, or also where the new ones go (another array,
+/// or over the committed ones).
+enum PointHistory<'a> {
+    Committed(&'a [f64]),
+    Next { from: &'a [f64], to: &'a mut [f64] },
+    InPlace(&'a mut [f64]),
+}
+
+impl PointHistory<'_> {
+    /// The committed values.
+    #[inline]
+    fn committed(&self) -> &[f64] {
+        match self {
+            Self::Committed(h) | Self::Next { from: h, .. } => h,
+            Self::InPlace(h) => h,
+        }
+    }
 }
 
 /// What one integration point computes from a current F.
@@ -459,46 +479,62 @@ impl MembraneBatch {
         &self.grad_n[start..start + nn]
     }
 
+    /// The resin's stress update of one point from τ̄ₙ over `d_eps`, its
+    /// own history updated where it lies in `out` (a copy of step n's);
+    /// writes U and τ̄ of step n+1 into `out` and returns τ̄.
+    #[inline]
+    fn update_point(
+        &self,
+        out: &mut [f64],
+        u: &Matrix2<f64>,
+        tau_n: Matrix2<f64>,
+        d_eps: &Matrix2<f64>,
+        step: Step<'_>,
+    ) -> Matrix2<f64> {
+        let resin = &self.section.material.resin;
+        let mut tau = tau_n;
+        if step.prony.len() == resin.prony.len() {
+            resin.update_stress_with(&mut tau, &mut out[KINEMATIC_HISTORY..], d_eps, step.prony);
+        } else {
+            resin.update_stress(&mut tau, &mut out[KINEMATIC_HISTORY..], d_eps, step.dt);
+        }
+        sym_into(u, &mut out[0..3]);
+        sym_into(&tau, &mut out[3..6]);
+        tau
+    }
+
     /// The response of point `p` of element `e` at positions `xe`, from the
-    /// point history `h_in`; writes the new history into `h_out` if given.
+    /// point history `history` (which also says whether and where the new
+    /// history goes).
     #[inline]
     fn point_response(
         &self,
         e: usize,
         p: usize,
         xe: &[Vector3<f64>],
-        h_in: &[f64],
-        h_out: Option<&mut [f64]>,
+        history: PointHistory<'_>,
         step: Step<'_>,
     ) -> Result<PointResponse, KinematicsError> {
         let m = &self.section.material;
         let f = deformation_gradient(xe, self.point_grad(e, p));
         let polar = polar_decomposition(&f)?;
+        let h_in = history.committed();
         let u_n = sym_from(&h_in[0..3]);
         let d_eps = rotated_strain_increment(&u_n, &polar.u);
         let tau_n = sym_from(&h_in[3..6]);
-        let tau = match h_out {
-            Some(out) => {
-                let mut tau = tau_n;
-                out[KINEMATIC_HISTORY..].copy_from_slice(&h_in[KINEMATIC_HISTORY..]);
-                if step.prony.len() == m.resin.prony.len() {
-                    m.resin.update_stress_with(
-                        &mut tau,
-                        &mut out[KINEMATIC_HISTORY..],
-                        &d_eps,
-                        step.prony,
-                    );
-                } else {
-                    m.resin
-                        .update_stress(&mut tau, &mut out[KINEMATIC_HISTORY..], &d_eps, step.dt);
-                }
-                sym_into(&polar.u, &mut out[0..3]);
-                sym_into(&tau, &mut out[3..6]);
-                tau
+        // Updating in place, U and τ̄ of step n are read above before
+        // anything is written, and the resin updates its own history where
+        // it lies: both ways give the same bits.
+        let tau = match history {
+            PointHistory::Committed(h) => {
+                m.resin
+                    .stress_after(&tau_n, &h[KINEMATIC_HISTORY..], &d_eps, step.dt)
             }
-            None => m
-                .resin
-                .stress_after(&tau_n, &h_in[KINEMATIC_HISTORY..], &d_eps, step.dt),
+            PointHistory::Next { from, to } => {
+                to[KINEMATIC_HISTORY..].copy_from_slice(&from[KINEMATIC_HISTORY..]);
+                self.update_point(to, &polar.u, tau_n, &d_eps, step)
+            }
+            PointHistory::InPlace(h) => self.update_point(h, &polar.u, tau_n, &d_eps, step),
         };
         let fibres = if self.section.embedded_fibres {
             [
@@ -557,16 +593,19 @@ impl MembraneBatch {
         dt: f64,
         forces: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
-        self.element_force_with(e, x, h_in, h_out, Step { dt, prony: &[] }, forces)
+        self.element_force_with(e, x, Some(h_in), h_out, Step { dt, prony: &[] }, forces)
     }
 
+    /// [`Self::element_force`] with the step's Prony factors; `h_in` the
+    /// committed history, or None to update `h` in place (on an error the
+    /// points before the failing one are then already updated).
     #[inline]
     fn element_force_with(
         &self,
         e: usize,
         x: &[Vector3<f64>],
-        h_in: &[f64],
-        h_out: &mut [f64],
+        h_in: Option<&[f64]>,
+        h: &mut [f64],
         step: Step<'_>,
         forces: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
@@ -575,15 +614,15 @@ impl MembraneBatch {
         forces.fill(Vector3::zeros());
         for p in 0..self.shape.points() {
             let range = p * self.stride..(p + 1) * self.stride;
+            let history = match h_in {
+                Some(from) => PointHistory::Next {
+                    from: &from[range.clone()],
+                    to: &mut h[range],
+                },
+                None => PointHistory::InPlace(&mut h[range]),
+            };
             let r = self
-                .point_response(
-                    e,
-                    p,
-                    &xe[..nn],
-                    &h_in[range.clone()],
-                    Some(&mut h_out[range]),
-                    step,
-                )
+                .point_response(e, p, &xe[..nn], history, step)
                 .map_err(|cause| ElementError {
                     element: e,
                     point: p,
@@ -656,10 +695,42 @@ impl MembraneBatch {
         dt: f64,
         slots: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
+        assert_eq!(h_in.len(), self.element_history_len() * self.len());
+        self.forces(x, Some(h_in), h_out, dt, slots)
+    }
+
+    /// [`Self::forces_into`] with the history `h` updated where it lies:
+    /// the same forces and the same new history, bit for bit, with one
+    /// history array read and written instead of one read and another
+    /// written (the explicit step's largest memory stream).
+    ///
+    /// On an error `h` is partly updated (the elements and points before
+    /// the failing one, in any order): the caller must keep a copy of the
+    /// committed history to go back to (the explicit driver's guard keeps
+    /// the last good state). A driver that evaluates trial states from one
+    /// committed history (Newton iterations) uses [`Self::forces_into`].
+    pub fn forces_in_place(
+        &self,
+        x: &[Vector3<f64>],
+        h: &mut [f64],
+        dt: f64,
+        slots: &mut [Vector3<f64>],
+    ) -> Result<(), ElementError> {
+        self.forces(x, None, h, dt, slots)
+    }
+
+    /// [`Self::forces_into`] from `h_in`, or in place when None.
+    fn forces(
+        &self,
+        x: &[Vector3<f64>],
+        h_in: Option<&[f64]>,
+        h: &mut [f64],
+        dt: f64,
+        slots: &mut [Vector3<f64>],
+    ) -> Result<(), ElementError> {
         let (nn, eh) = (self.shape.nodes(), self.element_history_len());
         assert_eq!(slots.len(), nn * self.len());
-        assert_eq!(h_in.len(), eh * self.len());
-        assert_eq!(h_out.len(), eh * self.len());
+        assert_eq!(h.len(), eh * self.len());
         let resin = &self.section.material.resin;
         let mut table = [(0.0, 0.0); PRONY_TABLE];
         let factors: &[(f64, f64)] = if resin.prony.len() <= table.len() {
@@ -672,31 +743,32 @@ impl MembraneBatch {
         if let Some(lanes) = &self.lanes {
             // (A lane batch's Prony terms fit the table.)
             return self
-                .forces_into_lanes(lanes, x, h_in, h_out, step, slots)
+                .forces_into_lanes(lanes, x, h_in, h, step, slots)
                 .map_err(|error| self.diagnose(error, x));
         }
         lowest_error(
             slots
                 .par_chunks_mut(nn)
-                .zip(h_out.par_chunks_mut(eh))
+                .zip(h.par_chunks_mut(eh))
                 .with_min_len(MIN_CHUNK)
                 .enumerate()
                 .map(|(e, (f, out))| {
-                    self.element_force_with(e, x, &h_in[e * eh..(e + 1) * eh], out, step, f)
+                    let from = h_in.map(|h| &h[e * eh..(e + 1) * eh]);
+                    self.element_force_with(e, x, from, out, step, f)
                 }),
         )
         .map_err(|error| self.diagnose(error, x))
     }
 
-    /// [`Self::forces_into`] of a resin-only quad batch: whole blocks of
+    /// [`Self::forces`] of a resin-only quad batch: whole blocks of
     /// [`LANES`] elements on the lanes (a block with a failing point again
     /// on the scalar path, which names it), the rest on the scalar path.
     fn forces_into_lanes(
         &self,
         lanes: &QuadLanes,
         x: &[Vector3<f64>],
-        h_in: &[f64],
-        h_out: &mut [f64],
+        h_in: Option<&[f64]>,
+        h: &mut [f64],
         step: Step<'_>,
         slots: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
@@ -716,7 +788,7 @@ impl MembraneBatch {
         };
         let split = lanes.blocks() * LANES;
         let (block_slots, tail_slots) = slots.split_at_mut(split * nn);
-        let (block_h, tail_h) = h_out.split_at_mut(split * eh);
+        let (block_h, tail_h) = h.split_at_mut(split * eh);
         lowest_error(
             block_slots
                 .par_chunks_mut(LANES * nn)
@@ -725,23 +797,25 @@ impl MembraneBatch {
                 .enumerate()
                 .map(|(b, (f, out))| {
                     let e0 = b * LANES;
-                    let (nodes, h) = (
-                        &self.nodes[e0 * nn..(e0 + LANES) * nn],
-                        &h_in[e0 * eh..(e0 + LANES) * eh],
-                    );
-                    if lanes.block_forces(b, nodes, x, h, out, self.stride, &resin, f) {
+                    let nodes = &self.nodes[e0 * nn..(e0 + LANES) * nn];
+                    let from = h_in.map(|h| &h[e0 * eh..(e0 + LANES) * eh]);
+                    if lanes.block_forces(b, nodes, x, from, out, self.stride, &resin, f) {
                         return Ok(());
                     }
-                    // The cold path: each lane's history out of the block
-                    // and back (the block is `out`, history of elements
-                    // e0.. as the batch keeps them).
-                    let mut next = [0.0; LANE_ELEMENT_HISTORY];
+                    // The cold path (the kernel wrote nothing): each
+                    // lane's history out of the block and back (value `j`
+                    // of lane `k` at `j·LANES + k`, see `history_index`).
+                    let (mut prev, mut next) =
+                        ([0.0; LANE_ELEMENT_HISTORY], [0.0; LANE_ELEMENT_HISTORY]);
                     for k in 0..LANES {
-                        let e = e0 + k;
+                        let committed = from.unwrap_or(out);
+                        for (j, v) in prev[..eh].iter_mut().enumerate() {
+                            *v = committed[j * LANES + k];
+                        }
                         self.element_force_with(
-                            e,
+                            e0 + k,
                             x,
-                            &self.element_history(h_in, e),
+                            Some(&prev[..eh]),
                             &mut next[..eh],
                             step,
                             &mut f[k * nn..(k + 1) * nn],
@@ -759,7 +833,8 @@ impl MembraneBatch {
             .enumerate()
         {
             let e = split + k;
-            self.element_force_with(e, x, &h_in[e * eh..(e + 1) * eh], out, step, f)?;
+            let from = h_in.map(|h| &h[e * eh..(e + 1) * eh]);
+            self.element_force_with(e, x, from, out, step, f)?;
         }
         Ok(())
     }
@@ -788,7 +863,13 @@ impl MembraneBatch {
         for p in 0..self.shape.points() {
             let h = &h_in[p * self.stride..(p + 1) * self.stride];
             let r = self
-                .point_response(e, p, &xe[..nn], h, None, Step { dt, prony: &[] })
+                .point_response(
+                    e,
+                    p,
+                    &xe[..nn],
+                    PointHistory::Committed(h),
+                    Step { dt, prony: &[] },
+                )
                 .map_err(|cause| ElementError {
                     element: e,
                     point: p,
@@ -971,6 +1052,51 @@ impl MembraneBatch {
             .with_min_len(MIN_CHUNK)
             .map(|e| self.element_stable_time_step(e, x))
             .reduce(|| f64::INFINITY, f64::min)
+    }
+
+    /// The smallest of [`Self::element_stable_time_step`] times `scale[e]`
+    /// over the batch (∞ when empty), in parallel: what the explicit
+    /// driver's stable-step estimate takes of a batch (`scale` its √(mass
+    /// scale) per element). A resin-only quad batch computes its whole
+    /// blocks on the lanes, with the same bits as element by element
+    /// (tested); the minimum does not depend on the split.
+    pub fn min_scaled_stable_time_step(&self, x: &[Vector3<f64>], scale: &[f64]) -> f64 {
+        assert_eq!(scale.len(), self.len());
+        let scalar = |e: usize| self.element_stable_time_step(e, x) * scale[e];
+        let Some(lanes) = &self.lanes else {
+            return (0..self.len())
+                .into_par_iter()
+                .with_min_len(MIN_CHUNK / 4)
+                .map(scalar)
+                .reduce(|| f64::INFINITY, f64::min);
+        };
+        let bound = StepBound {
+            kappa: self.stiffness_bound(),
+            rho_h: self.section.material.areal_density(),
+            gauss: GAUSS,
+        };
+        let nn = self.shape.nodes();
+        let blocks = (0..lanes.blocks())
+            .into_par_iter()
+            .with_min_len(MIN_CHUNK / LANES)
+            .map(|b| {
+                let (e0, e1) = (b * LANES * nn, (b + 1) * LANES * nn);
+                let dt = lanes.block_stable_steps(
+                    &self.nodes[e0..e1],
+                    x,
+                    &self.nodal_area[e0..e1],
+                    bound,
+                );
+                let s = &scale[b * LANES..(b + 1) * LANES];
+                (dt[0] * s[0])
+                    .min(dt[1] * s[1])
+                    .min(dt[2] * s[2])
+                    .min(dt[3] * s[3])
+            })
+            .reduce(|| f64::INFINITY, f64::min);
+        (self.blocked..self.len())
+            .map(scalar)
+            .fold(blocks, f64::min)
     }
 
     /// Output fields of element `e` at positions `x` with its committed

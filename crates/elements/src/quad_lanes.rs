@@ -85,18 +85,26 @@ impl QuadLanes {
         Self { grad, area: areas }
     }
 
+    /// ∂N/∂X of the nodes at point `p` of block `b`.
+    #[inline(always)]
+    fn point_grad(&self, b: usize, p: usize) -> &[[f64x4; 2]] {
+        &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES]
+    }
+
     /// Whole blocks.
     pub(crate) fn blocks(&self) -> usize {
         self.area.len() / POINTS
     }
 
     /// Forces and new history of block `b`: `nodes` its elements' nodes
-    /// (4 per element), `h_in`/`h_out` the block's history (`stride` values
-    /// per point, value-major: value `i` of point `p` of lane `k` at
-    /// `(p·stride + i)·4 + k`), `slots` their nodal forces (4 per element).
-    /// Returns false, having written nothing meaningful, if a point of the
-    /// block is non-finite or degenerate: the caller then runs the block on
-    /// the scalar path, which names the element.
+    /// (4 per element), `h` the block's history (`stride` values per
+    /// point, value-major: value `i` of point `p` of lane `k` at
+    /// `(p·stride + i)·4 + k`), the committed one read from `h_in`, or
+    /// from `h` itself when None (advanced in place), the new one written
+    /// into `h`; `slots` their nodal forces (4 per element). Returns
+    /// false, having written nothing, if a point of the block is
+    /// non-finite or degenerate: the caller then runs the block on the
+    /// scalar path, which names the element.
     #[allow(clippy::too_many_arguments)]
     #[inline]
     pub(crate) fn block_forces(
@@ -104,8 +112,8 @@ impl QuadLanes {
         b: usize,
         nodes: &[u32],
         x: &[Vector3<f64>],
-        h_in: &[f64],
-        h_out: &mut [f64],
+        h_in: Option<&[f64]>,
+        h: &mut [f64],
         stride: usize,
         resin: &ResinStep<'_>,
         slots: &mut [Vector3<f64>],
@@ -113,11 +121,9 @@ impl QuadLanes {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2 (checked just above).
-            return unsafe {
-                self.block_forces_avx2(b, nodes, x, h_in, h_out, stride, resin, slots)
-            };
+            return unsafe { self.block_forces_avx2(b, nodes, x, h_in, h, stride, resin, slots) };
         }
-        self.block_forces_lanes(b, nodes, x, h_in, h_out, stride, resin, slots)
+        self.block_forces_lanes(b, nodes, x, h_in, h, stride, resin, slots)
     }
 
     /// [`Self::block_forces`] compiled with AVX2.
@@ -129,13 +135,13 @@ impl QuadLanes {
         b: usize,
         nodes: &[u32],
         x: &[Vector3<f64>],
-        h_in: &[f64],
-        h_out: &mut [f64],
+        h_in: Option<&[f64]>,
+        h: &mut [f64],
         stride: usize,
         resin: &ResinStep<'_>,
         slots: &mut [Vector3<f64>],
     ) -> bool {
-        self.block_forces_lanes(b, nodes, x, h_in, h_out, stride, resin, slots)
+        self.block_forces_lanes(b, nodes, x, h_in, h, stride, resin, slots)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -145,8 +151,8 @@ impl QuadLanes {
         b: usize,
         nodes: &[u32],
         x: &[Vector3<f64>],
-        h_in: &[f64],
-        h_out: &mut [f64],
+        h_in: Option<&[f64]>,
+        h: &mut [f64],
         stride: usize,
         resin: &ResinStep<'_>,
         slots: &mut [Vector3<f64>],
@@ -158,7 +164,7 @@ impl QuadLanes {
         let nodes: &[u32; LANES * NODES] = nodes.try_into().expect("a block's nodes");
         let slots: &mut [Vector3<f64>; LANES * NODES] =
             slots.try_into().expect("a block's force slots");
-        assert!(h_in.len() == LANES * eh && h_out.len() == LANES * eh);
+        assert!(h.len() == LANES * eh && h_in.is_none_or(|h_in| h_in.len() == LANES * eh));
         let used = if resin.prony.is_empty() {
             6
         } else {
@@ -177,31 +183,32 @@ impl QuadLanes {
         }
         let zero = f64x4::splat(0.0);
         let half = f64x4::splat(0.5);
-        let mut force = [[zero; 3]; NODES];
+        // First every point's F and C, and the block's check, so that a
+        // block that goes to the scalar path has written nothing (its
+        // history may be the committed one, advanced in place).
+        // (Built point by point, not zeroed and filled: a memset call.)
+        let points = [
+            point_gradient(self.point_grad(b, 0), &xe),
+            point_gradient(self.point_grad(b, 1), &xe),
+            point_gradient(self.point_grad(b, 2), &xe),
+            point_gradient(self.point_grad(b, 3), &xe),
+        ];
+        // One test stands for the scalar path's finiteness and degeneracy
+        // checks: tr C is the sum of the squares of F, so a NaN in F, C or
+        // det C fails the comparison, and an infinite (or overflowing)
+        // entry makes its right side +∞, which nothing exceeds. Every
+        // point it passes is one the scalar path accepts.
         let mut ok = true;
-        for p in 0..POINTS {
-            let grad = &self.grad[(b * POINTS + p) * NODES..(b * POINTS + p + 1) * NODES];
-            // F = Σₐ xₐ ⊗ ∇Nₐ (from zero, node by node).
-            let mut f = [[zero; 2]; 3];
-            for (xa, ga) in xe.iter().zip(grad) {
-                for i in 0..3 {
-                    for j in 0..2 {
-                        f[i][j] += xa[i] * ga[j];
-                    }
-                }
-            }
-            // Polar decomposition (closed form of right_stretch).
-            let c00 = f[0][0] * f[0][0] + f[1][0] * f[1][0] + f[2][0] * f[2][0];
-            let c01 = f[0][0] * f[0][1] + f[1][0] * f[1][1] + f[2][0] * f[2][1];
-            let c11 = f[0][1] * f[0][1] + f[1][1] * f[1][1] + f[2][1] * f[2][1];
-            let det_c = c00 * c11 - c01 * c01;
-            let tr_c = c00 + c11;
-            // One test stands for the scalar path's finiteness and
-            // degeneracy checks: tr C is the sum of the squares of F, so a
-            // NaN in F, C or det C fails the comparison, and an infinite
-            // (or overflowing) entry makes its right side +∞, which nothing
-            // exceeds. Every point it passes is one the scalar path accepts.
-            ok &= det_c.all_gt(f64x4::splat(DEGENERATE_DET_C) * tr_c * tr_c);
+        for (_, [_, _, _, det_c, tr_c]) in &points {
+            ok &= det_c.all_gt(f64x4::splat(DEGENERATE_DET_C) * *tr_c * *tr_c);
+        }
+        if !ok {
+            return false;
+        }
+        let mut force = [[zero; 3]; NODES];
+        for (p, (f, [c00, c01, c11, det_c, tr_c])) in points.iter().enumerate() {
+            let grad = self.point_grad(b, p);
+            let (c00, c01, c11, det_c, tr_c) = (*c00, *c01, *c11, *det_c, *tr_c);
             let det_u = det_c.sqrt();
             let s = (tr_c + f64x4::splat(2.0) * det_u).sqrt();
             let (u00, u01, u11) = ((c00 + det_u) / s, (c01 + zero) / s, (c11 + det_u) / s);
@@ -214,9 +221,12 @@ impl QuadLanes {
             // Rotated strain increment from the committed U. The block's
             // history is value-major ([point][value][lane], see
             // `MembraneBatch`'s layout), so each value of the four lanes
-            // is one load; the first six as a fixed array, one bounds check.
-            let at = p * stride * LANES;
-            let fixed: &[f64; 6 * LANES] = h_in[at..at + 6 * LANES]
+            // is one load; the first six as a fixed array, one bounds
+            // check. Every committed value of the point is read before the
+            // point's new ones are written (the same place when in place).
+            let range = p * stride * LANES..(p * stride + used) * LANES;
+            let (from, point) = (h_in.map(|h| &h[range.clone()]), &mut h[range]);
+            let fixed: [f64; 6 * LANES] = from.unwrap_or(point)[..6 * LANES]
                 .try_into()
                 .expect("a point's six values");
             let un = |i: usize| {
@@ -251,23 +261,26 @@ impl QuadLanes {
             let t00 = un(3) + k * (e00 + nu * e11);
             let t11 = un(4) + k * (nu * e00 + e11);
             let d_s0 = f64x4::splat(resin.shear_modulus) * (e01 + e10);
-            let (out_fixed, out_tail) = h_out[at..at + used * LANES].split_at_mut(6 * LANES);
             let t01 = if resin.prony.is_empty() {
                 un(5) + d_s0
             } else {
-                let tail = &h_in[at + 6 * LANES..at + used * LANES];
-                let s0 = load(tail, 0) + d_s0;
+                // The shear stress and Prony terms, each read before its
+                // new value is written over it.
+                let committed = |point: &[f64], i: usize| load(from.unwrap_or(point), 6 + i);
+                let s0 = committed(point, 0) + d_s0;
                 let mut relaxing = zero;
                 for (q, &(decay, weight)) in resin.prony.iter().enumerate() {
-                    let qk = f64x4::splat(decay) * load(tail, 1 + q) + f64x4::splat(weight) * d_s0;
+                    let qk =
+                        f64x4::splat(decay) * committed(point, 1 + q) + f64x4::splat(weight) * d_s0;
                     relaxing += qk;
-                    store(out_tail, 1 + q, qk);
+                    store(point, 7 + q, qk);
                 }
-                store(out_tail, 0, s0);
+                store(point, 6, s0);
                 f64x4::splat(resin.long_term) * s0 + relaxing
             };
-            let out_fixed: &mut [f64; 6 * LANES] =
-                out_fixed.try_into().expect("a point's six values");
+            let out_fixed: &mut [f64; 6 * LANES] = (&mut point[..6 * LANES])
+                .try_into()
+                .expect("a point's six values");
             for (i, v) in [u00, u11, u01, t00, t11, t01].into_iter().enumerate() {
                 out_fixed[LANES * i..LANES * (i + 1)].copy_from_slice(&v.0);
             }
@@ -280,12 +293,12 @@ impl QuadLanes {
             let b01 = a00 * ui01 + a01 * ui11;
             let b10 = a10 * ui00 + a11 * ui01;
             let b11 = a10 * ui01 + a11 * ui11;
-            let h = f64x4::splat(resin.thickness);
+            let h_m = f64x4::splat(resin.thickness);
             let mut piola = [[zero; 2]; 3];
-            for (pi, fi) in piola.iter_mut().zip(&f) {
+            for (pi, fi) in piola.iter_mut().zip(f) {
                 *pi = [
-                    (fi[0] * b00 + fi[1] * b10) * h,
-                    (fi[0] * b01 + fi[1] * b11) * h,
+                    (fi[0] * b00 + fi[1] * b10) * h_m,
+                    (fi[0] * b01 + fi[1] * b11) * h_m,
                 ];
             }
             // fₐ += (P·∇Nₐ)·A.
@@ -301,8 +314,225 @@ impl QuadLanes {
                 slots[k * NODES + a] = Vector3::new(fa[0].0[k], fa[1].0[k], fa[2].0[k]);
             }
         }
-        ok
+        true
     }
+}
+
+/// F = Σₐ xₐ ⊗ ∇Nₐ at a point (from zero, node by node), and C = FᵀF's
+/// C₁₁, C₁₂, C₂₂, det C, tr C as `right_stretch` forms them. A function
+/// with `inline(always)`, not a closure, so that it is inlined into the
+/// kernel's AVX2 build.
+#[inline(always)]
+fn point_gradient(grad: &[[f64x4; 2]], xe: &[[f64x4; 3]; NODES]) -> ([[f64x4; 2]; 3], [f64x4; 5]) {
+    let mut f = [[f64x4::splat(0.0); 2]; 3];
+    for (xa, ga) in xe.iter().zip(grad) {
+        for i in 0..3 {
+            for j in 0..2 {
+                f[i][j] += xa[i] * ga[j];
+            }
+        }
+    }
+    let c00 = f[0][0] * f[0][0] + f[1][0] * f[1][0] + f[2][0] * f[2][0];
+    let c01 = f[0][0] * f[0][1] + f[1][0] * f[1][1] + f[2][0] * f[2][1];
+    let c11 = f[0][1] * f[0][1] + f[1][1] * f[1][1] + f[2][1] * f[2][1];
+    let det_c = c00 * c11 - c01 * c01;
+    let tr_c = c00 + c11;
+    (f, [c00, c01, c11, det_c, tr_c])
+}
+
+/// The natural-coordinate derivatives (∂Nₐ/∂ξ, ∂Nₐ/∂η) of the 2×2 Gauss
+/// points, computed as `drape_kinematics::quad_point` computes them.
+fn gauss_derivatives(gauss: f64) -> [([f64; NODES], [f64; NODES]); POINTS] {
+    let mut out = [([0.0; NODES], [0.0; NODES]); POINTS];
+    for (o, (xi, eta)) in out
+        .iter_mut()
+        .zip([(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)])
+    {
+        let (xi, eta): (f64, f64) = (xi * gauss, eta * gauss);
+        let (xm, xp, em, ep) = (1.0 - xi, 1.0 + xi, 1.0 - eta, 1.0 + eta);
+        *o = (
+            [-0.25 * em, 0.25 * em, 0.25 * ep, -0.25 * ep],
+            [-0.25 * xm, -0.25 * xp, 0.25 * xp, 0.25 * xm],
+        );
+    }
+    out
+}
+
+/// The constants of a resin-only quad batch's stable-step bound (see
+/// `MembraneBatch::element_stable_time_step`).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct StepBound {
+    /// The membrane stiffness κ (N/mm).
+    pub kappa: f64,
+    /// Areal density ρh.
+    pub rho_h: f64,
+    /// The 2×2 Gauss abscissa.
+    pub gauss: f64,
+}
+
+impl QuadLanes {
+    /// The stable steps of a block's four quads at positions `x` (`nodes`
+    /// their nodes, `nodal_area` their nodes' reference areas, 4 per
+    /// element): `MembraneBatch::element_stable_time_step` lane by lane,
+    /// operation for operation (`quad_point`'s frame, Jacobian and
+    /// gradients at each Gauss point, the Laplacian, Gershgorin's bound),
+    /// and 0 for a quad whose current shape has a degenerate or non-finite
+    /// point, as there.
+    #[inline]
+    pub(crate) fn block_stable_steps(
+        &self,
+        nodes: &[u32],
+        x: &[Vector3<f64>],
+        nodal_area: &[f64],
+        bound: StepBound,
+    ) -> [f64; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked just above).
+            return unsafe { block_stable_steps_avx2(nodes, x, nodal_area, bound) };
+        }
+        block_stable_steps_lanes(nodes, x, nodal_area, bound)
+    }
+}
+
+/// [`block_stable_steps_lanes`] compiled with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn block_stable_steps_avx2(
+    nodes: &[u32],
+    x: &[Vector3<f64>],
+    nodal_area: &[f64],
+    bound: StepBound,
+) -> [f64; LANES] {
+    block_stable_steps_lanes(nodes, x, nodal_area, bound)
+}
+
+/// Three components of four lanes.
+type Vec3x4 = [f64x4; 3];
+
+/// nalgebra's 3-vector dot, (a₀b₀ + a₁b₁) + a₂b₂.
+#[inline(always)]
+fn dot3(a: &Vec3x4, b: &Vec3x4) -> f64x4 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// nalgebra's cross product.
+#[inline(always)]
+fn cross3(a: &Vec3x4, b: &Vec3x4) -> Vec3x4 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline(always)]
+fn divided3(a: &Vec3x4, d: f64x4) -> Vec3x4 {
+    [a[0] / d, a[1] / d, a[2] / d]
+}
+
+/// [`QuadLanes::block_stable_steps`] for the target's baseline.
+#[inline(always)]
+pub(crate) fn block_stable_steps_lanes(
+    nodes: &[u32],
+    x: &[Vector3<f64>],
+    nodal_area: &[f64],
+    bound: StepBound,
+) -> [f64; LANES] {
+    let nodes: &[u32; LANES * NODES] = nodes.try_into().expect("a block's nodes");
+    let nodal_area: &[f64; LANES * NODES] = nodal_area.try_into().expect("a block's areas");
+    let zero = f64x4::splat(0.0);
+    let mut xe = [[zero; 3]; NODES];
+    for (a, xa) in xe.iter_mut().enumerate() {
+        for k in 0..LANES {
+            let p = &x[nodes[k * NODES + a] as usize];
+            for (c, v) in xa.iter_mut().enumerate() {
+                v.0[k] = p[c];
+            }
+        }
+    }
+    let mut ok = [true; LANES];
+    let mut lap = [[zero; NODES]; NODES];
+    for (d_xi, d_eta) in gauss_derivatives(bound.gauss) {
+        // reference_point: the tangents, the frame, J, ∇N and the area.
+        let (mut g1, mut g2) = ([zero; 3], [zero; 3]);
+        for (a, xa) in xe.iter().enumerate() {
+            let (s1, s2) = (f64x4::splat(d_xi[a]), f64x4::splat(d_eta[a]));
+            for c in 0..3 {
+                g1[c] += xa[c] * s1;
+                g2[c] += xa[c] * s2;
+            }
+        }
+        let n = cross3(&g1, &g2);
+        let size = dot3(&n, &n).sqrt();
+        let (n1, n2) = (dot3(&g1, &g1).sqrt(), dot3(&g2, &g2).sqrt());
+        let small = f64x4::splat(1e-12) * n1 * n2;
+        for (ok, (size, small)) in ok.iter_mut().zip(size.0.into_iter().zip(small.0)) {
+            // As `LocalFrame::from_tangents`: a NaN bound passes there too.
+            let degenerate = size <= small;
+            *ok &= size.is_finite() && !degenerate;
+        }
+        let normal = divided3(&n, size);
+        let e1 = divided3(&g1, n1);
+        let e2 = cross3(&normal, &e1);
+        let (j00, j10) = (dot3(&e1, &g1), dot3(&e2, &g1));
+        let (j01, j11) = (dot3(&e1, &g2), dot3(&e2, &g2));
+        let det_j = j00 * j11 - j10 * j01;
+        let (t00, t01, t10, t11) = (j11 / det_j, -j10 / det_j, -j01 / det_j, j00 / det_j);
+        let mut grad = [[zero; 2]; NODES];
+        for (a, g) in grad.iter_mut().enumerate() {
+            let (s1, s2) = (f64x4::splat(d_xi[a]), f64x4::splat(d_eta[a]));
+            *g = [t00 * s1 + t01 * s2, t10 * s1 + t11 * s2];
+        }
+        // The area is det J (weight 1). L is symmetric to the bit (the
+        // products and sums commute), so its upper half is computed and
+        // mirrored below.
+        for a in 0..NODES {
+            for b in a..NODES {
+                lap[a][b] += det_j * (grad[a][0] * grad[b][0] + grad[a][1] * grad[b][1]);
+            }
+        }
+    }
+    #[allow(clippy::needless_range_loop)] // (a mirror: both orders index it)
+    for a in 1..NODES {
+        for b in 0..a {
+            lap[a][b] = lap[b][a];
+        }
+    }
+    let rho_h = f64x4::splat(bound.rho_h);
+    let area_of = |a: usize| {
+        lanes([
+            nodal_area[a],
+            nodal_area[NODES + a],
+            nodal_area[2 * NODES + a],
+            nodal_area[3 * NODES + a],
+        ])
+    };
+    // ρh·√(mₐ·m_b), symmetric as L.
+    let mut scale = [[zero; NODES]; NODES];
+    #[allow(clippy::needless_range_loop)] // (a mirror: both orders index it)
+    for a in 0..NODES {
+        for b in a..NODES {
+            scale[a][b] = rho_h * (area_of(a) * area_of(b)).sqrt();
+            scale[b][a] = scale[a][b];
+        }
+    }
+    let mut lambda = zero;
+    for (row, scale) in lap.iter().zip(&scale) {
+        let mut sum = zero;
+        for (l, s) in row.iter().zip(scale) {
+            sum += l.abs() / *s;
+        }
+        lambda = lambda.max(sum);
+    }
+    let dt = f64x4::splat(2.0) / (f64x4::splat(bound.kappa) * lambda).sqrt();
+    let mut out = dt.0;
+    for k in 0..LANES {
+        if !ok[k] {
+            out[k] = 0.0;
+        }
+    }
+    out
 }
 
 /// Value `i` of the four lanes in a value-major run of history `h`.

@@ -379,9 +379,9 @@ impl<'m> Explicit<'m> {
     fn estimated_time_step(&self, x: &[Vector3<f64>]) -> f64 {
         let model = self.model;
         // Pieces of about 100 k instructions (callgrind, 200 × 200 blank:
-        // ≈ 1 700 per quad, ≈ 45 per truss): enough to pay for
-        // waking a second thread, and the minimum does not depend on how
-        // the range is split.
+        // ≈ 45 per truss): enough to pay for waking a second thread, and
+        // the minimum does not depend on how the range is split. The
+        // membranes split their own (`min_scaled_stable_time_step`).
         let smallest = |len: usize, piece: usize, dt_e: &(dyn Fn(usize) -> f64 + Sync)| {
             (0..len)
                 .into_par_iter()
@@ -405,11 +405,12 @@ impl<'m> Explicit<'m> {
                     * self.damped_step_factor(k)
             })
             .fold(f64::INFINITY, f64::min));
+        // (Resin-only quads on the lanes, with the same bits.)
         add(model
             .membranes
             .iter()
             .zip(&self.membrane_scale)
-            .map(|(b, s)| smallest(b.len(), 64, &|e| b.element_stable_time_step(e, x) * s[e]))
+            .map(|(b, s)| b.min_scaled_stable_time_step(x, s))
             .fold(f64::INFINITY, f64::min));
         add(model
             .springs
@@ -706,12 +707,16 @@ impl<'m> Explicit<'m> {
                 shared::external_forces(model, t_new, &mut self.f_ext);
                 self.lap(Pass::Loads);
             }
-            // Forces at n+1 from the committed history.
-            self.forces.evaluate(
+            // Forces at n+1, the history advanced to n+1 where it lies (one
+            // array streamed, not two): from here to the commit `state`
+            // holds x at n with the history at n+1 (partly, if the pass
+            // fails), so every failure below returns an error, and `run`
+            // puts the guard's last good state back whole.
+            self.forces.evaluate_in_place(
                 model,
                 &self.x_new,
                 Some((&self.v_new, &self.truss_damping)),
-                &state.history,
+                &mut state.history,
                 h,
                 state.step + 1,
                 t_new,
@@ -733,7 +738,6 @@ impl<'m> Explicit<'m> {
             // Commit.
             std::mem::swap(&mut state.x, &mut self.x_new);
             std::mem::swap(&mut state.v, &mut self.v_new);
-            std::mem::swap(&mut state.history, &mut self.forces.history_new);
             state.time = t_new;
             state.step += 1;
             steps += 1;

@@ -165,7 +165,9 @@ impl ForcePass {
     /// the dashpots along kinked yarns (an empty list for a batch without;
     /// the explicit driver's `fibre_damping`). `step` and `time` only name
     /// the failure; `profiler` (the explicit step's, when asked) times the
-    /// element kinds.
+    /// element kinds. For trial states evaluated from one committed
+    /// history (Newton iterations, a run's start); the explicit step uses
+    /// [`Self::evaluate_in_place`].
     #[allow(clippy::too_many_arguments)]
     pub fn evaluate(
         &mut self,
@@ -173,6 +175,60 @@ impl ForcePass {
         x: &[Vector3<f64>],
         dashpots: Option<Dashpots<'_>>,
         history: &[Vec<f64>],
+        dt: f64,
+        step: u64,
+        time: f64,
+        profiler: Option<&mut Profiler>,
+    ) -> Result<(), RunError> {
+        self.evaluate_with(
+            model,
+            x,
+            dashpots,
+            Histories::Into(history),
+            dt,
+            step,
+            time,
+            profiler,
+        )
+    }
+
+    /// [`Self::evaluate`] with the membranes' `history` advanced to the new
+    /// one where it lies (`self.history_new` untouched): one history array
+    /// streamed instead of two, the same bits. On an error `history` is
+    /// partly advanced, so the caller must be able to go back to a copy
+    /// (the explicit driver returns to the guard's last good state); after
+    /// a success it is the new history whatever the caller does next.
+    #[allow(clippy::too_many_arguments)]
+    pub fn evaluate_in_place(
+        &mut self,
+        model: &Model,
+        x: &[Vector3<f64>],
+        dashpots: Option<Dashpots<'_>>,
+        history: &mut [Vec<f64>],
+        dt: f64,
+        step: u64,
+        time: f64,
+        profiler: Option<&mut Profiler>,
+    ) -> Result<(), RunError> {
+        self.evaluate_with(
+            model,
+            x,
+            dashpots,
+            Histories::InPlace(history),
+            dt,
+            step,
+            time,
+            profiler,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate_with(
+        &mut self,
+        model: &Model,
+        x: &[Vector3<f64>],
+        dashpots: Option<Dashpots<'_>>,
+        history: Histories<'_>,
         dt: f64,
         step: u64,
         time: f64,
@@ -290,13 +346,22 @@ fn truss_forces(
     Ok(())
 }
 
+/// Where the force pass takes the membranes' committed histories from
+/// and where the new ones go.
+enum Histories<'a> {
+    /// From these, the new ones into [`ForcePass::history_new`].
+    Into(&'a [Vec<f64>]),
+    /// Advanced where they lie.
+    InPlace(&'a mut [Vec<f64>]),
+}
+
 /// The membrane batches' forces into `slots` (which begin at slot `base`
-/// of `layout`) and their new histories into `history_new`.
+/// of `layout`) and their new histories (into `history_new`, or in place).
 #[allow(clippy::too_many_arguments)]
 fn membrane_forces(
     model: &Model,
     x: &[Vector3<f64>],
-    history: &[Vec<f64>],
+    mut history: Histories<'_>,
     history_new: &mut [Vec<f64>],
     dt: f64,
     slots: &mut [Vector3<f64>],
@@ -308,13 +373,11 @@ fn membrane_forces(
     for (i, b) in model.membranes.iter().enumerate() {
         let start = layout.membrane_offsets[i] - base;
         let n = b.shape().nodes() * b.len();
-        b.forces_into(
-            x,
-            &history[i],
-            &mut history_new[i],
-            dt,
-            &mut slots[start..start + n],
-        )
+        let slots = &mut slots[start..start + n];
+        match &mut history {
+            Histories::Into(h) => b.forces_into(x, &h[i], &mut history_new[i], dt, slots),
+            Histories::InPlace(h) => b.forces_in_place(x, &mut h[i], dt, slots),
+        }
         .map_err(|e| fail(format!("membrane batch {i} ({:?})", b.shape()), e))?;
         lap(Pass::Membranes);
     }

@@ -410,3 +410,75 @@ fn a_run_resumed_from_a_checkpoint_ends_bit_for_bit_where_an_uninterrupted_one_d
     assert_eq!(bits(&state), bits(&straight));
     assert_eq!(state.history, straight.history);
 }
+
+#[test]
+fn a_run_failing_in_the_membrane_pass_reports_its_last_frame_whole() {
+    // Every node held but the top row's, which moves down onto the row
+    // below by the end: the top row of quads (the last elements, so the
+    // other lane blocks have already advanced their history in place when
+    // they fail) is flattened at the last step.
+    let mut model = Model::from_blank(
+        &blank([8, 8], ElementKind::Quad, FibreRepresentation::Trusses, 0.0),
+        &Material::preset("carbon-prepreg-2x2").unwrap(),
+    )
+    .unwrap();
+    let top = model.node_set("top").unwrap().to_vec();
+    let held: Vec<u32> = (0..model.node_count() as u32)
+        .filter(|n| !top.contains(n))
+        .collect();
+    model.boundary.push(BoundaryCondition::fixed(held));
+    let end_time = 2e-4;
+    model.boundary.push(BoundaryCondition {
+        nodes: top,
+        components: [true, true, true],
+        motion: Motion::Displacement {
+            value: Vector3::new(5.0, -10.0, 0.0),
+            amplitude: Amplitude::Ramp { duration: end_time },
+        },
+    });
+    let settings = ExplicitSettings {
+        end_time,
+        frames: 10,
+        ..ExplicitSettings::default()
+    };
+    #[derive(Default)]
+    struct LastFrame(Option<State>);
+    impl Observer for LastFrame {
+        fn frame(&mut self, frame: &Frame<'_>) {
+            self.0 = Some(frame.state.clone());
+        }
+    }
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut state = model.initial_state();
+        let mut last = LastFrame::default();
+        let err = pool
+            .install(|| {
+                Explicit::new(&model, settings.clone())
+                    .unwrap()
+                    .run(&mut state, &mut last)
+            })
+            .unwrap_err();
+        let RunError::Element {
+            step, batch, error, ..
+        } = &err
+        else {
+            panic!("{err}");
+        };
+        assert!(batch.starts_with("membrane"), "{err}");
+        assert!(error.element >= 56, "{err}");
+        // What the run reports is the last frame, history and all (not the
+        // failed step's half-advanced history with the frame's positions).
+        let frame = last.0.unwrap();
+        assert!(frame.step > 0 && frame.step < *step, "{err}");
+        assert_eq!(state.step, frame.step);
+        assert_eq!(state.time.to_bits(), frame.time.to_bits());
+        assert_eq!(state.x, frame.x);
+        assert_eq!(state.v, frame.v);
+        assert_eq!(state.history, frame.history);
+        assert_ne!(state.history, model.initial_state().history);
+    }
+}

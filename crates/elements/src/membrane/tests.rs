@@ -636,7 +636,7 @@ fn scalar_forces(
         b.element_force_with(
             e,
             x,
-            &b.element_history(h_in, e),
+            Some(&b.element_history(h_in, e)),
             &mut h_out[e * eh..(e + 1) * eh],
             step,
             &mut slots[e * nn..(e + 1) * nn],
@@ -687,7 +687,7 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                 1,
                 &b.nodes[16..32],
                 &x,
-                &h[4 * eh..8 * eh],
+                Some(&h[4 * eh..8 * eh]),
                 &mut out,
                 b.stride,
                 &resin,
@@ -700,7 +700,7 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                 1,
                 &b.nodes[16..32],
                 &x,
-                &h[4 * eh..8 * eh],
+                Some(&h[4 * eh..8 * eh]),
                 &mut out_base,
                 b.stride,
                 &resin,
@@ -712,6 +712,46 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                     .zip(&out_base)
                     .all(|(a, b)| a.to_bits() == b.to_bits())
             );
+            // And in place, over the committed values.
+            let (mut f_in_place, mut in_place) =
+                ([Vector3::zeros(); 16], h[4 * eh..8 * eh].to_vec());
+            assert!(lanes.block_forces(
+                1,
+                &b.nodes[16..32],
+                &x,
+                None,
+                &mut in_place,
+                b.stride,
+                &resin,
+                &mut f_in_place
+            ));
+            assert_eq!(f, f_in_place);
+            assert!(
+                out.iter()
+                    .zip(&in_place)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+            // A block with a quad squeezed onto a line writes nothing.
+            let mut collapsed = x.clone();
+            let nodes = b.element_nodes(7).to_vec();
+            let (p, q) = (x[nodes[0] as usize], x[nodes[1] as usize]);
+            for (k, &n) in nodes.iter().enumerate() {
+                collapsed[n as usize] = p + (q - p) * (k as f64 * 0.3);
+            }
+            let mut untouched = h[4 * eh..8 * eh].to_vec();
+            let mut f_none = [Vector3::new(7.0, 7.0, 7.0); 16];
+            assert!(!lanes.block_forces(
+                1,
+                &b.nodes[16..32],
+                &collapsed,
+                None,
+                &mut untouched,
+                b.stride,
+                &resin,
+                &mut f_none
+            ));
+            assert_eq!(untouched, h[4 * eh..8 * eh]);
+            assert!(f_none.iter().all(|v| *v == Vector3::new(7.0, 7.0, 7.0)));
             // Stated round-off: none. The lanes do the scalar operations in
             // the scalar order, without fused multiply-adds.
             for (e, (f, g)) in slots.iter().zip(&expected).enumerate() {
@@ -723,6 +763,161 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                 assert_eq!(v.to_bits(), w.to_bits(), "history value {k}, step {step}");
             }
             h = h_out;
+        }
+    }
+}
+
+#[test]
+fn updating_the_history_in_place_gives_the_bits_of_a_second_array() {
+    // Lane blocks with and without Prony terms, the scalar path (embedded
+    // fibres), triangles: each over three steps of a general motion.
+    let (lanes_carbon, x0) = lane_grid(carbon());
+    let (lanes_glass, _) = lane_grid(glass());
+    let quads: Vec<[u32; 4]> = lanes_carbon
+        .nodes
+        .chunks_exact(4)
+        .map(|q| [q[0], q[1], q[2], q[3]])
+        .collect();
+    let triangles: Vec<[u32; 3]> = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    let warp = |n: usize| vec![Vector3::new(0.8, 0.6, 0.0); n];
+    let embedded = MembraneBatch::quads(
+        FabricSection::new(carbon(), true),
+        &x0,
+        quads.clone(),
+        &warp(quads.len()),
+    )
+    .unwrap();
+    let tri = MembraneBatch::triangles(
+        FabricSection::new(glass(), false),
+        &x0,
+        triangles.clone(),
+        &warp(triangles.len()),
+    )
+    .unwrap();
+    assert!(embedded.lanes.is_none() && tri.lanes.is_none());
+    for b in [&lanes_carbon, &lanes_glass, &embedded, &tri] {
+        let mut h = b.initial_history();
+        for step in 1..=3u64 {
+            let s = step as f64;
+            let a = nalgebra::Matrix3::new(
+                1.0 + 0.02 * s,
+                0.04 * s,
+                0.0,
+                -0.01 * s,
+                1.0 - 0.006 * s,
+                0.0,
+                0.002 * s,
+                0.001,
+                1.0,
+            );
+            let x = deform(&x0, &a, step);
+            let dt = 2e-3 * s;
+            let nn = b.shape().nodes();
+            let (mut expected, mut expected_h) = (
+                vec![Vector3::zeros(); nn * b.len()],
+                vec![f64::NAN; h.len()],
+            );
+            b.forces_into(&x, &h, &mut expected_h, dt, &mut expected)
+                .unwrap();
+            let mut slots = vec![Vector3::zeros(); nn * b.len()];
+            b.forces_in_place(&x, &mut h, dt, &mut slots).unwrap();
+            // Stated round-off: none.
+            assert_eq!(slots, expected, "{:?}, step {step}", b.shape());
+            for (k, (v, w)) in h.iter().zip(&expected_h).enumerate() {
+                assert_eq!(v.to_bits(), w.to_bits(), "history value {k}, step {step}");
+            }
+            assert!(h.iter().zip(&b.initial_history()).any(|(v, w)| v != w));
+        }
+    }
+    // A degenerate element (in a lane block, then in the scalar tail) is
+    // named and diagnosed as from a second array.
+    for e in [5, 9] {
+        let mut x = x0.clone();
+        let nodes = lanes_carbon.element_nodes(e).to_vec();
+        let (p, q) = (x[nodes[0] as usize], x[nodes[1] as usize]);
+        for (k, &n) in nodes.iter().enumerate() {
+            x[n as usize] = p + (q - p) * (k as f64 * 0.3);
+        }
+        let h = lanes_carbon.initial_history();
+        let mut slots = vec![Vector3::zeros(); 4 * lanes_carbon.len()];
+        let expected = lanes_carbon
+            .forces_into(&x, &h, &mut h.clone(), 1e-3, &mut slots)
+            .unwrap_err();
+        let err = lanes_carbon
+            .forces_in_place(&x, &mut h.clone(), 1e-3, &mut slots)
+            .unwrap_err();
+        assert_eq!(err, expected);
+        assert_eq!(err.element, e);
+    }
+}
+
+#[test]
+fn lane_stable_steps_equal_the_scalar_estimate_bit_for_bit() {
+    use crate::quad_lanes::{StepBound, block_stable_steps_lanes};
+    for material in [carbon(), glass()] {
+        let (b, x0) = lane_grid(material);
+        let lanes = b.lanes.as_ref().unwrap();
+        let bound = StepBound {
+            kappa: b.stiffness_bound(),
+            rho_h: b.section.material.areal_density(),
+            gauss: GAUSS,
+        };
+        let scale: Vec<f64> = (0..b.len()).map(|e| 1.0 + 0.37 * e as f64).collect();
+        for seed in 0..6u64 {
+            let s = seed as f64;
+            let a = nalgebra::Matrix3::new(
+                1.0 + 0.05 * s,
+                0.2 * (s - 2.0),
+                0.01,
+                -0.03 * s,
+                1.0 - 0.04 * s,
+                0.02,
+                0.01 * s,
+                -0.02,
+                1.0,
+            );
+            let mut x = deform(&x0, &a, seed);
+            // Seed 4: a quad of the first block squeezed flat (0 there);
+            // seed 5: a NaN in the second block (0 too).
+            if seed == 4 {
+                let nodes = b.element_nodes(1).to_vec();
+                let (p, q) = (x[nodes[0] as usize], x[nodes[1] as usize]);
+                for (k, &n) in nodes.iter().enumerate() {
+                    x[n as usize] = p + (q - p) * (k as f64 * 0.3);
+                }
+            }
+            if seed == 5 {
+                x[b.element_nodes(6)[2] as usize].y = f64::NAN;
+            }
+            let mut zeros = 0;
+            for blk in 0..lanes.blocks() {
+                let r = blk * 16..(blk + 1) * 16;
+                for kernel in [
+                    lanes.block_stable_steps(
+                        &b.nodes[r.clone()],
+                        &x,
+                        &b.nodal_area[r.clone()],
+                        bound,
+                    ),
+                    block_stable_steps_lanes(&b.nodes[r.clone()], &x, &b.nodal_area[r], bound),
+                ] {
+                    for (k, dt) in kernel.iter().enumerate() {
+                        let e = blk * 4 + k;
+                        let expected = b.element_stable_time_step(e, &x);
+                        assert_eq!(dt.to_bits(), expected.to_bits(), "element {e}, seed {seed}");
+                        zeros += usize::from(*dt == 0.0);
+                    }
+                }
+            }
+            assert_eq!(zeros > 0, seed >= 4, "seed {seed}: {zeros} zeros");
+            let expected = (0..b.len())
+                .map(|e| b.element_stable_time_step(e, &x) * scale[e])
+                .fold(f64::INFINITY, f64::min);
+            let got = b.min_scaled_stable_time_step(&x, &scale);
+            assert_eq!(got.to_bits(), expected.to_bits(), "seed {seed}");
         }
     }
 }

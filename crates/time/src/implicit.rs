@@ -56,7 +56,7 @@
 
 use std::time::Instant;
 
-use drape_contact::{ImplicitContact, ImplicitContactSettings, Increment};
+use drape_contact::{ImplicitContact, ImplicitContactSettings, Increment, SolveError};
 use drape_model::{Model, State};
 use nalgebra::Vector3;
 use rayon::prelude::*;
@@ -66,8 +66,8 @@ use crate::guard::{self, Guard, GuardSettings};
 use crate::shared::{self, Constraints, ForcePass};
 use crate::tangent::SparseTangent;
 use crate::{
-    Control, DriverState, Energies, Frame, ImplicitCarry, ImplicitTotals, IncrementReport,
-    Observer, Progress, RunError, RunSummary,
+    Control, CutbackReasons, DriverState, Energies, Frame, ImplicitCarry, ImplicitTotals,
+    IncrementReport, Observer, Progress, RunError, RunSummary,
 };
 
 /// Newton iterations of an easy increment (the next one grows) and of a
@@ -195,8 +195,38 @@ pub struct NewtonRecord {
     pub correction: f64,
 }
 
-/// Why an attempt failed, for the cutback and the final diagnosis.
-struct Failure(String);
+/// Why an attempt failed, for the cutback count and the final diagnosis.
+struct Failure {
+    reason: Cutback,
+    message: String,
+}
+
+/// The kinds of [`CutbackReasons`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Cutback {
+    FrictionChatter,
+    NewtonLimit,
+    ElementFailure,
+    NotFinite,
+    TangentFailure,
+    ContactIndefinite,
+    ContactNotConverged,
+}
+
+impl Cutback {
+    fn count(self, reasons: &mut CutbackReasons) {
+        let n = match self {
+            Cutback::FrictionChatter => &mut reasons.friction_chatter,
+            Cutback::NewtonLimit => &mut reasons.newton_limit,
+            Cutback::ElementFailure => &mut reasons.element_failure,
+            Cutback::NotFinite => &mut reasons.not_finite,
+            Cutback::TangentFailure => &mut reasons.tangent_failure,
+            Cutback::ContactIndefinite => &mut reasons.contact_indefinite,
+            Cutback::ContactNotConverged => &mut reasons.contact_not_converged,
+        };
+        *n += 1;
+    }
+}
 
 /// What a converged attempt reports.
 struct Converged {
@@ -387,6 +417,17 @@ impl<'m> Implicit<'m> {
     /// The recorded Newton iterations.
     pub fn newton_record(&self) -> &[NewtonRecord] {
         self.record.as_deref().unwrap_or(&[])
+    }
+
+    /// What the run did so far, in total: also after a failed run, whose
+    /// cutbacks by reason say why it failed.
+    pub fn totals(&self) -> ImplicitTotals {
+        ImplicitTotals {
+            factorisations: self.tangent.factorisations,
+            indefinite: self.tangent.indefinite,
+            factor_seconds: self.tangent.factor_seconds,
+            ..self.totals
+        }
     }
 
     /// The tangent's size: (degrees of freedom, stored entries).
@@ -611,16 +652,17 @@ impl<'m> Implicit<'m> {
             let converged = loop {
                 match self.attempt(state, h) {
                     Ok(c) => break c,
-                    Err(Failure(reason)) => {
+                    Err(Failure { reason, message }) => {
                         cutbacks += 1;
                         self.totals.cutbacks += 1;
+                        reason.count(&mut self.totals.cutback_reasons);
                         h *= 0.25;
                         if h < min_h {
                             return Err(RunError::NoConvergence {
                                 step: state.step + 1,
                                 time: state.time,
                                 increment: h / 0.25,
-                                reason,
+                                reason: message,
                             });
                         }
                     }
@@ -736,9 +778,6 @@ impl<'m> Implicit<'m> {
                 ));
             }
         }
-        self.totals.factorisations = self.tangent.factorisations;
-        self.totals.indefinite = self.tangent.indefinite;
-        self.totals.factor_seconds = self.tangent.factor_seconds;
         Ok(RunSummary {
             steps: increments,
             dt_range: (h_min_used, h_max_used),
@@ -749,7 +788,7 @@ impl<'m> Implicit<'m> {
             wall_seconds: started.elapsed().as_secs_f64(),
             threads: rayon::current_num_threads(),
             warnings: self.warnings.clone(),
-            implicit: Some(self.totals),
+            implicit: Some(self.totals()),
         })
     }
 
@@ -906,10 +945,11 @@ impl<'m> Implicit<'m> {
         let mut newton = 0usize;
         let mut contact_iterations = 0usize;
         let mut switched = 0usize;
-        let fail = |newton: usize, totals: &mut ImplicitTotals, why: String| {
-            totals.wasted_iterations += newton as u64;
-            Err(Failure(why))
-        };
+        let fail =
+            |newton: usize, totals: &mut ImplicitTotals, reason: Cutback, message: String| {
+                totals.wasted_iterations += newton as u64;
+                Err(Failure { reason, message })
+            };
         loop {
             let evaluated = self.forces.evaluate(
                 model,
@@ -953,7 +993,12 @@ impl<'m> Implicit<'m> {
                 }
                 Err(e) => (f64::NAN, usize::MAX, {
                     if !(step_taken && alpha > 1.0 / 16.0) {
-                        return fail(newton, &mut self.totals, e.to_string());
+                        return fail(
+                            newton,
+                            &mut self.totals,
+                            Cutback::ElementFailure,
+                            e.to_string(),
+                        );
                     }
                     f64::NAN
                 }),
@@ -985,6 +1030,7 @@ impl<'m> Implicit<'m> {
                 return fail(
                     newton,
                     &mut self.totals,
+                    Cutback::NotFinite,
                     format!("the residual is not finite after {newton} iterations"),
                 );
             }
@@ -1030,9 +1076,15 @@ impl<'m> Implicit<'m> {
                 });
             }
             if newton >= settings.max_iterations {
+                let reason = if friction_changes > 0 {
+                    Cutback::FrictionChatter
+                } else {
+                    Cutback::NewtonLimit
+                };
                 return fail(
                     newton,
                     &mut self.totals,
+                    reason,
                     format!(
                         "{newton} Newton iterations: residual {res:.3e} N at node {node} (force scale {scale:.3e} N), \
                          last correction {correction:.3e} mm, penetration {pen:.3e} mm, \
@@ -1047,12 +1099,18 @@ impl<'m> Implicit<'m> {
                     .assemble(model, &self.x, &state.history, h, &model.mass, mass_factor);
             self.totals.assembly_seconds += assembly.elapsed().as_secs_f64();
             if let Err((batch, e)) = assembled {
-                return fail(newton, &mut self.totals, format!("tangent of {batch}: {e}"));
+                return fail(
+                    newton,
+                    &mut self.totals,
+                    Cutback::TangentFailure,
+                    format!("tangent of {batch}: {e}"),
+                );
             }
             if let Err(e) = self.tangent.factorise() {
                 return fail(
                     newton,
                     &mut self.totals,
+                    Cutback::TangentFailure,
                     format!(
                         "the tangent has a zero pivot at node {} (component {})",
                         e.dof / 3,
@@ -1082,7 +1140,13 @@ impl<'m> Implicit<'m> {
                     self.totals.contact_seconds += started.elapsed().as_secs_f64();
                     match solved {
                         Ok(stats) => contact_iterations += stats.iterations,
-                        Err(e) => return fail(newton, &mut self.totals, e.to_string()),
+                        Err(e) => {
+                            let reason = match e {
+                                SolveError::Indefinite => Cutback::ContactIndefinite,
+                                SolveError::NoConvergence { .. } => Cutback::ContactNotConverged,
+                            };
+                            return fail(newton, &mut self.totals, reason, e.to_string());
+                        }
                     }
                 }
                 None => {

@@ -36,7 +36,8 @@
 //! pair needs a reversal beyond a small band to stick again (see
 //! `SETTLE`). A step that more than doubles the residual
 //! (or inverts an element) is halved, up to four times (line search),
-//! unless friction states changed with it.
+//! unless friction states changed with it. The contact solve is
+//! preconditioned with K̂'s nodal blocks at the contact rows' nodes.
 //!
 //! **Increments.** Grow by 1.5 after an easy increment (≤ 6 iterations
 //! besides those that followed a change of friction states), shrink by
@@ -58,7 +59,7 @@ use std::time::Instant;
 
 use drape_contact::{ImplicitContact, ImplicitContactSettings, Increment, SolveError};
 use drape_model::{Model, State};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
 
 use crate::energy::{chunked_sum, chunked_sums};
@@ -286,6 +287,9 @@ pub struct Implicit<'m> {
     warnings: Vec<String>,
     /// Which tools have touched the blank.
     tool_touched: Vec<bool>,
+    /// K̂'s 3×3 diagonal block at each node of a contact row (for the
+    /// contact solve's preconditioner).
+    node_blocks: Vec<Matrix3<f64>>,
 }
 
 impl<'m> Implicit<'m> {
@@ -394,6 +398,7 @@ impl<'m> Implicit<'m> {
             guard,
             warnings,
             tool_touched: vec![false; model.tools.len()],
+            node_blocks: vec![Matrix3::zeros(); n],
             size: {
                 let lo = model
                     .x0
@@ -1120,6 +1125,13 @@ impl<'m> Implicit<'m> {
             }
             let fixed = &self.fixed;
             let tangent = &mut self.tangent;
+            if let Some(contact) = &self.contact {
+                for i in contact.row_nodes() {
+                    let i = i as usize;
+                    self.node_blocks[i] =
+                        Matrix3::from_fn(|a, b| tangent.entry(3 * i + a, 3 * i + b));
+                }
+            }
             let mut solve = |w: &mut [f64]| {
                 for (wi, &f) in w.iter_mut().zip(fixed) {
                     if f {
@@ -1136,7 +1148,13 @@ impl<'m> Implicit<'m> {
             match &mut self.contact {
                 Some(contact) => {
                     let started = Instant::now();
-                    let solved = contact.solve(&self.r, &mut solve, &mut self.dx);
+                    let blocks = &self.node_blocks;
+                    let solved = contact.solve_preconditioned(
+                        &self.r,
+                        &mut solve,
+                        Some(&|i: usize| blocks[i]),
+                        &mut self.dx,
+                    );
                     self.totals.contact_seconds += started.elapsed().as_secs_f64();
                     match solved {
                         Ok(stats) => contact_iterations += stats.iterations,

@@ -962,6 +962,14 @@ impl ImplicitContact {
         Ok(stats)
     }
 
+    /// Scales the last solve's steps of the force-driven tools, as the
+    /// driver scales Δx (a damped Newton step).
+    pub fn scale_step(&mut self, alpha: f64) {
+        for d in &mut self.tool_step {
+            *d *= alpha;
+        }
+    }
+
     /// Moves the force-driven tools by `alpha` times the last solve's Δd
     /// (the driver's line search moves the nodes by α·Δx).
     pub fn apply_step(&mut self, alpha: f64) {

@@ -505,6 +505,8 @@ pub fn run_in(
     let solver = scene.spec.simulation.solver;
     // Where the tools are at the end, for the oblique picture.
     let mut end_tools = Vec::new();
+    // The implicit driver's totals, a failed run's included.
+    let mut implicit_totals = None;
     // The scene's own (an imported file's units, repairs) first.
     let mut warnings = scene.warnings.clone();
     let outcome: Result<RunSummary, RunError> = match solver {
@@ -547,6 +549,7 @@ pub fn run_in(
                     }
                 }
                 warnings.extend_from_slice(implicit.warnings());
+                implicit_totals = Some(implicit.totals());
                 outcome
             })
         }
@@ -648,26 +651,23 @@ pub fn run_in(
                 Solver::Implicit => "implicit",
             }
             .to_owned(),
-            implicit: outcome
-                .as_ref()
-                .ok()
-                .and_then(|s| s.implicit)
-                .map(|t| ImplicitRunInfo {
-                    newton_iterations: t.newton_iterations,
-                    wasted_iterations: t.wasted_iterations,
-                    contact_iterations: t.contact_iterations,
-                    factorisations: t.factorisations,
-                    indefinite: t.indefinite,
-                    cutbacks: t.cutbacks,
-                    factor_s: t.factor_seconds,
-                    assembly_s: t.assembly_seconds,
-                    contact_s: t.contact_seconds,
-                    factor_share: if wall_s > 0.0 {
-                        t.factor_seconds / wall_s
-                    } else {
-                        0.0
-                    },
-                }),
+            implicit: implicit_totals.map(|t: drape_time::ImplicitTotals| ImplicitRunInfo {
+                newton_iterations: t.newton_iterations,
+                wasted_iterations: t.wasted_iterations,
+                contact_iterations: t.contact_iterations,
+                factorisations: t.factorisations,
+                indefinite: t.indefinite,
+                cutbacks: t.cutbacks,
+                cutback_reasons: t.cutback_reasons.into(),
+                factor_s: t.factor_seconds,
+                assembly_s: t.assembly_seconds,
+                contact_s: t.contact_seconds,
+                factor_share: if wall_s > 0.0 {
+                    t.factor_seconds / wall_s
+                } else {
+                    0.0
+                },
+            }),
         },
         warnings,
     };

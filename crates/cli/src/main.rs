@@ -540,6 +540,9 @@ fn print_summary(s: &Summary, out: &Path) {
             i.factor_s,
             100.0 * i.factor_share
         );
+        if i.cutbacks > 0 {
+            println!("cutbacks          {}", i.cutback_reasons.describe());
+        }
     }
     for w in &s.warnings {
         println!("warning           {w}");

@@ -175,6 +175,9 @@ pub struct ImplicitRunInfo {
     pub indefinite: u64,
     /// Increments cut back.
     pub cutbacks: u64,
+    /// The cutbacks by why the attempt failed.
+    #[serde(default)]
+    pub cutback_reasons: CutbackReasonsInfo,
     /// Seconds in numeric factorisations.
     pub factor_s: f64,
     /// Seconds in tangent assembly.
@@ -183,6 +186,60 @@ pub struct ImplicitRunInfo {
     pub contact_s: f64,
     /// factor_s / wall_s.
     pub factor_share: f64,
+}
+
+/// Why the implicit driver cut increments back, in `summary.json` (see
+/// `drape_time::CutbackReasons`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct CutbackReasonsInfo {
+    /// Newton iteration limit with friction states still changing.
+    pub friction_chatter: u64,
+    /// Newton iteration limit with the friction states settled.
+    pub newton_limit: u64,
+    /// An element's law failed (inverted element) at every step length.
+    pub element_failure: u64,
+    /// The residual was not finite.
+    pub not_finite: u64,
+    /// The tangent failed to assemble or had a zero pivot.
+    pub tangent_failure: u64,
+    /// The condensed contact solve met non-positive curvature.
+    pub contact_indefinite: u64,
+    /// The condensed contact solve ran out of iterations.
+    pub contact_not_converged: u64,
+}
+
+impl From<drape_time::CutbackReasons> for CutbackReasonsInfo {
+    fn from(r: drape_time::CutbackReasons) -> Self {
+        Self {
+            friction_chatter: r.friction_chatter,
+            newton_limit: r.newton_limit,
+            element_failure: r.element_failure,
+            not_finite: r.not_finite,
+            tangent_failure: r.tangent_failure,
+            contact_indefinite: r.contact_indefinite,
+            contact_not_converged: r.contact_not_converged,
+        }
+    }
+}
+
+impl CutbackReasonsInfo {
+    /// The non-zero counts, "name count" joined by commas (empty when none).
+    pub fn describe(&self) -> String {
+        [
+            ("friction chatter", self.friction_chatter),
+            ("Newton limit", self.newton_limit),
+            ("element failure", self.element_failure),
+            ("residual not finite", self.not_finite),
+            ("tangent failure", self.tangent_failure),
+            ("contact indefinite", self.contact_indefinite),
+            ("contact not converged", self.contact_not_converged),
+        ]
+        .iter()
+        .filter(|(_, n)| *n > 0)
+        .map(|(name, n)| format!("{name} {n}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+    }
 }
 
 /// `summary.json`.

@@ -132,6 +132,8 @@ pub struct ImplicitTotals {
     pub indefinite: u64,
     /// Increments cut back.
     pub cutbacks: u64,
+    /// The cutbacks by why the attempt failed.
+    pub cutback_reasons: CutbackReasons,
     /// Seconds in numeric factorisations.
     pub factor_seconds: f64,
     /// Seconds in tangent assembly.
@@ -139,4 +141,41 @@ pub struct ImplicitTotals {
     /// Seconds in the condensed contact solves (their solves with the
     /// factors included).
     pub contact_seconds: f64,
+}
+
+/// Why the implicit driver's attempts failed (each one cut the increment
+/// to a quarter), counted by reason.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct CutbackReasons {
+    /// The Newton iteration limit was reached with friction states still
+    /// changing in the last iteration: stick/slip chatter.
+    pub friction_chatter: u64,
+    /// The Newton iteration limit was reached with the friction states
+    /// settled: slow convergence of the residual or the correction.
+    pub newton_limit: u64,
+    /// An element's law failed (an inverted element) at the predictor or at
+    /// every step length of the line search.
+    pub element_failure: u64,
+    /// The residual was not finite.
+    pub not_finite: u64,
+    /// The tangent could not be assembled or had a zero pivot.
+    pub tangent_failure: u64,
+    /// The condensed contact solve met a direction of non-positive
+    /// curvature (an indefinite tangent seen through the contact rows).
+    pub contact_indefinite: u64,
+    /// The condensed contact solve ran out of iterations.
+    pub contact_not_converged: u64,
+}
+
+impl CutbackReasons {
+    /// Their sum: every cutback has one reason.
+    pub fn total(&self) -> u64 {
+        self.friction_chatter
+            + self.newton_limit
+            + self.element_failure
+            + self.not_finite
+            + self.tangent_failure
+            + self.contact_indefinite
+            + self.contact_not_converged
+    }
 }

@@ -60,7 +60,7 @@ mod shared;
 pub mod tangent;
 
 pub use energy::Energies;
-pub use error::{ImplicitTotals, RunError, RunSummary};
+pub use error::{CutbackReasons, ImplicitTotals, RunError, RunSummary};
 pub use explicit::{Explicit, ExplicitSettings};
 pub use guard::{Guard, GuardSettings, Instability};
 pub use implicit::{ELASTIC_SLIP, Implicit, ImplicitSettings, NewtonRecord};

@@ -85,3 +85,50 @@ impl std::fmt::Display for Norms {
         Ok(())
     }
 }
+
+/// Every cutback is counted under its reason, also when the run fails: a
+/// strip stretched by 10 % in one increment with three Newton iterations
+/// allowed and a force tolerance below round-off fails on the iteration
+/// limit (no contact, no friction, no inverted element) until the
+/// increment is below the smallest, and the reasons add up to the
+/// cutbacks.
+#[test]
+fn cutbacks_are_counted_by_reason() {
+    let mut model = strip(FibreRepresentation::Trusses);
+    model.boundary.push(BoundaryCondition::fixed(
+        model.node_set("left").unwrap().to_vec(),
+    ));
+    model.boundary.push(BoundaryCondition {
+        nodes: model.node_set("right").unwrap().to_vec(),
+        components: [true; 3],
+        motion: Motion::Displacement {
+            value: Vector3::new(4.0, 1.0, 0.0),
+            amplitude: Amplitude::Ramp { duration: 1.0 },
+        },
+    });
+    let settings = ImplicitSettings {
+        end_time: 1.0,
+        frames: 1,
+        initial_increment: Some(1.0),
+        max_increment: Some(1.0),
+        min_increment: Some(1e-6),
+        force_tolerance: 1e-14,
+        displacement_tolerance: 1e-14,
+        max_iterations: 3,
+        ..ImplicitSettings::default()
+    };
+    let mut driver = Implicit::new(&model, settings).unwrap();
+    let mut state = model.initial_state();
+    let outcome = driver.run(&mut state, &mut NoObserver);
+    assert!(
+        matches!(outcome, Err(drape_time::RunError::NoConvergence { .. })),
+        "{outcome:?}"
+    );
+    let totals = driver.totals();
+    eprintln!("{totals:?}");
+    // From 1 s to below 1e-6 s by quarters: ten cutbacks at least.
+    assert!(totals.cutbacks >= 10, "{totals:?}");
+    assert_eq!(totals.cutback_reasons.newton_limit, totals.cutbacks);
+    assert_eq!(totals.cutback_reasons.total(), totals.cutbacks);
+    assert_eq!(totals.wasted_iterations, 3 * totals.cutbacks);
+}

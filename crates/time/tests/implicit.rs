@@ -21,24 +21,31 @@ fn strip(fibres: FibreRepresentation) -> Model {
     Model::from_blank(&blank, &material).unwrap()
 }
 
+/// [`strip`] clamped on the left, its right end moved by `pull` (mm) on a
+/// ramp over 1 s.
+fn clamped_strip(fibres: FibreRepresentation, pull: Vector3<f64>) -> Model {
+    let mut model = strip(fibres);
+    model.boundary.push(BoundaryCondition::fixed(
+        model.node_set("left").unwrap().to_vec(),
+    ));
+    model.boundary.push(BoundaryCondition {
+        nodes: model.node_set("right").unwrap().to_vec(),
+        components: [true; 3],
+        motion: Motion::Displacement {
+            value: pull,
+            amplitude: Amplitude::Ramp { duration: 1.0 },
+        },
+    });
+    model
+}
+
 /// A strip clamped on the left, its right end moved 0.4 mm along and
 /// 0.1 mm across in one increment: the residual norms of Newton's
 /// iterations fall quadratically, eₖ₊₁ ≤ C·eₖ², until round-off.
 #[test]
 fn newton_converges_quadratically_on_a_contact_free_stretch() {
     for fibres in [FibreRepresentation::Trusses, FibreRepresentation::Embedded] {
-        let mut model = strip(fibres);
-        model.boundary.push(BoundaryCondition::fixed(
-            model.node_set("left").unwrap().to_vec(),
-        ));
-        model.boundary.push(BoundaryCondition {
-            nodes: model.node_set("right").unwrap().to_vec(),
-            components: [true; 3],
-            motion: Motion::Displacement {
-                value: Vector3::new(0.4, 0.1, 0.0),
-                amplitude: Amplitude::Ramp { duration: 1.0 },
-            },
-        });
+        let model = clamped_strip(fibres, Vector3::new(0.4, 0.1, 0.0));
         let settings = ImplicitSettings {
             end_time: 1.0,
             frames: 1,
@@ -94,18 +101,7 @@ impl std::fmt::Display for Norms {
 /// cutbacks.
 #[test]
 fn cutbacks_are_counted_by_reason() {
-    let mut model = strip(FibreRepresentation::Trusses);
-    model.boundary.push(BoundaryCondition::fixed(
-        model.node_set("left").unwrap().to_vec(),
-    ));
-    model.boundary.push(BoundaryCondition {
-        nodes: model.node_set("right").unwrap().to_vec(),
-        components: [true; 3],
-        motion: Motion::Displacement {
-            value: Vector3::new(4.0, 1.0, 0.0),
-            amplitude: Amplitude::Ramp { duration: 1.0 },
-        },
-    });
+    let model = clamped_strip(FibreRepresentation::Trusses, Vector3::new(4.0, 1.0, 0.0));
     let settings = ImplicitSettings {
         end_time: 1.0,
         frames: 1,

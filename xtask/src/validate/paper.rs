@@ -397,6 +397,22 @@ fn hemisphere_table_2() -> Vec<Check> {
     checks
 }
 
+/// Of `orientation`'s runs at friction `mu`: the preset's (labelled
+/// "μ = {mu}") and the shear-law rows ("μ = {mu}, <law>").
+fn law_rows(
+    outcomes: &[Outcome],
+    orientation: Orientation,
+    mu: f64,
+) -> (Option<&Outcome>, Vec<&Outcome>) {
+    let base_label = format!("μ = {mu}");
+    let ours = || outcomes.iter().filter(|o| o.run.orientation == orientation);
+    let base = ours().find(|o| o.run.label == base_label);
+    let rows = ours()
+        .filter(|o| o.run.label.starts_with(&format!("{base_label},")))
+        .collect();
+    (base, rows)
+}
+
 /// The hemisphere's shear-law rows beside the preset's run at the same
 /// friction, with what they change, and the finding stated from those
 /// numbers.
@@ -412,16 +428,7 @@ fn hemisphere_law_table(outcomes: &[Outcome]) -> String {
     let base_label = format!("μ = {LAW_MU}");
     let mut findings = String::new();
     for (orientation, experiment, _) in TABLE_2 {
-        let base = outcomes
-            .iter()
-            .find(|o| o.run.orientation == orientation && o.run.label == base_label);
-        let rows: Vec<&Outcome> = outcomes
-            .iter()
-            .filter(|o| {
-                o.run.orientation == orientation
-                    && o.run.label.starts_with(&format!("{base_label},"))
-            })
-            .collect();
+        let (base, rows) = law_rows(outcomes, orientation, LAW_MU);
         if rows.is_empty() {
             continue;
         }
@@ -639,16 +646,8 @@ fn deep_drawing_table_4() -> Vec<Check> {
 /// experiment the closest row removes.
 fn deep_drawing_law_table(outcomes: &[Outcome]) -> String {
     let base_label = format!("μ = {TABLE_4_PAPER_MU}");
-    let rows_of = |orientation: Orientation| -> Vec<&Outcome> {
-        outcomes
-            .iter()
-            .filter(|o| {
-                o.run.orientation == orientation
-                    && o.run.label.starts_with(&format!("{base_label},"))
-            })
-            .collect()
-    };
-    if Orientation::BOTH.iter().all(|&o| rows_of(o).is_empty()) {
+    let rows_of = |orientation| law_rows(outcomes, orientation, TABLE_4_PAPER_MU);
+    if Orientation::BOTH.iter().all(|&o| rows_of(o).1.is_empty()) {
         return String::new();
     }
     let mut text = format!(
@@ -660,11 +659,7 @@ fn deep_drawing_law_table(outcomes: &[Outcome]) -> String {
     );
     let mut findings = String::new();
     for orientation in Orientation::BOTH {
-        let rows = rows_of(orientation);
-        let Some(base) = outcomes
-            .iter()
-            .find(|o| o.run.orientation == orientation && o.run.label == base_label)
-        else {
+        let (Some(base), rows) = rows_of(orientation) else {
             continue;
         };
         let _ = writeln!(

@@ -572,9 +572,15 @@ fn print_setup(s: &drape_io::results::RunSetup, solver: drape_io::scene::Solver)
     };
     if solver == drape_io::scene::Solver::Implicit {
         eprintln!(
-            "increments        implicit, physical mass; first {:.3e} s, then as Newton converges \
+            "increments        implicit, {}; first {:.3e} s, then as Newton converges \
              (explicit stable step {:.3e} s)",
-            s.time_step_s, s.stable_time_step_s
+            if scaled.is_empty() {
+                "physical mass".to_owned()
+            } else {
+                scaled.trim_start_matches("; ").to_owned()
+            },
+            s.time_step_s,
+            s.stable_time_step_s
         );
         return;
     }

@@ -1,8 +1,8 @@
 //! What a run starts with, for the user before it runs and for its
 //! summary: the model's size, the fibres, the stable and the mass-scaled
 //! time step, the added mass and the steps to expect. An implicit run
-//! uses the physical mass and its own increments: its set-up has the first
-//! increment as its step, no mass scaling and no added mass.
+//! integrates with the same (scaled) masses and its own increments: its
+//! set-up has the first increment as its step.
 
 use drape_io::results::RunSetup;
 use drape_io::scene::{Scene, Solver};
@@ -57,9 +57,6 @@ pub fn run_setup(scene: &Scene) -> Option<RunSetup> {
         let end = scene.implicit.end_time;
         let first = scene.implicit.initial_increment.unwrap_or(end / 100.0);
         setup.time_step_s = first;
-        setup.mass_scaling_dt_s = None;
-        setup.added_mass_t = 0.0;
-        setup.added_mass_fraction = 0.0;
         // The increments grow and shrink as Newton converges.
         setup.expected_steps = (end / first).ceil() as u64;
     }

@@ -1740,6 +1740,8 @@ fn build(
         max_iterations: sim.max_iterations,
         damping: sim.damping,
         contact_margin: sim.contact_margin,
+        mass_scaling: sim.mass_scaling_dt,
+        safety_factor: sim.safety_factor,
         guard,
         ..ImplicitSettings::default()
     };

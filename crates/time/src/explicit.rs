@@ -442,6 +442,12 @@ impl<'m> Explicit<'m> {
         self.contact.as_ref()
     }
 
+    /// The nodes' masses the driver integrates with (t): the model's, plus
+    /// what mass scaling added.
+    pub fn mass(&self) -> &[f64] {
+        &self.mass
+    }
+
     /// Mass added by mass scaling (t), 0 without it: known before the run.
     pub fn added_mass(&self) -> f64 {
         self.added_mass

@@ -173,6 +173,15 @@ pub struct ImplicitSettings {
     pub max_increments: Option<u64>,
     /// Hand the observer a checkpoint every this many increments.
     pub checkpoint_every: Option<u64>,
+    /// Target step of the explicit driver's selective mass scaling
+    /// ([`crate::ExplicitSettings::mass_scaling`]): the implicit run
+    /// integrates with the same nodal masses, so that a scene gives the
+    /// same model to both drivers. The weight stays the physical mass's
+    /// (mass scaling adds inertia only). None: the physical mass.
+    pub mass_scaling: Option<f64>,
+    /// The explicit driver's safety factor, which its mass scaling is
+    /// computed with (the scene's `safety_factor`); nothing else.
+    pub safety_factor: f64,
 }
 
 impl Default for ImplicitSettings {
@@ -194,6 +203,8 @@ impl Default for ImplicitSettings {
             guard: GuardSettings::default(),
             max_increments: None,
             checkpoint_every: None,
+            mass_scaling: None,
+            safety_factor: crate::ExplicitSettings::default().safety_factor,
         }
     }
 }
@@ -307,6 +318,9 @@ pub struct Implicit<'m> {
     /// K̂'s 3×3 diagonal block at each node of a contact row (for the
     /// contact solve's preconditioner).
     node_blocks: Vec<Matrix3<f64>>,
+    /// The nodes' inertia (t): the model's mass, scaled as the explicit
+    /// driver scales it when `mass_scaling` is set.
+    mass: Vec<f64>,
 }
 
 impl<'m> Implicit<'m> {
@@ -352,6 +366,22 @@ impl<'m> Implicit<'m> {
             )));
         }
         let n = model.node_count();
+        // The explicit driver's own scaling, so that both drivers see the
+        // same inertia.
+        let mass = match settings.mass_scaling {
+            Some(dt) => crate::Explicit::new(
+                model,
+                crate::ExplicitSettings {
+                    end_time: settings.end_time,
+                    mass_scaling: Some(dt),
+                    safety_factor: settings.safety_factor,
+                    ..Default::default()
+                },
+            )?
+            .mass()
+            .to_vec(),
+            None => model.mass.clone(),
+        };
         let constraints = Constraints::new(model);
         let fixed: Vec<bool> = constraints
             .constrained
@@ -373,7 +403,7 @@ impl<'m> Implicit<'m> {
                     ..ImplicitContactSettings::default()
                 },
             );
-            contact.set_mass(&model.mass);
+            contact.set_mass(&mass);
             contact
         });
         let (alpha_m, beta, gamma) = bossak(settings.spectral_radius);
@@ -416,6 +446,7 @@ impl<'m> Implicit<'m> {
             warnings,
             tool_touched: vec![false; model.tools.len()],
             node_blocks: vec![Matrix3::zeros(); n],
+            mass,
             size: {
                 let lo = model
                     .x0
@@ -428,6 +459,11 @@ impl<'m> Implicit<'m> {
                 (hi - lo).norm()
             },
         })
+    }
+
+    /// Mass added by mass scaling (t), 0 without it.
+    pub fn added_mass(&self) -> f64 {
+        self.mass.iter().sum::<f64>() - self.model.mass.iter().sum::<f64>()
     }
 
     /// Records the residual norms of every Newton iteration (see
@@ -492,12 +528,12 @@ impl<'m> Implicit<'m> {
         let damping = self.settings.damping;
         let n = model.node_count();
         for i in 0..n {
-            let f = self.f_ext[i] - self.forces.f_int[i] - state.v[i] * (damping * model.mass[i]);
+            let f = self.f_ext[i] - self.forces.f_int[i] - state.v[i] * (damping * self.mass[i]);
             for k in 0..3 {
                 self.acceleration[i][k] = if self.constraints.constrained[i][k] {
                     0.0
                 } else {
-                    f[k] / model.mass[i]
+                    f[k] / self.mass[i]
                 };
             }
         }
@@ -526,7 +562,7 @@ impl<'m> Implicit<'m> {
                 .initial_acceleration(
                     &state.x,
                     &state.v,
-                    &model.mass,
+                    &self.mass,
                     &free,
                     touch,
                     &mut self.acceleration,
@@ -583,7 +619,7 @@ impl<'m> Implicit<'m> {
         let mut energy = resume.as_ref().map_or_else(Energies::default, |r| r.energy);
         let kinetic0 = match &resume {
             Some(r) => r.kinetic0,
-            None => chunked_sum(n, |i| 0.5 * model.mass[i] * state.v[i].norm_squared()),
+            None => chunked_sum(n, |i| 0.5 * self.mass[i] * state.v[i].norm_squared()),
         };
         self.kinetic0 = kinetic0;
         match &resume {
@@ -613,7 +649,7 @@ impl<'m> Implicit<'m> {
         // The stiffness at the start sets the force floor of the
         // convergence test before the first Newton step assembles it.
         self.tangent
-            .assemble(model, &state.x, &state.history, 0.0, &model.mass, 0.0)
+            .assemble(model, &state.x, &state.history, 0.0, &self.mass, 0.0)
             .map_err(|(batch, error)| RunError::Element {
                 step: state.step,
                 time: state.time,
@@ -803,8 +839,8 @@ impl<'m> Implicit<'m> {
         Ok(RunSummary {
             steps: increments,
             dt_range: (h_min_used, h_max_used),
-            added_mass: 0.0,
-            total_mass: model.mass.iter().sum(),
+            added_mass: self.added_mass(),
+            total_mass: self.mass.iter().sum(),
             energy,
             stopped,
             wall_seconds: started.elapsed().as_secs_f64(),
@@ -883,7 +919,7 @@ impl<'m> Implicit<'m> {
             .with_min_len(1024)
             .enumerate()
             .map(|(i, ri)| {
-                let m = model.mass[i];
+                let m = self.mass[i];
                 let inertia = inc.inertia(a_n[i], a[i]) * m;
                 let f = f_ext[i] - f_int[i] - inertia - v[i] * (damping * m) + f_slip[i];
                 let mut worst = 0.0f64;
@@ -1121,7 +1157,7 @@ impl<'m> Implicit<'m> {
             let assembly = Instant::now();
             let assembled =
                 self.tangent
-                    .assemble(model, &self.x, &state.history, h, &model.mass, mass_factor);
+                    .assemble(model, &self.x, &state.history, h, &self.mass, mass_factor);
             self.totals.assembly_seconds += assembly.elapsed().as_secs_f64();
             if let Err((batch, e)) = assembled {
                 return fail(
@@ -1245,7 +1281,7 @@ impl<'m> Implicit<'m> {
         let (f_slip, f_con) = (&self.f_slip, &self.f_con);
         let fixed = &self.fixed;
         let [w_int, w_ext, w_damp, w_c, w_bc, ke_n, d_num] = chunked_sums(n, |i| {
-            let m = model.mass[i];
+            let m = self.mass[i];
             let dx = x[i] - x_n[i];
             let f_c = f_slip[i] + f_con[i];
             let (damp, damp_n) = (v[i] * (damping * m), v_n[i] * (damping * m));
@@ -1302,7 +1338,7 @@ impl<'m> Implicit<'m> {
             }
             None => (0, 0, 0),
         };
-        let ke = chunked_sum(n, |i| 0.5 * model.mass[i] * self.v[i].norm_squared());
+        let ke = chunked_sum(n, |i| 0.5 * self.mass[i] * self.v[i].norm_squared());
         energy.numerical_dissipation += d_num - (ke - ke_n);
         energy.kinetic = ke;
         for ((c, s), k) in self.f_c_n.iter_mut().zip(&self.f_slip).zip(&self.f_con) {

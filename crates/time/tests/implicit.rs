@@ -128,3 +128,68 @@ fn cutbacks_are_counted_by_reason() {
     assert_eq!(totals.cutback_reasons.total(), totals.cutbacks);
     assert_eq!(totals.wasted_iterations, 3 * totals.cutbacks);
 }
+
+/// With mass scaling the implicit driver integrates with the explicit
+/// driver's scaled masses, and the weight stays the physical mass's: a
+/// free strip falling under gravity moves its scaled centre of mass by
+/// Σ m̃ᵢ·Δzᵢ = ½·(Σ mᵢ)·g·t² (internal forces sum to zero, and the
+/// Newmark update is exact for the constant resultant), to Newton's
+/// tolerance. With the physical mass as inertia the left side would be
+/// off by the scaling's factor (≈ 100 here).
+#[test]
+fn mass_scaling_gives_the_implicit_driver_the_explicit_masses() {
+    let mut model = strip(FibreRepresentation::Trusses);
+    let g = -9810.0;
+    model.gravity = Vector3::new(0.0, 0.0, g);
+    let physical: f64 = model.mass.iter().sum();
+    let end_time = 0.01;
+    let probe = drape_time::Explicit::new(
+        &model,
+        drape_time::ExplicitSettings {
+            end_time,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let target = 10.0 * probe.stable_time_step(&model.x0);
+    let explicit = drape_time::Explicit::new(
+        &model,
+        drape_time::ExplicitSettings {
+            end_time,
+            mass_scaling: Some(target),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let scaled = explicit.mass().to_vec();
+    assert!(
+        explicit.added_mass() > 50.0 * physical,
+        "{}",
+        explicit.added_mass()
+    );
+    let settings = ImplicitSettings {
+        end_time,
+        frames: 1,
+        initial_increment: Some(end_time / 10.0),
+        max_increment: Some(end_time / 10.0),
+        force_tolerance: 1e-9,
+        displacement_tolerance: 1e-9,
+        mass_scaling: Some(target),
+        ..ImplicitSettings::default()
+    };
+    let mut driver = Implicit::new(&model, settings).unwrap();
+    assert_eq!(driver.added_mass(), explicit.added_mass());
+    let mut state = model.initial_state();
+    let summary = driver.run(&mut state, &mut NoObserver).unwrap();
+    assert_eq!(summary.added_mass, explicit.added_mass());
+    let moment: f64 = scaled
+        .iter()
+        .zip(state.x.iter().zip(&model.x0))
+        .map(|(m, (x, x0))| m * (x.z - x0.z))
+        .sum();
+    let exact = 0.5 * physical * g * end_time * end_time;
+    assert!(
+        ((moment - exact) / exact).abs() < 1e-8,
+        "Σ m̃·Δz = {moment:e}, ½·M·g·t² = {exact:e}"
+    );
+}

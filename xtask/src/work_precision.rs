@@ -11,8 +11,8 @@
 //! mass-scaling targets, a shorter process time (with the viscoelastic
 //! resin as is, and with its Prony times scaled along), embedded fibres
 //! instead of trusses, one thread instead of two, and the implicit solver
-//! with its increment sizes (on a 10 × 10 blank only: it is too slow for
-//! more, see [`plan`]) — is a list of scene overrides, exactly as
+//! (on the shipped mesh and on 10 × 10, with the scene's mass scaling and
+//! on 10 × 10 without it, see [`plan`]) — is a list of scene overrides, exactly as
 //! `drape run SCENE --set key=value …` takes them, run by the `drape`
 //! binary one after the other, and compared with the reference:
 //!
@@ -48,8 +48,10 @@
 //! then the judged error), `target/bench/work-precision.png` (time
 //! against each error, log–log, the Pareto front drawn) and
 //! `target/bench/work-precision.md` (every row, the front, the fastest
-//! setting within [`TARGET_MAX_SHEAR_DEG`] away from the holding, and how
-//! much a shorter process time changes the Prony response). A full run without `--filter` also
+//! setting within [`TARGET_MAX_SHEAR_DEG`] away from the holding, the
+//! implicit rows' increments, Newton iterations, contact-solve products and
+//! factorisation share, and how much a shorter process time changes the
+//! Prony response). A full run without `--filter` also
 //! puts that Markdown into the README between its `work-precision` markers
 //! and the picture into `docs/work-precision.png`.
 //!
@@ -377,15 +379,8 @@ fn plan(
         rows.push(one);
         let mut implicit = Row::new(
             "implicit",
-            "10x10 implicit dt0.05",
-            [
-                base(),
-                vec![
-                    set("simulation.solver", "\"implicit\""),
-                    set("simulation.max_increment", 0.05),
-                ],
-            ]
-            .concat(),
+            "10x10 implicit ms2e-5",
+            [base(), vec![set("simulation.solver", "\"implicit\"")]].concat(),
         );
         implicit.optional = true;
         rows.push(implicit);
@@ -461,28 +456,31 @@ fn plan(
         );
         one.threads = 1;
         rows.push(one);
-        // The implicit driver on the 10 × 10 blank only: it takes about a
-        // minute there and 20 min on 16 × 16 (the condensed contact solve,
-        // issue 11), so 40 × 40 rows would take the study hours. Beside
-        // them, the explicit 10 × 10 rows without and with mass scaling
-        // separate the mesh's error from the inertia's.
+        // The implicit driver with the scene's mass scaling (both drivers
+        // integrate with the same masses) on the shipped mesh and on
+        // 10 × 10, and on 10 × 10 with the physical mass beside the
+        // explicit run without mass scaling: the two 10 × 10 pairs
+        // separate the driver's error from the inertia's and the mesh's.
         rows.push(Row::new(
             "implicit",
             "10x10 no mass scaling",
             vec![cells(10), no_mass_scaling()],
         ));
-        for dt in [0.05, 0.02, 0.01] {
-            let mut implicit = Row::new(
-                "implicit",
-                &format!("10x10 implicit dt{dt}"),
-                vec![
-                    cells(10),
-                    set("simulation.solver", "\"implicit\""),
-                    set("simulation.max_increment", dt),
-                ],
-            );
-            implicit.optional = true;
-            rows.push(implicit);
+        let implicit = || set("simulation.solver", "\"implicit\"");
+        for (name, overrides) in [
+            (format!("{n0}x{n0} implicit ms{dt0:e}"), vec![implicit()]),
+            (
+                format!("10x10 implicit ms{dt0:e}"),
+                vec![cells(10), implicit()],
+            ),
+            (
+                "10x10 implicit no mass scaling".to_owned(),
+                vec![cells(10), no_mass_scaling(), implicit()],
+            ),
+        ] {
+            let mut row = Row::new("implicit", &name, overrides);
+            row.optional = true;
+            rows.push(row);
         }
     }
     Ok((reference, rows))
@@ -531,6 +529,8 @@ struct Outcome {
     /// distances averaged, by distance.
     profile: Vec<(f64, f64)>,
     added_mass_fraction: f64,
+    /// The implicit driver's counts, for an implicit row.
+    implicit: Option<drape_io::results::ImplicitRunInfo>,
 }
 
 impl Outcome {
@@ -754,6 +754,7 @@ fn run_row(
                     draw_in: [f64::NAN; 3],
                     profile: Vec::new(),
                     added_mass_fraction: f64::NAN,
+                    implicit: None,
                 });
             }
             Ok(None) => std::thread::sleep(Duration::from_millis(20)),
@@ -800,6 +801,7 @@ fn run_row(
             .setup
             .as_ref()
             .map_or(f64::NAN, |s| s.added_mass_fraction),
+        implicit: summary.run.implicit,
     })
 }
 
@@ -898,6 +900,7 @@ fn reference(
             .setup
             .as_ref()
             .map_or(f64::NAN, |s| s.added_mass_fraction),
+        implicit: summary.run.implicit,
     };
     if outcome.added_mass_fraction != 0.0 {
         return Err(format!(
@@ -1447,8 +1450,48 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
         }
         None => md.push_str(" (the shipped setting is not a row of this mode).\n"),
     }
+    md.push_str(&implicit_table(measured));
     if !prony.is_empty() {
         md.push_str(&prony_table(measured, prony));
+    }
+    md
+}
+
+/// What the implicit rows' runs cost: increments, Newton iterations
+/// (converged and wasted in cutbacks), condensed-solve products (one
+/// forward/back solve with the factors each), and where the time went.
+fn implicit_table(measured: &[Measured]) -> String {
+    let rows: Vec<(usize, &Measured, drape_io::results::ImplicitRunInfo)> = measured
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| Some((i, m, m.outcome.as_ref()?.implicit?)))
+        .collect();
+    if rows.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from(
+        "\nThe implicit rows' solver counts (summary.json `run.implicit`; seconds are wall time of the run's \
+         pieces):\n\n\
+         | # | setting | increments | Newton | wasted Newton | cutbacks | contact-solve products | factorisation s (share) | assembly s | contact s |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for (i, m, t) in rows {
+        let steps = m.outcome.as_ref().map_or(0, |o| o.steps);
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} | {} | {} ({:.0} %) | {} | {} |",
+            i + 1,
+            m.row.name,
+            steps,
+            t.newton_iterations,
+            t.wasted_iterations,
+            t.cutbacks,
+            t.contact_iterations,
+            cell(t.factor_s, 1),
+            100.0 * t.factor_share,
+            cell(t.assembly_s, 1),
+            cell(t.contact_s, 1)
+        );
     }
     md
 }
@@ -1573,6 +1616,7 @@ mod tests {
             draw_in,
             profile,
             added_mass_fraction: 0.0,
+            implicit: None,
         }
     }
 

@@ -252,7 +252,9 @@ fn agreement(name: &str, overrides: &[(&str, &str)]) -> Vec<Check> {
         .chain(&[("fabric.bending", "true")])
         .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
         .collect();
-    let physical = overrides.iter().any(|(k, v)| (k.as_str(), v.as_str()) == PHYSICAL_MASS);
+    let physical = overrides
+        .iter()
+        .any(|(k, v)| (k.as_str(), v.as_str()) == PHYSICAL_MASS);
     let scene = Scene::from_file(&root.join(format!("scenes/{name}.toml")), &overrides)
         .expect("the scene loads");
     let cells = scene.model.membranes.iter().map(|b| b.len()).sum::<usize>();

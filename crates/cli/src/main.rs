@@ -187,11 +187,12 @@ fn bad(message: impl Into<String>) -> anyhow::Error {
     anyhow!(BadInput(message.into()))
 }
 
-/// Set by the first Ctrl-C: runs stop after their current step and write
-/// what they reached.
+/// Set by the first Ctrl-C (or SIGTERM, SIGHUP): runs stop after their
+/// current step and write what they reached.
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
-/// The exit code of a run stopped by Ctrl-C (128 + SIGINT, as shells do).
+/// The exit code of a run stopped by Ctrl-C (128 + SIGINT, as shells do),
+/// also when SIGTERM or SIGHUP stopped it.
 const INTERRUPTED_EXIT: u8 = 130;
 
 /// The first Ctrl-C asks the runs to stop cleanly; a second one quits at

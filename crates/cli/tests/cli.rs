@@ -505,11 +505,12 @@ fn checkpoint_step(out: &Path) -> Option<u64> {
     c["state"]["step"].as_u64()
 }
 
-/// Sends Ctrl-C's signal to `child` and waits for it.
+/// Sends `signal` (Ctrl-C's INT, or a scheduler's TERM) to `child` and
+/// waits for it.
 #[cfg(unix)]
-fn interrupt(child: std::process::Child) -> Output {
+fn interrupt(child: std::process::Child, signal: &str) -> Output {
     let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([&format!("-{signal}"), &child.id().to_string()])
         .status()
         .unwrap();
     assert!(killed.success());
@@ -523,7 +524,8 @@ fn summary_of(out: &Path) -> serde_json::Value {
 /// One long run, seen through everything that happens to a folder: a
 /// second run into it is refused, Ctrl-C stops it with a last frame and a
 /// "stopped" summary, it resumes from another directory with its own scene
-/// although the file was edited, counts all its steps, and a new run into
+/// although the file was edited, counts all its steps, SIGTERM stops it as
+/// cleanly, and a new run into
 /// the folder removes the stale checkpoint.
 #[cfg(unix)]
 #[test]
@@ -571,7 +573,7 @@ fn lock_ctrl_c_resume_elsewhere_and_stale_checkpoint() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
 
     // Ctrl-C: a clean stop.
-    let o = interrupt(child);
+    let o = interrupt(child, "INT");
     assert_eq!(o.status.code(), Some(130), "{}", text(&o));
     assert!(text(&o).contains("drape run --resume out"), "{}", text(&o));
     let summary = summary_of(&out);
@@ -614,7 +616,8 @@ fn lock_ctrl_c_resume_elsewhere_and_stale_checkpoint() {
     wait_for("a later checkpoint", || {
         checkpoint_step(&out).is_some_and(|s| s > first_steps)
     });
-    let o = interrupt(child);
+    // SIGTERM (a batch scheduler's time limit, `timeout`): as clean.
+    let o = interrupt(child, "TERM");
     assert_eq!(o.status.code(), Some(130), "{}", text(&o));
     let shown = text(&o);
     assert!(

@@ -885,7 +885,6 @@ impl<'m> Implicit<'m> {
     /// the slip and constraint forces of the last solve. Returns (largest
     /// residual component with the constraint forces, node, force scale).
     fn residual(&mut self, state: &State, inc: &Increment) -> (f64, usize, f64) {
-        let model = self.model;
         let damping = self.settings.damping;
         let (x_n, v_n, a_n) = (&state.x, &state.v, &self.acceleration);
         {

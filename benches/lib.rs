@@ -1,7 +1,8 @@
 //! drape's criterion benches live in `benches/` (`kernels.rs`: the
 //! per-integration-point kernels; `elements.rs`: the element batch passes;
 //! `explicit.rs`: the explicit driver's step throughput; `contact.rs`: the
-//! contact pass against the element pass). This library holds what they
+//! contact pass against the element pass; `implicit_iteration.rs`: the
+//! pieces of one implicit Newton iteration on the hemisphere's tangent). This library holds what they
 //! may share: a stopwatch that reads either the wall clock or the calling
 //! thread's CPU time.
 //!

@@ -292,6 +292,22 @@ pub struct SolveStats {
     pub active_changes: usize,
 }
 
+impl SolveStats {
+    /// Adds `other`'s counts to these; rows, active and residual become
+    /// `other`'s.
+    fn add(&mut self, other: &Self) {
+        self.iterations += other.iterations;
+        self.cg_steps += other.cg_steps;
+        self.expansions += other.expansions;
+        self.proportionings += other.proportionings;
+        self.norm_products += other.norm_products;
+        self.active_changes += other.active_changes;
+        self.rows = other.rows;
+        self.active = other.active;
+        self.residual = other.residual;
+    }
+}
+
 /// The condensed solve did not converge, or met a direction of
 /// non-positive curvature (an indefinite tangent).
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -353,6 +369,9 @@ pub struct ImplicitContact {
     scratch: Scratch,
     /// Nodal masses for the regularised stick's inertia floor (empty: none).
     mass: Vec<f64>,
+    /// Sums of the condensed solves' counts so far (rows, active and
+    /// residual: of the last solve).
+    solve_totals: SolveStats,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -367,6 +386,11 @@ struct Scratch {
     tool_w: Vec<f64>,
     /// Row scaling of the preconditioned solve.
     scale: Vec<f64>,
+    /// Per tool: its stiffness along its axis, and work for its forces.
+    tool_stiffness: Vec<f64>,
+    tool_f: Vec<f64>,
+    /// Whether each row is bounded (λ ≥ 0).
+    bounded: Vec<bool>,
 }
 
 /// A regularised stick's spring is at least this many times the node's
@@ -436,6 +460,7 @@ impl ImplicitContact {
             rows: Vec::new(),
             scratch: Scratch::default(),
             mass: Vec::new(),
+            solve_totals: SolveStats::default(),
         }
     }
 
@@ -785,7 +810,9 @@ impl ImplicitContact {
             self.scratch.tool_w = tool_r;
             return Ok(stats);
         }
-        let stiffness: Vec<f64> = (0..n_tools).map(|t| self.tool_stiffness(t)).collect();
+        let mut stiffness = std::mem::take(&mut self.scratch.tool_stiffness);
+        stiffness.clear();
+        stiffness.extend((0..n_tools).map(|t| self.tool_stiffness(t)));
         let s = &mut self.scratch;
         for v in [
             &mut s.lambda,
@@ -855,7 +882,12 @@ impl ImplicitContact {
         let pairs = &self.pairs;
         let scale = &s.scale;
         let mut w = std::mem::take(&mut s.w);
-        let mut tool_w = vec![0.0; n_tools];
+        let mut tool_w = std::mem::take(&mut s.tool_f);
+        tool_w.clear();
+        tool_w.resize(n_tools, 0.0);
+        let mut bounded = std::mem::take(&mut s.bounded);
+        bounded.clear();
+        bounded.extend(rows.iter().map(|r| r.bounded));
         let mut products = 0usize;
         // y = A·v = C·K̂⁻¹·Cᵀ·v.
         let mut apply = |v: &[f64], y: &mut [f64]| {
@@ -888,7 +920,6 @@ impl ImplicitContact {
                     / scale[k];
             }
         };
-        let bounded: Vec<bool> = rows.iter().map(|r| r.bounded).collect();
         let result = mprgp(
             &bounded,
             &s.c,
@@ -906,15 +937,25 @@ impl ImplicitContact {
             self.settings.max_iterations,
         );
         s.w = w;
+        s.bounded = bounded;
         stats.iterations = products;
-        let residual = result?;
+        let residual = match result {
+            Ok(residual) => residual,
+            Err(e) => {
+                s.tool_f = tool_w;
+                self.scratch.tool_stiffness = stiffness;
+                self.scratch.tool_w = tool_r;
+                return Err(e);
+            }
+        };
         for k in 0..n {
             s.lambda[k] /= s.scale[k];
         }
         stats.residual = residual;
         // Δx = K̂⁻¹·(r + Cᵀλ) = Δx₀ + K̂⁻¹·Cᵀλ.
         s.w.iter_mut().for_each(|x| *x = 0.0);
-        let mut tool_f = vec![0.0; n_tools];
+        let mut tool_f = tool_w;
+        tool_f.iter_mut().for_each(|x| *x = 0.0);
         for (row, &l) in self.rows.iter().zip(&s.lambda) {
             let pair = &self.pairs[row.pair as usize];
             let i = 3 * pair.node as usize;
@@ -959,6 +1000,9 @@ impl ImplicitContact {
         }
         stats.active = self.pairs.iter().filter(|p| p.lambda > 0.0).count();
         self.scratch.tool_w = tool_r;
+        self.scratch.tool_f = tool_f;
+        self.scratch.tool_stiffness = stiffness;
+        self.solve_totals.add(&stats);
         Ok(stats)
     }
 
@@ -1421,6 +1465,13 @@ impl ImplicitContact {
         self.rows.iter().map(|r| self.pairs[r.pair as usize].node)
     }
 
+    /// The condensed solves' counts summed over the run so far (products
+    /// by kind; rows, active and residual of the last solve); solves that
+    /// failed are not counted.
+    pub fn solve_totals(&self) -> SolveStats {
+        self.solve_totals
+    }
+
     /// Whether a force-driven tool is among the tools.
     pub fn couples_tools(&self) -> bool {
         self.has_free_tools()
@@ -1823,6 +1874,7 @@ mod tests {
         };
         let mut dx = vec![0.0; n];
         let block = |i: usize| Matrix3::from_fn(|a, b| k[(3 * i + a, 3 * i + b)]);
+        let before = contact.solve_totals();
         let stats = if preconditioned {
             contact.solve_preconditioned(&r, &mut solve, Some(&block), &mut dx)
         } else {
@@ -1833,6 +1885,15 @@ mod tests {
             stats.iterations + 1,
             solves,
             "one solve per product, plus K̂⁻¹·r"
+        );
+        let totals = contact.solve_totals();
+        assert_eq!(
+            (
+                totals.iterations - before.iterations,
+                totals.cg_steps - before.cg_steps
+            ),
+            (stats.iterations, stats.cg_steps),
+            "the run's totals add this solve's counts"
         );
         // The direct reference, with the tool unknowns appended.
         let free_tools: Vec<usize> = (0..tools.len())

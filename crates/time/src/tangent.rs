@@ -361,6 +361,17 @@ impl SparseTangent {
         self.values.len()
     }
 
+    /// The assembled upper triangle as a faer matrix (for benches and
+    /// checks of other factorisations of the same values).
+    pub fn matrix(&self) -> SparseColMatRef<'_, usize, f64> {
+        SparseColMatRef::new(self.symbolic_matrix.as_ref(), &self.values)
+    }
+
+    /// The symbolic factorisation every numeric one reuses.
+    pub fn symbolic(&self) -> &SymbolicCholesky<usize> {
+        &self.symbolic
+    }
+
     /// Assembles K̂ = diag(`mass_factor`·m) + sym(K) at positions `x`, the
     /// membranes from their committed `history` over a step `dt`; an
     /// identity block for the constrained dofs.

@@ -1146,17 +1146,6 @@ impl ImplicitContact {
                 self.friction_dissipation -= f.dot(&slip);
             }
         }
-        let displacement_n: Vec<f64> = self.tool_state.iter().map(|s| s.displacement).collect();
-        for t in 0..self.tools.len() {
-            let s = self.tool_state[t];
-            let a0 = self.tool_acceleration[t];
-            let a = inc.acceleration(self.trial[t] - s.displacement, s.velocity, a0);
-            self.tool_state[t] = ToolState {
-                displacement: self.trial[t],
-                velocity: inc.velocity(s.velocity, a0, a),
-            };
-            self.tool_acceleration[t] = a;
-        }
         self.carried.clear();
         self.pressed.clear();
         let (mut active, mut stick, mut slip) = (0, 0, 0);
@@ -1179,7 +1168,8 @@ impl ImplicitContact {
             if sliding && self.settings.elastic_slip == 0.0 {
                 let tool = &self.tools[pair.tool as usize];
                 let i = pair.node as usize;
-                let dd = self.trial[pair.tool as usize] - displacement_n[pair.tool as usize];
+                let dd = self.trial[pair.tool as usize]
+                    - self.tool_state[pair.tool as usize].displacement;
                 let s = x[i] - x_n[i] - tool.motion.direction() * dd;
                 let slip_t = s - pair.normal * pair.normal.dot(&s);
                 if slip_t.norm() > SLIP_NOISE * self.settings.tolerance {
@@ -1198,6 +1188,18 @@ impl ImplicitContact {
                     Friction::Stick
                 },
             });
+        }
+        // The tools move on once the pairs have measured their slips
+        // against the tools' positions at tₙ.
+        for t in 0..self.tools.len() {
+            let s = self.tool_state[t];
+            let a0 = self.tool_acceleration[t];
+            let a = inc.acceleration(self.trial[t] - s.displacement, s.velocity, a0);
+            self.tool_state[t] = ToolState {
+                displacement: self.trial[t],
+                velocity: inc.velocity(s.velocity, a0, a),
+            };
+            self.tool_acceleration[t] = a;
         }
         self.write_outputs_from_carried();
         // A node resting on a tool at zero gap with nothing pressing it

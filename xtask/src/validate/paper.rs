@@ -398,7 +398,7 @@ fn hemisphere_table_2() -> Vec<Check> {
 }
 
 /// Of `orientation`'s runs at friction `mu`: the preset's (labelled
-/// "μ = {mu}") and the shear-law rows ("μ = {mu}, <law>").
+/// "μ = {mu}") and the shear-law rows ("μ = {mu}, `<law>`").
 fn law_rows(
     outcomes: &[Outcome],
     orientation: Orientation,

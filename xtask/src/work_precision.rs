@@ -1461,10 +1461,13 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
 /// (converged and wasted in cutbacks), condensed-solve products (one
 /// forward/back solve with the factors each), and where the time went.
 fn implicit_table(measured: &[Measured]) -> String {
-    let rows: Vec<(usize, &Measured, drape_io::results::ImplicitRunInfo)> = measured
+    let rows: Vec<(usize, &Measured, u64, drape_io::results::ImplicitRunInfo)> = measured
         .iter()
         .enumerate()
-        .filter_map(|(i, m)| Some((i, m, m.outcome.as_ref()?.implicit?)))
+        .filter_map(|(i, m)| {
+            let o = m.outcome.as_ref()?;
+            Some((i, m, o.steps, o.implicit?))
+        })
         .collect();
     if rows.is_empty() {
         return String::new();
@@ -1475,8 +1478,7 @@ fn implicit_table(measured: &[Measured]) -> String {
          | # | setting | increments | Newton | wasted Newton | cutbacks | contact-solve products | factorisation s (share) | assembly s | contact s |\n\
          |---|---|---|---|---|---|---|---|---|---|\n",
     );
-    for (i, m, t) in rows {
-        let steps = m.outcome.as_ref().map_or(0, |o| o.steps);
+    for (i, m, steps, t) in rows {
         let _ = writeln!(
             md,
             "| {} | {} | {} | {} | {} | {} | {} | {} ({:.0} %) | {} | {} |",

@@ -707,11 +707,7 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                 &mut f_base
             ));
             assert_eq!(f, f_base);
-            assert!(
-                out.iter()
-                    .zip(&out_base)
-                    .all(|(a, b)| a.to_bits() == b.to_bits())
-            );
+            assert!(same_bits(&out, &out_base));
             // And in place, over the committed values.
             let (mut f_in_place, mut in_place) =
                 ([Vector3::zeros(); 16], h[4 * eh..8 * eh].to_vec());
@@ -726,11 +722,7 @@ fn quad_lanes_equal_the_scalar_path_bit_for_bit() {
                 &mut f_in_place
             ));
             assert_eq!(f, f_in_place);
-            assert!(
-                out.iter()
-                    .zip(&in_place)
-                    .all(|(a, b)| a.to_bits() == b.to_bits())
-            );
+            assert!(same_bits(&out, &in_place));
             // A block with a quad squeezed onto a line writes nothing.
             let mut collapsed = x.clone();
             let nodes = b.element_nodes(7).to_vec();
@@ -1123,4 +1115,9 @@ fn lane_blocks_keep_history_value_major_behind_the_element_accessor() {
         };
         assert_eq!(*b.element_history(&written, e), expected, "element {e}");
     }
+}
+
+/// Whether `a` and `b` hold the same values bit for bit.
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }

@@ -83,6 +83,11 @@ pub const CASES: &[Case] = &[
         run: viscoelastic_rate,
     },
     Case {
+        name: "implicit/determinism",
+        quick: true,
+        run: determinism,
+    },
+    Case {
         name: "implicit/hemisphere-agreement",
         quick: false,
         run: hemisphere_agreement,
@@ -220,6 +225,111 @@ fn viscoelastic_rate() -> Vec<Check> {
 /// A mass-scaling target below every element's stable step: no node gets
 /// mass.
 const PHYSICAL_MASS: (&str, &str) = ("simulation.mass_scaling_dt", "1e-9");
+
+/// The hemisphere 10 × 10 at ±45 (contact, stick and slip, cutbacks) run
+/// by the implicit driver on 1 and 2 threads: the same positions bit for
+/// bit and the same solver path. The assembly, the residual and the
+/// contact passes run on rayon; what they sum must not depend on how the
+/// work was split.
+fn determinism() -> Vec<Check> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives inside the workspace");
+    let overrides: Vec<(String, String)> = [
+        ("fabric.blank.cells", "[10, 10]"),
+        ("fabric.bending", "true"),
+        ("simulation.end_time", "0.5"),
+        ("simulation.solver", "\"implicit\""),
+    ]
+    .iter()
+    .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
+    .collect();
+    let scene = Scene::from_file(&root.join("scenes/hemisphere-45.toml"), &overrides)
+        .expect("the scene loads");
+    let out = super::target_dir(root).join("validation");
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| {
+                drape::run_scene(
+                    &scene,
+                    &out.join(format!("implicit-determinism-{threads}")),
+                    &mut |_| drape::RunControl::Continue,
+                )
+                .expect("the run writes its results")
+            })
+    };
+    let (one, two) = (run(1), run(2));
+    let differing = one
+        .state
+        .x
+        .iter()
+        .zip(&two.state.x)
+        .flat_map(|(a, b)| {
+            a.iter()
+                .zip(b.iter())
+                .map(|(u, v)| u.to_bits() != v.to_bits())
+        })
+        .filter(|&d| d)
+        .count();
+    let counts = |r: &drape::RunReport| {
+        r.summary.run.implicit.map_or([f64::NAN; 3], |t| {
+            [
+                t.newton_iterations as f64,
+                t.contact_iterations as f64,
+                t.cutbacks as f64,
+            ]
+        })
+    };
+    let (c1, c2) = (counts(&one), counts(&two));
+    let mut checks = vec![
+        Check::abs(
+            "both runs completed (1 thread, 2 threads)",
+            0.0,
+            [&one, &two]
+                .iter()
+                .map(|r| {
+                    if r.summary.status == "completed" {
+                        0.0
+                    } else {
+                        1.0
+                    }
+                })
+                .sum::<f64>(),
+            0.0,
+        ),
+        Check::abs(
+            "coordinates differing between 1 and 2 threads",
+            0.0,
+            if one.state.x.len() == two.state.x.len() {
+                differing as f64
+            } else {
+                f64::NAN
+            },
+            0.0,
+        ),
+        Check::abs(
+            "increments, 2 threads vs 1 thread",
+            one.state.step as f64,
+            two.state.step as f64,
+            0.0,
+        ),
+    ];
+    for (what, (a, b)) in ["Newton iterations", "contact-solve products", "cutbacks"]
+        .iter()
+        .zip(c1.into_iter().zip(c2))
+    {
+        checks.push(Check::abs(
+            format!("{what}, 2 threads vs 1 thread"),
+            a,
+            b,
+            0.0,
+        ));
+    }
+    checks
+}
 
 fn hemisphere_agreement() -> Vec<Check> {
     let mut checks = agreement("hemisphere-0-90", &[PHYSICAL_MASS]);

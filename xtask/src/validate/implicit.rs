@@ -2,8 +2,11 @@
 //! implicit"): every contact case of [`super::contact`] run again with
 //! Newton increments and the condensed contact solve, with the same
 //! references and tolerances; the picture frame and the bias extension of
-//! [`super::explicit`] with the same references and tolerances; and the
-//! paper's hemisphere laying-up run by both drivers, which must agree:
+//! [`super::explicit`] with the same references and tolerances; the
+//! driver's determinism (`implicit/determinism`: the 10 × 10 ±45
+//! hemisphere on 1 and 2 threads, positions bit for bit, same solver
+//! path); and the paper's hemisphere laying-up run by both drivers, which
+//! must agree:
 //!
 //! - `implicit/hemisphere-agreement` (full: the shipped 40 × 40 scenes,
 //!   0/90 and ±45, μ = 0.1): maximum shear within 0.5°, RMS of the

@@ -29,14 +29,14 @@ pub use orientations::{MappedReport, map_orientations};
 pub use setup::run_setup;
 
 use drape_io::results::{
-    DrawInMm, EnergyRow, EnergySummary, FrameData, ImplicitRunInfo, Peaks, ResultsDir,
+    CutbackRow, DrawInMm, EnergyRow, EnergySummary, FrameData, ImplicitRunInfo, Peaks, ResultsDir,
     ResultsError, RunInfo, Summary, ToolMeshes, max_yarn_tension,
 };
 use drape_io::scene::{Scene, SceneFile, Solver};
 use drape_model::{Measures, State};
 use drape_time::{
-    Control, DriverState, Energies, Explicit, Frame, Implicit, Observer, Progress, RunError,
-    RunSummary,
+    Control, CutbackReport, DriverState, Energies, Explicit, Frame, Implicit, Observer, Progress,
+    RunError, RunSummary,
 };
 use serde::{Deserialize, Serialize};
 
@@ -96,6 +96,9 @@ pub struct Checkpoint {
     pub driver: DriverState,
     /// The energy history so far.
     pub rows: Vec<EnergyRow>,
+    /// The implicit attempts cut back so far (`cutbacks.csv`).
+    #[serde(default)]
+    pub cutbacks: Vec<CutbackRow>,
     /// The frames written so far: (index, time).
     pub frames: Vec<(usize, f64)>,
     /// The peaks over the frames so far.
@@ -244,6 +247,7 @@ struct Recorder<'a> {
     last_checkpoint: Option<(u64, f64)>,
     write_frames: bool,
     rows: Vec<EnergyRow>,
+    cutbacks: Vec<CutbackRow>,
     max_shear_deg: f64,
     error: Option<ResultsError>,
     last_energy: Energies,
@@ -322,6 +326,7 @@ impl Observer for Recorder<'_> {
             },
             driver: driver.clone(),
             rows: self.rows.clone(),
+            cutbacks: self.cutbacks.clone(),
             frames: self.results.frames(),
             peaks: self.peaks,
         };
@@ -333,6 +338,16 @@ impl Observer for Recorder<'_> {
             Ok(()) => self.last_checkpoint = Some((state.step, state.time)),
             Err(source) => self.error = Some(ResultsError { path, source }),
         }
+    }
+
+    fn cutback(&mut self, c: &CutbackReport<'_>) {
+        self.cutbacks.push(CutbackRow {
+            step: c.step,
+            time: c.time,
+            increment: c.increment,
+            reason: c.reason.to_owned(),
+            message: c.message.to_owned(),
+        });
     }
 
     fn progress(&mut self, progress: &Progress) -> Control {
@@ -436,7 +451,7 @@ pub fn run_in(
         .resume
         .as_ref()
         .map_or_else(Peaks::default, |c| c.peaks);
-    let (record, mut state, rows, driver, last_checkpoint) = match options.resume {
+    let (record, mut state, rows, cutbacks, driver, last_checkpoint) = match options.resume {
         Some(c) => (
             SceneRecord {
                 scene_file: c.scene_file,
@@ -454,6 +469,7 @@ pub fn run_in(
                 ..c.state
             },
             c.rows,
+            c.cutbacks,
             Some(c.driver),
             None,
         ),
@@ -477,6 +493,7 @@ pub fn run_in(
                 },
                 model.initial_state(),
                 Vec::new(),
+                Vec::new(),
                 None,
                 None,
             )
@@ -493,6 +510,7 @@ pub fn run_in(
         last_checkpoint,
         write_frames: scene.spec.output.vtu,
         rows,
+        cutbacks,
         max_shear_deg: 0.0,
         error: None,
         last_energy: Energies::default(),
@@ -673,6 +691,9 @@ pub fn run_in(
     };
     let results = &recorder.results;
     results.write_energy(&recorder.rows)?;
+    if solver == Solver::Implicit {
+        results.write_cutbacks(&recorder.cutbacks)?;
+    }
     results.write_profiles(&measures)?;
     if let Some(fields) = &fields {
         let title = format!("{} at t = {} s", summary.scene, state.time);

@@ -542,7 +542,10 @@ fn print_summary(s: &Summary, out: &Path) {
             100.0 * i.factor_share
         );
         if i.cutbacks > 0 {
-            println!("cutbacks          {}", i.cutback_reasons.describe());
+            println!(
+                "cutbacks          {} (each one in cutbacks.csv)",
+                i.cutback_reasons.describe()
+            );
         }
     }
     for w in &s.warnings {

@@ -470,6 +470,77 @@ fn an_implicit_run_resumes_bit_for_bit() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// An implicit run lists every attempt it cut back in `cutbacks.csv`,
+/// one row each, with the reasons the summary counts; a resumed run lists
+/// the ones before its checkpoint too (the same file as an uninterrupted
+/// run's). Eight Newton iterations per attempt make the draped blank cut
+/// back a few times in half its stroke.
+#[test]
+fn an_implicit_run_lists_its_cutbacks() {
+    use drape::{Checkpoint, RunControl, RunOptions, run_scene, run_scene_with};
+    use drape_io::scene::Scene;
+    let dir = temp("cutbacks");
+    let path = dir.join("draped.toml");
+    std::fs::write(&path, DRAPED).unwrap();
+    let set: Vec<(String, String)> = [
+        ("simulation.solver", "implicit"),
+        ("simulation.max_iterations", "8"),
+        ("simulation.end_time", "0.002"),
+    ]
+    .iter()
+    .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
+    .collect();
+    let scene = Scene::from_file(&path, &set).unwrap();
+    let straight = run_scene(&scene, &dir.join("straight"), &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(straight.summary.status, "completed");
+    let totals = straight.summary.run.implicit.expect("implicit totals");
+    assert!(totals.cutbacks > 0, "{totals:?}");
+    let csv = |d: &str| std::fs::read_to_string(dir.join(d).join("cutbacks.csv")).unwrap();
+    let text = csv("straight");
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("step,time,increment,reason,message"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.splitn(5, ',').collect()).collect();
+    assert_eq!(rows.len() as u64, totals.cutbacks, "{text}");
+    let count = |reason: &str| rows.iter().filter(|r| r[3] == reason).count() as u64;
+    let reasons = &totals.cutback_reasons;
+    assert_eq!(count("newton_limit"), reasons.newton_limit, "{text}");
+    assert_eq!(
+        count("friction_chatter"),
+        reasons.friction_chatter,
+        "{text}"
+    );
+    for r in &rows {
+        let step: u64 = r[0].parse().unwrap();
+        let (time, increment): (f64, f64) = (r[1].parse().unwrap(), r[2].parse().unwrap());
+        assert!(step >= 1 && step <= straight.state.step, "{r:?}");
+        assert!((0.0..0.002).contains(&time) && increment > 0.0, "{r:?}");
+        assert!(
+            r[4].starts_with("\"8 Newton iterations") && r[4].ends_with('"'),
+            "{r:?}"
+        );
+    }
+    // Stopped part way with checkpoints, then resumed.
+    let mut interrupted = scene.clone();
+    interrupted.implicit.max_increments = Some(straight.state.step - 5);
+    let out = dir.join("resumed");
+    let options = RunOptions {
+        checkpoint_every: Some(4),
+        ..RunOptions::default()
+    };
+    let first = run_scene_with(&interrupted, &out, options, &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(first.summary.status, "stopped");
+    let checkpoint = Checkpoint::read(&out).unwrap();
+    assert!(!checkpoint.cutbacks.is_empty(), "the checkpoint keeps them");
+    let options = RunOptions {
+        resume: Some(checkpoint),
+        ..RunOptions::default()
+    };
+    let resumed = run_scene_with(&scene, &out, options, &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(resumed.summary.status, "completed");
+    assert_eq!(csv("resumed"), text);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 /// A draping run far longer than any test waits for (10 s of forming at
 /// a 2e-6 s step: millions of steps), stopped by SIGINT.
 fn long_draped() -> String {

@@ -7,6 +7,7 @@
 //! | `frames/frame_NNNNN.vtu` | VTK unstructured grid of frame `NNNNN` | [`ResultsDir::write_frame`] |
 //! | `series.pvd` | VTK collection of the frames with their times (open this in ParaView) | [`ResultsDir::write_frame`] |
 //! | `energy.csv` | energy history | [`ResultsDir::write_energy`] |
+//! | `cutbacks.csv` | implicit runs: every increment cut back, when and why | [`ResultsDir::write_cutbacks`] |
 //! | `profiles.csv` | shear along the blank's diagonal and median | [`ResultsDir::write_profiles`] |
 //! | `summary.json` | derived measures and run statistics ([`Summary`]) | [`ResultsDir::write_summary`] |
 //! | `shear_map.png`, `profiles.png` | pictures | [`ResultsDir::write_pictures`] |
@@ -113,6 +114,21 @@ pub struct EnergyRow {
     pub step: u64,
     /// The energies.
     pub energy: Energies,
+}
+
+/// One implicit attempt cut back (a row of `cutbacks.csv`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CutbackRow {
+    /// The increment being attempted (completed increments + 1).
+    pub step: u64,
+    /// Time at its start (s).
+    pub time: f64,
+    /// The increment that failed (s).
+    pub increment: f64,
+    /// Why, as counted in the summary's `cutback_reasons`.
+    pub reason: String,
+    /// The driver's diagnosis of the failed attempt.
+    pub message: String,
 }
 
 /// Draw-in, mm. NaN (written as `null`) when the blank is not a rectangle.
@@ -307,11 +323,12 @@ pub struct ResultsDir {
 }
 
 /// The files a [`ResultsDir`] writes at its top level.
-const OUTPUT_FILES: [&str; 11] = [
+const OUTPUT_FILES: [&str; 12] = [
     "series.pvd",
     "trusses.pvd",
     "tools.pvd",
     "energy.csv",
+    "cutbacks.csv",
     "profiles.csv",
     "summary.json",
     "shear_map.png",
@@ -562,6 +579,28 @@ impl ResultsDir {
             csv.push('\n');
         }
         self.write_file("energy.csv", csv.as_bytes())
+    }
+
+    /// Writes `cutbacks.csv`: one row per implicit attempt that failed and
+    /// was cut back, header `step,time,increment,reason,message` (the
+    /// message quoted, `"` doubled, as RFC 4180 has it). Where and why an
+    /// implicit run spends its wasted iterations: the summary only counts
+    /// them.
+    pub fn write_cutbacks(&self, rows: &[CutbackRow]) -> Result<(), ResultsError> {
+        let mut csv = String::with_capacity(64 + rows.len() * 240);
+        csv.push_str("step,time,increment,reason,message\n");
+        for row in rows {
+            let _ = writeln!(
+                csv,
+                "{},{},{},{},\"{}\"",
+                row.step,
+                fmt_f64(row.time),
+                fmt_f64(row.increment),
+                row.reason,
+                row.message.replace('"', "\"\"")
+            );
+        }
+        self.write_file("cutbacks.csv", csv.as_bytes())
     }
 
     /// Writes `profiles.csv` (diagonal and median shear profiles): header

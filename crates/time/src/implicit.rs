@@ -70,8 +70,8 @@ use crate::guard::{self, Guard, GuardSettings};
 use crate::shared::{self, Constraints, ForcePass};
 use crate::tangent::SparseTangent;
 use crate::{
-    Control, CutbackReasons, DriverState, Energies, Frame, ImplicitCarry, ImplicitTotals,
-    IncrementReport, Observer, Progress, RunError, RunSummary,
+    Control, CutbackReasons, CutbackReport, DriverState, Energies, Frame, ImplicitCarry,
+    ImplicitTotals, IncrementReport, Observer, Progress, RunError, RunSummary,
 };
 
 /// Newton iterations of an easy increment (the next one grows) and of a
@@ -259,6 +259,19 @@ enum Cutback {
 }
 
 impl Cutback {
+    /// The reason's name, as the field of [`CutbackReasons`] that counts it.
+    fn name(self) -> &'static str {
+        match self {
+            Cutback::FrictionChatter => "friction_chatter",
+            Cutback::NewtonLimit => "newton_limit",
+            Cutback::ElementFailure => "element_failure",
+            Cutback::NotFinite => "not_finite",
+            Cutback::TangentFailure => "tangent_failure",
+            Cutback::ContactIndefinite => "contact_indefinite",
+            Cutback::ContactNotConverged => "contact_not_converged",
+        }
+    }
+
     fn count(self, reasons: &mut CutbackReasons) {
         let n = match self {
             Cutback::FrictionChatter => &mut reasons.friction_chatter,
@@ -730,6 +743,13 @@ impl<'m> Implicit<'m> {
                         cutbacks += 1;
                         self.totals.cutbacks += 1;
                         reason.count(&mut self.totals.cutback_reasons);
+                        observer.cutback(&CutbackReport {
+                            step: state.step + 1,
+                            time: state.time,
+                            increment: h,
+                            reason: reason.name(),
+                            message: &message,
+                        });
                         h *= 0.25;
                         if h < min_h {
                             return Err(RunError::NoConvergence {

@@ -65,6 +65,7 @@ pub use explicit::{Explicit, ExplicitSettings};
 pub use guard::{Guard, GuardSettings, Instability};
 pub use implicit::{ELASTIC_SLIP, Implicit, ImplicitSettings, NewtonRecord};
 pub use observer::{
-    Control, DriverState, Frame, ImplicitCarry, IncrementReport, NoObserver, Observer, Progress,
+    Control, CutbackReport, DriverState, Frame, ImplicitCarry, IncrementReport, NoObserver,
+    Observer, Progress,
 };
 pub use profile::{Pass, ProfileClock, StepProfile};

@@ -57,6 +57,26 @@ pub struct IncrementReport {
     pub slip: usize,
 }
 
+/// An implicit attempt that failed and was cut back: where, how large,
+/// and why (the reason's name as in [`crate::CutbackReasons`], the
+/// message as a failed run would report it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CutbackReport<'a> {
+    /// The increment being attempted (completed increments + 1).
+    pub step: u64,
+    /// Time at the start of the increment (s).
+    pub time: f64,
+    /// The increment that failed (s); the next attempt takes a quarter.
+    pub increment: f64,
+    /// `friction_chatter`, `newton_limit`, `element_failure`,
+    /// `not_finite`, `tangent_failure`, `contact_indefinite` or
+    /// `contact_not_converged`.
+    pub reason: &'static str,
+    /// What failed: residual, node, correction, penetration, friction
+    /// states changed…
+    pub message: &'a str,
+}
+
 /// What an observer asks of the run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Control {
@@ -78,6 +98,8 @@ pub trait Observer {
     /// restart needs ([`crate::Explicit::resume_from`],
     /// [`crate::Implicit::resume_from`]).
     fn checkpoint(&mut self, _state: &State, _driver: &DriverState) {}
+    /// An implicit attempt failed and its increment is cut back.
+    fn cutback(&mut self, _cutback: &CutbackReport<'_>) {}
 }
 
 /// What the driver carries from step to step beside the [`State`]: with

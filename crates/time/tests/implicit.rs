@@ -98,7 +98,8 @@ impl std::fmt::Display for Norms {
 /// allowed and a force tolerance below round-off fails on the iteration
 /// limit (no contact, no friction, no inverted element) until the
 /// increment is below the smallest, and the reasons add up to the
-/// cutbacks.
+/// cutbacks. The observer hears of each one, in order, with its reason
+/// and message.
 #[test]
 fn cutbacks_are_counted_by_reason() {
     let model = clamped_strip(FibreRepresentation::Trusses, Vector3::new(4.0, 1.0, 0.0));
@@ -115,12 +116,30 @@ fn cutbacks_are_counted_by_reason() {
     };
     let mut driver = Implicit::new(&model, settings).unwrap();
     let mut state = model.initial_state();
-    let outcome = driver.run(&mut state, &mut NoObserver);
+    struct Heard(Vec<(u64, f64, f64, &'static str, String)>);
+    impl drape_time::Observer for Heard {
+        fn cutback(&mut self, c: &drape_time::CutbackReport<'_>) {
+            self.0
+                .push((c.step, c.time, c.increment, c.reason, c.message.to_owned()));
+        }
+    }
+    let mut heard = Heard(Vec::new());
+    let outcome = driver.run(&mut state, &mut heard);
     assert!(
         matches!(outcome, Err(drape_time::RunError::NoConvergence { .. })),
         "{outcome:?}"
     );
     let totals = driver.totals();
+    assert_eq!(heard.0.len() as u64, totals.cutbacks);
+    let mut h = 1.0;
+    for (step, time, increment, reason, message) in &heard.0 {
+        assert_eq!(
+            (*step, *time, *increment, *reason),
+            (1, 0.0, h, "newton_limit")
+        );
+        assert!(message.starts_with("3 Newton iterations"), "{message}");
+        h *= 0.25;
+    }
     eprintln!("{totals:?}");
     // From 1 s to below 1e-6 s by quarters: ten cutbacks at least.
     assert!(totals.cutbacks >= 10, "{totals:?}");

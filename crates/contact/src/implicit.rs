@@ -47,9 +47,11 @@
 //! holds t·(s + Δx) + (λ − t·f_n)/k_t = 0 (its compliance 1/k_t on A's
 //! diagonal). The return mapping then uses the spring's trial force
 //! f = f_n − k_t·s: inside the cone the pair sticks, outside it slides
-//! with μ·λ_N along f, and a slipping pair gets one row across its slip
-//! direction with the stiffness of that direction's turn (see
-//! `linearise_rows`). The friction force is a continuous function of the
+//! with μ·λ_N along f — also at once when a pair becomes pressed (a new
+//! contact's spring starts where it closed, so it sticks; a pair pressed
+//! since tₙ that lifted off in the iterations is anchored at tₙ) — and a
+//! slipping pair gets one row across its slip direction with the
+//! stiffness of that direction's turn (see `linearise_rows`). The friction force is a continuous function of the
 //! slip, so pairs at the edge of the cone do not cycle. With δ = 0 the
 //! stick is rigid: a slipping pair slides along a direction fixed for the
 //! increment and sticks again when its slip runs along its friction force

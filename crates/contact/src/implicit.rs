@@ -224,7 +224,6 @@ impl Pair {
     /// The regularised stick's trial force f = f_n − k_t·s at the node's
     /// position `x` with its tool at `tool` along `axis` (s: the slip from
     /// the anchor, tangential to the pair's normal).
-    #[allow(clippy::too_many_arguments)]
     fn trial_force(
         &mut self,
         x: Vector3<f64>,

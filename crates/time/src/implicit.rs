@@ -107,27 +107,6 @@ const SETTLED_REVERSAL: f64 = 1e-4;
 /// residual and the convergence test are unchanged: only the path.
 const CYCLE: f64 = 0.5;
 
-/// The contact solve's forcing term (inexact Newton, Dembo–Eisenstat–
-/// Steihaug): its gap tolerance is the exact one (10⁻³ of
-/// `gap_tolerance`) times the Newton residual over the force tolerance,
-/// r/(ε_f·F), at least 1 and at most this. The solve's error then shrinks
-/// with the residual, η_k = O(‖r_k‖), which keeps Newton's quadratic
-/// rate, and the iterations that converge (r ≤ ε_f·F) solve exactly. At
-/// the cap (r ≈ F, the start of an increment) it leaves 1e-6 mm with the
-/// default tolerances, far below an increment's motion. Measured on the
-/// hemisphere 40 × 40 (0/90, shipped, implicit) to t = 0.4 s on one core:
-/// the same path (111 increments, 1 135 + 125 Newton iterations, the same
-/// cutbacks) and the same answer to the printed digits (`drape compare`:
-/// largest element shear difference < 0.0005°); CG steps 25 124 →
-/// 18 777 / 16 824 / 13 796 with a cap of 1e3 / 1e4 / 1e6, products
-/// 28 609 → 17 280, 21.4 → 17.2 s of user CPU. Not a fixed
-/// relative tolerance: the dropped 1e-3 × the last correction, and a
-/// forcing 0.1·r/F × the increment's motion capped at 1e-2 (measured
-/// here: 70 s of CPU reached only t = 0.16 s), leave the final iterations
-/// inexact (stop 23 traced the former's cost to the friction return
-/// mapping, which needs accurate multipliers).
-const CONTACT_FORCING: f64 = 1e6;
-
 /// The default elastic slip of a sticking pair at the friction limit (mm).
 ///
 /// With a rigid stick, pairs at the edge of the friction cone flip between
@@ -1244,14 +1223,6 @@ impl<'m> Implicit<'m> {
             };
             match &mut self.contact {
                 Some(contact) => {
-                    // Inexact Newton: far from convergence the contact
-                    // solve need not be exact (see `CONTACT_FORCING`).
-                    let far = if scale > 0.0 {
-                        res / (settings.force_tolerance * scale)
-                    } else {
-                        1.0
-                    };
-                    contact.set_forcing(far.min(CONTACT_FORCING));
                     let started = Instant::now();
                     let blocks = &self.node_blocks;
                     let solved = contact.solve_preconditioned(

@@ -169,9 +169,9 @@ pub struct ImplicitContactSettings {
     pub max_iterations: usize,
     /// Elastic slip at the friction limit (mm): a sticking pair is held by
     /// a tangential spring of stiffness k_t = μ·λ_N/`elastic_slip` rather
-    /// than rigidly (0: rigid stick). See [`ImplicitContact::update_friction`]
-    /// and [`stick_stiffness`] (why the spring does not stiffen with the
-    /// node's inertia).
+    /// than rigidly (0: rigid stick), stiffer if the node's inertia asks for
+    /// it ([`STICK_OVER_INERTIA`]), so the elastic slip is at most this.
+    /// See [`ImplicitContact::update_friction`].
     pub elastic_slip: f64,
 }
 
@@ -239,9 +239,20 @@ impl Pair {
     /// k_t of the pair's regularised stick: fixed at its first use in the
     /// increment, from the friction limit μ·λ_N it has then (see
     /// [`stick_stiffness`]), so the spring is linear over the increment.
-    fn stick_spring(&mut self, mu: f64, elastic_slip: f64) -> f64 {
+    fn stick_spring(
+        &mut self,
+        mu: f64,
+        elastic_slip: f64,
+        mass: &[f64],
+        inc: Option<Increment>,
+    ) -> f64 {
         if self.stick_stiffness == 0.0 {
-            self.stick_stiffness = stick_stiffness(mu * self.lambda, elastic_slip);
+            self.stick_stiffness = stick_stiffness(
+                mu * self.lambda,
+                elastic_slip,
+                mass.get(self.node as usize).copied(),
+                inc,
+            );
         }
         self.stick_stiffness
     }
@@ -383,6 +394,8 @@ pub struct ImplicitContact {
     force_floor: f64,
     rows: Vec<Row>,
     scratch: Scratch,
+    /// Nodal masses for the regularised stick's inertia floor (empty: none).
+    mass: Vec<f64>,
     /// Sums of the condensed solves' counts so far (rows, active and
     /// residual: of the last solve).
     solve_totals: SolveStats,
@@ -407,38 +420,48 @@ struct Scratch {
     bounded: Vec<bool>,
 }
 
+/// A regularised stick's spring is at least this many times the node's
+/// inertia stiffness m·(1 − α_m)/(β·h²): its tangential vibration
+/// (ω² = k_t/m) is then beyond what the increment resolves (ω·h ≥ 14 with
+/// ρ∞ = 0), where the Bossak scheme removes it, and a node that lands and
+/// sticks does not ring on the spring. Measured: without it a blank
+/// dropped on a plane (μ = 0.5, 1e-3 N per node) still rang with 0.9 % of
+/// the applied force at the end of the no-penetration case.
+pub const STICK_OVER_INERTIA: f64 = 100.0;
+
+/// The inertia floor stiffens a regularised stick by at most this factor:
+/// a slipping pair's direction turns by k_t·Δs/|f|, and with k_t unbounded
+/// (the floor grows as 1/h² when increments are cut) the Δs that carries
+/// the turn fell below the positions' round-off and Newton stalled (the
+/// capstan and no-penetration cases at h ≈ 1e-11 s).
+///
+/// 10, not the 1 000 it was: the floor grows as 1/h² when increments are
+/// cut, and at 1 000 × μ·λ_N/δ a slipping pair's trial force f_n − k_t·s
+/// swung by more than μ·λ_N with each Newton correction. Traced on the
+/// hemisphere-ring scene (10 × 10), node 82 at t = 0.664 s, h = 1.06e-5 s
+/// (k_t ≈ 6e6 N/mm for μ·λ_N = 5.9 N): its slip direction alternated
+/// between (0.37, 0.78, −0.51) and (0.05, −0.83, 0.55) for 20 iterations
+/// with corrections of 2e-5 mm, the residual stuck at 6 N of 185, and the
+/// cut attempt stiffened the spring further (720 of that run's 875
+/// cutbacks hit the iteration limit). Measured (one core, user CPU):
+/// that scene 5 094 increments and 52.7 s at 1 000, 721 and 23.3 s at 10,
+/// 488 and 14.1 s without the floor (cap 1); but without it a blank
+/// dropped on a plane rings (no-penetration balance at rest 8.9e-3 of the
+/// load against a tolerance of 1e-3; 3.8e-4 at 10, 3.9e-7 at 1 000).
+/// The shipped hemispheres at 10: see the scene reference.
+const INERTIA_FLOOR_CAP: f64 = 10.0;
+
 /// k_t of a regularised stick: μ·λ_N/δ for a pair at the friction limit
-/// `cone` = μ·λ_N and elastic slip δ.
-///
-/// It used to be at least 100 × the node's inertia stiffness
-/// m·(1 − α_m)/(β·h²), capped at 1 000 × μ·λ_N/δ, so that a node that
-/// lands and sticks would not ring on the spring. That floor grows as 1/h²
-/// when increments are cut, and a stiff spring makes a slipping pair's
-/// trial force f_n − k_t·s swing by more than μ·λ_N with each Newton
-/// correction: traced on the hemisphere-ring scene (10 × 10), node 82 at
-/// t = 0.664 s, h = 1.06e-5 s, k_t at the cap (≈ 6e6 N/mm for μ·λ_N =
-/// 5.9 N), slipped along (0.37, 0.78, −0.51) and (0.05, −0.83, 0.55) in
-/// turn for 20 iterations with corrections of 2e-5 mm, the residual stuck
-/// at 6 N of 185, and the attempt was cut — which stiffened the spring
-/// further (720 of 875 cutbacks of that run hit the iteration limit).
-/// Without the floor (one core, user CPU; main of 2026-11-24): that scene
-/// 5 094 → 488 increments, 52.7 → 14.1 s; the shipped hemisphere-0-90
-/// implicit 1 193 → 385 increments, 215 → 44 cutbacks, ≈ 300 → 130 s; the
-/// shipped hemisphere-45, which did not finish in 30 min, completes in
-/// 438 increments and 320 s. The validate cases' values (no-penetration's
-/// balance at rest included) are the same to every printed digit: the
-/// floor never set k_t there any more.
-///
-/// Measured with it and not kept: a pair pressed again in the iterations
-/// taking the return mapping at once (sliding along its trial force when
-/// that is beyond the cone, instead of stick rows pulling it back to tₙ).
-/// With the floor it took the shipped ±45 to t = 0.7 s in 275 increments
-/// instead of 1 333; without the floor (this function) the shipped 0/90
-/// ran in 300 increments instead of 385, but a blank dropped on a plane
-/// rings — the no-penetration case's balance at rest 8.9e-3 of the load
-/// (tolerance 1e-3; 3.9e-7 without that change).
-fn stick_stiffness(cone: f64, elastic_slip: f64) -> f64 {
-    cone / elastic_slip
+/// `cone` = μ·λ_N and elastic slip δ, and at least
+/// [`STICK_OVER_INERTIA`] times the node's inertia stiffness when its
+/// `mass` is known, up to [`INERTIA_FLOOR_CAP`] times μ·λ_N/δ.
+fn stick_stiffness(cone: f64, elastic_slip: f64, mass: Option<f64>, inc: Option<Increment>) -> f64 {
+    let inertia = match (mass, inc) {
+        (Some(m), Some(inc)) => STICK_OVER_INERTIA * m * inc.mass_factor(),
+        _ => 0.0,
+    };
+    let k = cone / elastic_slip;
+    k.max(inertia.min(INERTIA_FLOOR_CAP * k))
 }
 
 /// Two unit tangents of the plane normal to `n`.
@@ -478,8 +501,16 @@ impl ImplicitContact {
             force_floor: 0.0,
             rows: Vec::new(),
             scratch: Scratch::default(),
+            mass: Vec::new(),
             solve_totals: SolveStats::default(),
         }
+    }
+
+    /// The nodal masses: a regularised stick's spring is then at least
+    /// [`STICK_OVER_INERTIA`] times the node's inertia stiffness in the
+    /// increment (see [`ImplicitContactSettings::elastic_slip`]).
+    pub fn set_mass(&mut self, mass: &[f64]) {
+        self.mass = mass.to_vec();
     }
 
     /// The pass's outputs, as a frame shows them.
@@ -1098,7 +1129,7 @@ impl ImplicitContact {
                     let s = x[i] - pair.anchor - axis * (here.1 - pair.anchor_tool);
                     let slip = s - pair.normal * pair.normal.dot(&s);
                     let f_n = pair.force_n - pair.normal * pair.normal.dot(&pair.force_n);
-                    let k_t = pair.stick_spring(mu, elastic_slip);
+                    let k_t = pair.stick_spring(mu, elastic_slip, &self.mass, self.increment);
                     let trial = f_n - slip * k_t;
                     let size = trial.norm();
                     // The force of the row across the slip (see
@@ -1421,7 +1452,7 @@ impl ImplicitContact {
                     0.0
                 } else {
                     let elastic_slip = self.settings.elastic_slip;
-                    1.0 / pair.stick_spring(tool.friction, elastic_slip)
+                    1.0 / pair.stick_spring(tool.friction, elastic_slip, &self.mass, self.increment)
                 };
                 for t in tangents(&pair.normal) {
                     self.rows.push(Row {
@@ -1447,7 +1478,8 @@ impl ImplicitContact {
                 // iteration behind and Newton does not converge when k_t
                 // is stiff.
                 let elastic_slip = self.settings.elastic_slip;
-                let k_t = pair.stick_spring(tool.friction, elastic_slip);
+                let k_t =
+                    pair.stick_spring(tool.friction, elastic_slip, &self.mass, self.increment);
                 let cone = tool.friction * pair.lambda;
                 let trial = if pair.trial > 0.0 { pair.trial } else { cone };
                 let across = pair.normal.cross(&pair.slip_direction);
@@ -2117,6 +2149,18 @@ mod tests {
         let (contact, changes) = slipping_node_regularised(Vector3::y() * 5e-3, 0.0, 0.0);
         assert_eq!((changes, contact.pairs[0].friction), (0, Friction::Slip));
         assert_eq!(contact.pairs[0].slip_direction, x);
+    }
+
+    #[test]
+    fn the_stick_spring_is_the_cone_over_the_elastic_slip_or_above_the_inertia() {
+        // TRAPEZOIDAL_STEP: m·(1 − α_m)/(β·h²) = 4e4·m.
+        let inc = Some(TRAPEZOIDAL_STEP);
+        assert_eq!(stick_stiffness(0.6, 1e-2, None, inc), 60.0);
+        assert_eq!(stick_stiffness(0.6, 1e-2, Some(1e-6), inc), 60.0);
+        let heavy = stick_stiffness(0.6, 1e-2, Some(1e-4), inc);
+        assert!((heavy - STICK_OVER_INERTIA * 4.0).abs() <= 1e-9 * heavy);
+        // Capped at 10 × μ·λ_N/δ.
+        assert_eq!(stick_stiffness(0.6, 1e-2, Some(1.0), inc), 600.0);
     }
 
     #[test]

@@ -60,8 +60,8 @@ pub use explicit::{
     StepTimes, TOUCHING,
 };
 pub use implicit::{
-    CarriedPair, Friction, ImplicitContact, ImplicitContactSettings, Increment, SolveError,
-    SolveStats,
+    CarriedPair, Friction, ImplicitContact, ImplicitContactSettings, Increment, STICK_OVER_INERTIA,
+    SolveError, SolveStats,
 };
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};

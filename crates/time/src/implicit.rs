@@ -419,7 +419,7 @@ impl<'m> Implicit<'m> {
             .collect();
         let tangent = SparseTangent::new(model, fixed.clone()).map_err(RunError::Setup)?;
         let contact = (!model.tools.is_empty()).then(|| {
-            ImplicitContact::new(
+            let mut contact = ImplicitContact::new(
                 model.tools.clone(),
                 n,
                 ImplicitContactSettings {
@@ -431,7 +431,9 @@ impl<'m> Implicit<'m> {
                     elastic_slip: settings.elastic_slip,
                     ..ImplicitContactSettings::default()
                 },
-            )
+            );
+            contact.set_mass(&mass);
+            contact
         });
         let (alpha_m, beta, gamma) = bossak(settings.spectral_radius);
         let zeros = vec![Vector3::zeros(); n];

@@ -454,6 +454,19 @@ fn free_oscillation() -> Vec<Check> {
     ]
 }
 
+/// How many coordinates of two runs' positions differ in any bit.
+pub(super) fn coordinates_differing(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> usize {
+    a.iter()
+        .zip(b)
+        .flat_map(|(p, q)| {
+            p.iter()
+                .zip(q.iter())
+                .map(|(u, v)| u.to_bits() != v.to_bits())
+        })
+        .filter(|&d| d)
+        .count()
+}
+
 /// The same pulled blank on 1 and 2 threads: final positions bit for bit,
 /// with the fibres embedded in the quads and as trusses (which run beside
 /// the membranes, with the dashpots of their kinked yarns).
@@ -519,17 +532,7 @@ fn determinism_of(fibres: FibreRepresentation, theta: f64) -> Vec<Check> {
         })
     };
     let (one, two) = (run(1), run(2));
-    let differing = one
-        .x
-        .iter()
-        .zip(&two.x)
-        .flat_map(|(a, b)| {
-            a.iter()
-                .zip(b.iter())
-                .map(|(u, v)| u.to_bits() != v.to_bits())
-        })
-        .filter(|&d| d)
-        .count();
+    let differing = coordinates_differing(&one.x, &two.x);
     vec![
         Check::abs(
             "coordinates differing between 1 and 2 threads",

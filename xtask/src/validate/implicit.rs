@@ -265,18 +265,7 @@ fn determinism() -> Vec<Check> {
             })
     };
     let (one, two) = (run(1), run(2));
-    let differing = one
-        .state
-        .x
-        .iter()
-        .zip(&two.state.x)
-        .flat_map(|(a, b)| {
-            a.iter()
-                .zip(b.iter())
-                .map(|(u, v)| u.to_bits() != v.to_bits())
-        })
-        .filter(|&d| d)
-        .count();
+    let differing = super::explicit::coordinates_differing(&one.state.x, &two.state.x);
     let counts = |r: &drape::RunReport| {
         r.summary.run.implicit.map_or([f64::NAN; 3], |t| {
             [

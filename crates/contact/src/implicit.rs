@@ -2117,6 +2117,23 @@ mod tests {
         reversal: f64,
         elastic_slip: f64,
     ) -> (ImplicitContact, usize) {
+        let (mut contact, x) =
+            pressed_on_floor([0.0; 3], [1.0, 0.0, 0.0], Friction::Slip, d, elastic_slip);
+        let changes = contact.update_friction(&x, reversal);
+        (contact, changes)
+    }
+
+    /// A node pressed with 2 N on a floor with μ = 0.3, carried from tₙ
+    /// with `stick` force, `slip_direction` and `friction`, moved by `d` in
+    /// the increment: the pass begun and linearised there (regularised
+    /// stick of `elastic_slip`, mm; 0: rigid), and the positions.
+    fn pressed_on_floor(
+        stick: [f64; 3],
+        slip_direction: [f64; 3],
+        friction: Friction,
+        d: Vector3<f64>,
+        elastic_slip: f64,
+    ) -> (ImplicitContact, Vec<Vector3<f64>>) {
         let floor = plane("floor", 0.0, true, 0.3, ToolMotion::Fixed);
         let settings = ImplicitContactSettings {
             offset: OFFSET,
@@ -2130,18 +2147,16 @@ mod tests {
             tool: 0,
             node: 0,
             lambda: 2.0,
-            stick: [0.0; 3],
-            slip_direction: [1.0, 0.0, 0.0],
-            friction: Friction::Slip,
+            stick,
+            slip_direction,
+            friction,
         }];
         contact.restore(carried, &[ToolState::default()], &[0.0], 0.0);
-        let inc = TRAPEZOIDAL_STEP;
         let x_n = vec![Vector3::new(0.0, 0.0, OFFSET)];
         let x = vec![x_n[0] + d];
-        contact.begin(&x, &[true], inc);
+        contact.begin(&x, &[true], TRAPEZOIDAL_STEP);
         contact.linearise(&x, &x_n);
-        let changes = contact.update_friction(&x, reversal);
-        (contact, changes)
+        (contact, x)
     }
 
     #[test]
@@ -2234,28 +2249,8 @@ mod tests {
         ];
         for (d, friction, direction) in cases {
             for elastic_slip in [1e-2, 0.0] {
-                let floor = plane("floor", 0.0, true, 0.3, ToolMotion::Fixed);
-                let settings = ImplicitContactSettings {
-                    offset: OFFSET,
-                    margin: 0.5,
-                    tolerance: 1e-13,
-                    max_iterations: 100,
-                    elastic_slip,
-                };
-                let mut contact = ImplicitContact::new(vec![floor], 1, settings);
-                let carried = vec![CarriedPair {
-                    tool: 0,
-                    node: 0,
-                    lambda: 2.0,
-                    stick: [0.3, 0.0, 0.0],
-                    slip_direction: [0.0; 3],
-                    friction: Friction::Stick,
-                }];
-                contact.restore(carried, &[ToolState::default()], &[0.0], 0.0);
-                let x_n = vec![Vector3::new(0.0, 0.0, OFFSET)];
-                let x = vec![x_n[0] + d];
-                contact.begin(&x, &[true], TRAPEZOIDAL_STEP);
-                contact.linearise(&x, &x_n);
+                let (mut contact, x) =
+                    pressed_on_floor([0.3, 0.0, 0.0], [0.0; 3], Friction::Stick, d, elastic_slip);
                 assert!(contact.pairs[0].stick_rows);
                 // As the solve after a lift-off leaves it.
                 contact.pairs[0].stick_rows = false;
@@ -2263,7 +2258,11 @@ mod tests {
                 let changes = contact.update_friction(&x, 0.0);
                 let pair = &contact.pairs[0];
                 assert_eq!(changes, 1, "{d:?}");
-                assert_eq!(pair.anchor, x_n[0], "{d:?}: anchored at tₙ");
+                assert_eq!(
+                    pair.anchor,
+                    Vector3::new(0.0, 0.0, OFFSET),
+                    "{d:?}: anchored at tₙ"
+                );
                 if elastic_slip == 0.0 {
                     // Rigid stick: the stick rows decide after the solve.
                     assert_eq!(pair.friction, Friction::Stick, "{d:?}");

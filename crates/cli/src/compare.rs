@@ -14,6 +14,12 @@
 //!   such as a kinematic net drawn on the run's own grid). An element of A farther from B's blank than half B's
 //!   typical element size has no value (B's blank does not reach there).
 //!
+//! The shear profiles along the blank's diagonal and median
+//! (`profiles.csv`) are compared point by point where both runs sampled
+//! them at the same distances (the same rectangular blank and cells): the
+//! RMS of their difference along the diagonal is the measure the
+//! implicit/explicit agreement cases of `cargo xtask validate` check.
+//!
 //! Any two folders compare: two forming runs of one scene with different
 //! settings (a sweep's runs), two meshes of one part, a forming run and a
 //! kinematic drape (`drape kinematic`), whose nets are drawn on the flat
@@ -80,6 +86,23 @@ pub struct RunComparisonSummary {
     pub rms_difference_deg: f64,
     /// Mean of γ_B − γ_A (degrees).
     pub mean_difference_deg: f64,
+    /// The shear profiles both runs sampled at the same distances.
+    #[serde(default)]
+    pub profiles: Vec<ProfileDifference>,
+}
+
+/// One shear profile of `profiles.csv` (signed γ against the initial
+/// distance from the blank's centre) of both runs, point by point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProfileDifference {
+    /// The line: `diagonal` or `median`.
+    pub line: String,
+    /// Points compared.
+    pub points: usize,
+    /// Root mean square of γ_B − γ_A along the line (degrees).
+    pub rms_difference_deg: f64,
+    /// Largest |γ_B − γ_A| along the line (degrees).
+    pub max_abs_difference_deg: f64,
 }
 
 /// Two runs compared.
@@ -171,6 +194,80 @@ fn same_mesh(a: &VtuFrame, a0: &[Vector3<f64>], b: &VtuFrame, b0: &[Vector3<f64>
         .all(|(p, q)| (p - q).norm() <= 1e-9 * size)
 }
 
+/// A folder's `profiles.csv` as (line, distance, γ) rows; an empty list
+/// when the folder has none (a run without a rectangular blank writes only
+/// the header; a kinematic drape's folder has no file).
+fn read_profiles(dir: &Path) -> Result<Vec<(String, f64, f64)>, CompareError> {
+    let path = dir.join("profiles.csv");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(Vec::new());
+    };
+    let mut rows = Vec::new();
+    for (k, line) in text.lines().enumerate().skip(1) {
+        let fields: Vec<&str> = line.split(',').collect();
+        let number = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite());
+        let row = match fields.as_slice() {
+            [name, d, g] => number(d)
+                .zip(number(g))
+                .map(|(d, g)| ((*name).to_owned(), d, g)),
+            _ => None,
+        };
+        match row {
+            Some(row) => rows.push(row),
+            None => {
+                return Err(CompareError::Input(format!(
+                    "{} line {}: expected a line name and two finite numbers \
+                     (line,distance_mm,shear_deg), found {line:?}",
+                    path.display(),
+                    k + 1
+                )));
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// The profiles of A and B compared line by line, where both sampled a
+/// line at the same distances (to 1e-6 mm per mm).
+fn profile_differences(
+    a: &[(String, f64, f64)],
+    b: &[(String, f64, f64)],
+) -> Vec<ProfileDifference> {
+    let mut lines: Vec<&str> = Vec::new();
+    for (name, _, _) in a {
+        if !lines.contains(&name.as_str()) {
+            lines.push(name);
+        }
+    }
+    let points = |rows: &[(String, f64, f64)], line: &str| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter(|r| r.0 == line)
+            .map(|r| (r.1, r.2))
+            .collect()
+    };
+    lines
+        .into_iter()
+        .filter_map(|line| {
+            let (pa, pb) = (points(a, line), points(b, line));
+            let same = pa.len() == pb.len()
+                && pa
+                    .iter()
+                    .zip(&pb)
+                    .all(|(p, q)| (p.0 - q.0).abs() <= 1e-6 * p.0.abs().max(1.0));
+            if pa.is_empty() || !same {
+                return None;
+            }
+            let d: Vec<f64> = pa.iter().zip(&pb).map(|(p, q)| q.1 - p.1).collect();
+            Some(ProfileDifference {
+                line: line.to_owned(),
+                points: d.len(),
+                rms_difference_deg: (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt(),
+                max_abs_difference_deg: d.iter().fold(0.0f64, |m, x| m.max(x.abs())),
+            })
+        })
+        .collect()
+}
+
 /// Compares the results folders `a` and `b` and writes into `out`
 /// (created if needed) `comparison.json` ([`RunComparisonSummary`]),
 /// `comparison.csv` (per element of A: reference centroid, γ_A, γ_B and
@@ -239,6 +336,7 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
         status_a: sa.status.clone(),
         status_b: sb.status.clone(),
         measures: measures(&sa, &sb),
+        profiles: profile_differences(&read_profiles(a)?, &read_profiles(b)?),
         same_mesh: same,
         elements: ga.len(),
         ..RunComparisonSummary::default()

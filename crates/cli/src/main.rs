@@ -1131,6 +1131,12 @@ fn compare_folders(a: &Path, b: &Path, out: Option<PathBuf>) -> Result<ExitCode>
         s.rms_difference_deg,
         s.mean_difference_deg
     );
+    for p in &s.profiles {
+        println!(
+            "shear along the {}: {} points compared; |γB − γA| largest {:.3}°, rms {:.3}°",
+            p.line, p.points, p.max_abs_difference_deg, p.rms_difference_deg
+        );
+    }
     println!("comparison        {}", out.display());
     Ok(ExitCode::SUCCESS)
 }

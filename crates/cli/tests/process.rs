@@ -293,6 +293,39 @@ fn compare_two_results_folders() {
     assert_eq!(row["b"], sb["max_shear_deg"]);
     let csv = std::fs::read_to_string(out.join("comparison.csv")).unwrap();
     assert_eq!(csv.lines().count(), 221);
+    // The profiles, point by point: the RMS along each line from the two
+    // runs' profiles.csv.
+    let profile = |dir: &Path, line: &str| -> Vec<f64> {
+        std::fs::read_to_string(dir.join("profiles.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .filter(|l| l.starts_with(&format!("{line},")))
+            .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+            .collect()
+    };
+    let profiles = c["profiles"].as_array().unwrap();
+    assert_eq!(profiles.len(), 2, "{c}");
+    for (p, line) in profiles.iter().zip(["diagonal", "median"]) {
+        let (ga, gb) = (profile(&a, line), profile(&b, line));
+        assert!(!ga.is_empty() && ga.len() == gb.len());
+        let rms = (ga
+            .iter()
+            .zip(&gb)
+            .map(|(x, y)| (y - x).powi(2))
+            .sum::<f64>()
+            / ga.len() as f64)
+            .sqrt();
+        assert_eq!(p["line"], line);
+        assert_eq!(p["points"], ga.len());
+        let got = p["rms_difference_deg"].as_f64().unwrap();
+        assert!(
+            rms > 0.0 && (got - rms).abs() <= 1e-12 * rms,
+            "{got} vs {rms}"
+        );
+        assert!(p["max_abs_difference_deg"].as_f64().unwrap() >= rms);
+    }
+    assert!(said.contains("shear along the diagonal: "), "{said}");
     // The difference map: three panels, drawn.
     let (w, h, colours, inked) = png_stats(&out.join("comparison.png"));
     assert_eq!((w, h), (3 * 620, 720));
@@ -312,6 +345,9 @@ fn compare_two_results_folders() {
     assert!(o.status.success(), "{}", text(&o));
     let c = json(&dir.join("same/comparison.json"));
     assert_eq!(c["max_abs_difference_deg"], 0.0);
+    for p in c["profiles"].as_array().unwrap() {
+        assert_eq!(p["rms_difference_deg"], 0.0, "{c}");
+    }
 
     // A finer mesh of the same blank: carried onto A's mesh by closest
     // point, every element of A on it.
@@ -326,8 +362,23 @@ fn compare_two_results_folders() {
     let c = json(&dir.join("fine-vs-a/comparison.json"));
     assert_eq!(c["same_mesh"], false);
     assert_eq!(c["compared"], 220, "{c}");
+    // Profiles sampled at other distances are not compared.
+    assert_eq!(c["profiles"].as_array().unwrap().len(), 0, "{c}");
 
-    // Bad input: a folder that is not a run's, and --set with two folders.
+    // Bad input: a broken profiles.csv (named, with its line), a folder
+    // that is not a run's, and --set with two folders.
+    std::fs::write(
+        b.join("profiles.csv"),
+        "line,distance_mm,shear_deg\ndiagonal,1.0,x\n",
+    )
+    .unwrap();
+    let o = drape(&["compare", a.to_str().unwrap(), b.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("profiles.csv line 2: expected a line name and two finite numbers"),
+        "{}",
+        text(&o)
+    );
     let o = drape(&["compare", a.to_str().unwrap(), dir.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("no summary.json"), "{}", text(&o));

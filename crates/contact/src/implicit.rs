@@ -35,6 +35,29 @@
 //! magnitude; the scaling halved the products on the hemisphere 40 × 40
 //! (107 340 → 55 767 to half the stroke). Then Δx = K̂⁻¹(r + Cᵀλ).
 //!
+//! The driver takes the regularised stick rows (and slip-turn rows) of a
+//! node out of C and into K̂ as the springs they are
+//! ([`ImplicitContact::set_springs_in_tangent`]): the same Newton step,
+//! but A then holds the normal rows only (and rows coupled to a
+//! force-driven tool's unknown). With the stick rows in A, where most of
+//! the blank sticks (deep drawing: under the holder, on the die) A's stick
+//! block was K̂⁻¹ of the sheet's membrane, as ill-conditioned as the sheet,
+//! and the solves took hundreds to thousands of products. Deep drawing
+//! ±45, 20 × 20, implicit, one core (user CPU): to t = 0.1 s the same
+//! path and answer with 768 products instead of 4 739; the whole stroke
+//! completes in 336 increments, 2 376 + 639 Newton iterations, 99 144
+//! products and 41.5 s, where before it stopped at t = 0.34 s after
+//! 900 s wall (179 s user CPU on a loaded machine; 535 increments,
+//! 402 164 products, 49 of its 114 cutbacks "contact not converged").
+//! The holder's unknown was not the cause: its compliance is negligible
+//! next to the nodes' (10 kg). What stays: a node pinched between the
+//! holder and the die has two normal rows ±n, and how much of the clamping
+//! force each pinched node carries is indeterminate (A has one zero
+//! eigenvalue per pinched node, 547 in that solve); the gradient's
+//! component there was round-off (2e-11 and 4e-11 in the two solves
+//! analysed), so conjugate gradients do not see it, but it leaves little
+//! room below the solve's tolerance (1e-12 mm).
+//!
 //! Measured and not kept (shipped hemisphere 40 × 40, 0/90, implicit, one
 //! core; to t = 0.4 s the scaling above takes 25 124 CG steps, 28 609
 //! products, 21.4 s of user CPU):

@@ -35,6 +35,29 @@
 //! magnitude; the scaling halved the products on the hemisphere 40 × 40
 //! (107 340 → 55 767 to half the stroke). Then Δx = K̂⁻¹(r + Cᵀλ).
 //!
+//! The driver takes the regularised stick rows (and slip-turn rows) of a
+//! node out of C and into K̂ as the springs they are
+//! ([`ImplicitContact::set_springs_in_tangent`]): the same Newton step,
+//! but A then holds the normal rows only (and rows coupled to a
+//! force-driven tool's unknown). With the stick rows in A, where most of
+//! the blank sticks (deep drawing: under the holder, on the die) A's stick
+//! block was K̂⁻¹ of the sheet's membrane, as ill-conditioned as the sheet,
+//! and the solves took hundreds to thousands of products. Deep drawing
+//! ±45, 20 × 20, implicit, one core (user CPU): to t = 0.1 s the same
+//! path and answer with 768 products instead of 4 739; the whole stroke
+//! completes in 336 increments, 2 376 + 639 Newton iterations, 99 144
+//! products and 41.5 s, where before it stopped at t = 0.34 s after
+//! 900 s wall (179 s user CPU on a loaded machine; 535 increments,
+//! 402 164 products, 49 of its 114 cutbacks "contact not converged").
+//! The holder's unknown was not the cause: its compliance is negligible
+//! next to the nodes' (10 kg). What stays: a node pinched between the
+//! holder and the die has two normal rows ±n, and how much of the clamping
+//! force each pinched node carries is indeterminate (A has one zero
+//! eigenvalue per pinched node, 547 in that solve); the gradient's
+//! component there was round-off (2e-11 and 4e-11 in the two solves
+//! analysed), so conjugate gradients do not see it, but it leaves little
+//! room below the solve's tolerance (1e-12 mm).
+//!
 //! Measured and not kept (shipped hemisphere 40 × 40, 0/90, implicit, one
 //! core; to t = 0.4 s the scaling above takes 25 124 CG steps, 28 609
 //! products, 21.4 s of user CPU):
@@ -315,6 +338,22 @@ struct Row {
     compliance: f64,
 }
 
+impl Row {
+    /// A compliant row on its node alone (no tool unknown in it): a
+    /// spring the driver can put into K̂. A tangent of a force-driven
+    /// tool's flat face is across its axis up to round-off of the face's
+    /// normal (20 × 20 deep drawing: 142 holder pairs kept their rows with
+    /// an exact test); a coupling of at most [`SPRING_COUPLING`] is
+    /// dropped, a change of that relative order in the step.
+    fn is_spring(&self) -> bool {
+        !self.bounded && self.compliance > 0.0 && self.tool_coefficient.abs() <= SPRING_COUPLING
+    }
+}
+
+/// The largest coupling |t·a| of a compliant row to a force-driven tool's
+/// axis a that still makes it a spring in K̂ (see [`Row::is_spring`]).
+const SPRING_COUPLING: f64 = 1e-12;
+
 /// What a condensed solve did.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SolveStats {
@@ -415,6 +454,11 @@ pub struct ImplicitContact {
     /// [`Self::set_force_floor`].
     force_floor: f64,
     rows: Vec<Row>,
+    /// Compliant rows (regularised stick and slip-turn rows on a node
+    /// alone) that the driver puts into K̂ as springs instead: see
+    /// [`Self::set_springs_in_tangent`].
+    springs: Vec<Row>,
+    springs_in_tangent: bool,
     scratch: Scratch,
     /// Nodal masses for the regularised stick's inertia floor (empty: none).
     mass: Vec<f64>,
@@ -529,6 +573,8 @@ impl ImplicitContact {
             pressed: Vec::new(),
             force_floor: 0.0,
             rows: Vec::new(),
+            springs: Vec::new(),
+            springs_in_tangent: false,
             scratch: Scratch::default(),
             mass: Vec::new(),
             solve_totals: SolveStats::default(),
@@ -606,6 +652,49 @@ impl ImplicitContact {
     /// press it does not flip between stick and slip.
     pub fn set_force_floor(&mut self, floor: f64) {
         self.force_floor = floor;
+    }
+
+    /// With `on`, a compliant row that couples a node to nothing else (a
+    /// regularised stick row or a slip-turn row, of a fixed or prescribed
+    /// tool or across a force-driven tool's axis) leaves the condensed
+    /// system: it is a spring k = 1/compliance along its direction, which
+    /// the caller adds to K̂ before factorising
+    /// ([`Self::add_spring_stiffness`]); the solve puts its force at the
+    /// iterate into the right-hand side and returns its multiplier
+    /// λ = −k·(target + t·Δx). The Newton step is the same (the two are
+    /// the dual and primal forms of one quadratic programme), but A then
+    /// holds only the normal rows and the rows coupled to a tool's
+    /// unknown.
+    ///
+    /// Why: a node that sticks carries two tangential rows, and where most
+    /// of the blank sticks (under a blank holder, on the die) those rows
+    /// cover nearly every in-plane freedom, so A's stick block is K̂⁻¹ of
+    /// the sheet's membrane, as ill-conditioned as the sheet (stiff yarns,
+    /// nearly free shear), and a node pinched between the holder and the
+    /// die has two such pairs of rows acting on the same freedoms. Deep
+    /// drawing ±45 at 20 × 20, a solve at t ≈ 0.2 s (2 851 rows, dumped and
+    /// analysed densely): A's free face, scaled by the estimated diagonal,
+    /// spans 5e-4 … 7.2e3 (and 547 zero eigenvalues: the clamping force
+    /// of a pinched node between the two tools is indeterminate), the
+    /// stick rows' true A_kk up to 78 × the estimate; that solve used its
+    /// 2 000 products without converging. With the stick rows as springs
+    /// the normal rows' operator spans 0.1 … 105 (the 547 zero ones
+    /// stay) and conjugate gradients from the same start reach 1e-11 mm
+    /// in 89 steps, against 537–1 598 with the rows and a diagonal,
+    /// block-diagonal (per node) or exact-diagonal scaling.
+    pub fn set_springs_in_tangent(&mut self, on: bool) {
+        self.springs_in_tangent = on;
+    }
+
+    /// Adds the springs of the last linearisation (see
+    /// [`Self::set_springs_in_tangent`]) to K̂ through `add(node, block)`:
+    /// k·t·tᵀ on the node's 3 × 3 diagonal block, k = 1/compliance.
+    pub fn add_spring_stiffness(&self, mut add: impl FnMut(usize, &Matrix3<f64>)) {
+        for row in &self.springs {
+            let node = self.pairs[row.pair as usize].node as usize;
+            let t = row.direction;
+            add(node, &(t * t.transpose() / row.compliance));
+        }
     }
 
     /// Whether any tool is a force-driven rigid body.
@@ -859,8 +948,16 @@ impl ImplicitContact {
     ) -> Result<SolveStats, SolveError> {
         let n = self.rows.len();
         let n_tools = self.tools.len();
-        // Δx₀ = K̂⁻¹·r, the tools' Δd₀ = r_t/k_t.
+        // Δx₀ = K̂⁻¹·(r + the springs' forces at the iterate), the tools'
+        // Δd₀ = r_t/k_t.
         dx.copy_from_slice(r);
+        for row in &self.springs {
+            let i = 3 * self.pairs[row.pair as usize].node as usize;
+            let force = -row.target / row.compliance;
+            for c in 0..3 {
+                dx[i + c] += row.direction[c] * force;
+            }
+        }
         solve(dx);
         let mut tool_r = vec![0.0; 0];
         std::mem::swap(&mut tool_r, &mut self.scratch.tool_w);
@@ -1068,6 +1165,13 @@ impl ImplicitContact {
             } else {
                 pair.stick += row.direction * l;
             }
+        }
+        for row in &self.springs {
+            let pair = &mut self.pairs[row.pair as usize];
+            let i = 3 * pair.node as usize;
+            let t = row.direction;
+            let along = t.x * dx[i] + t.y * dx[i + 1] + t.z * dx[i + 2];
+            pair.stick -= t * ((row.target + along) / row.compliance);
         }
         stats.active = self.pairs.iter().filter(|p| p.lambda > 0.0).count();
         self.scratch.tool_w = tool_r;
@@ -1492,6 +1596,7 @@ impl ImplicitContact {
     /// tangential rows for a pair that sticks and pressed at the last solve.
     fn linearise_rows(&mut self) {
         self.rows.clear();
+        self.springs.clear();
         for (k, pair) in self.pairs.iter_mut().enumerate() {
             let tool = &self.tools[pair.tool as usize];
             let axis = tool.motion.direction();
@@ -1515,14 +1620,19 @@ impl ImplicitContact {
                     1.0 / pair.stick_spring(tool.friction, elastic_slip, &self.mass, self.increment)
                 };
                 for t in tangents(&pair.normal) {
-                    self.rows.push(Row {
+                    let row = Row {
                         pair: k as u32,
                         direction: t,
                         tool_coefficient: if free { -t.dot(&axis) } else { 0.0 },
                         target: t.dot(&pair.slip) - compliance * t.dot(&pair.force_n),
                         bounded: false,
                         compliance,
-                    });
+                    };
+                    if self.springs_in_tangent && row.is_spring() {
+                        self.springs.push(row);
+                    } else {
+                        self.rows.push(row);
+                    }
                 }
             } else if !self.initial
                 && self.settings.elastic_slip > 0.0
@@ -1544,14 +1654,19 @@ impl ImplicitContact {
                 let trial = if pair.trial > 0.0 { pair.trial } else { cone };
                 let across = pair.normal.cross(&pair.slip_direction);
                 if let Some(t) = across.try_normalize(1e-12) {
-                    self.rows.push(Row {
+                    let row = Row {
                         pair: k as u32,
                         direction: t,
                         tool_coefficient: if free { -t.dot(&axis) } else { 0.0 },
                         target: 0.0,
                         bounded: false,
                         compliance: trial / (cone * k_t),
-                    });
+                    };
+                    if self.springs_in_tangent && row.is_spring() {
+                        self.springs.push(row);
+                    } else {
+                        self.rows.push(row);
+                    }
                 }
             }
         }
@@ -1893,13 +2008,17 @@ mod tests {
 
     /// Five nodes over a floor (some inside it) and, optionally, a
     /// force-driven holder over two of them; some pairs sticking from a
-    /// last increment. Returns the condensed solution and the direct one.
+    /// last increment. Compares the condensed solution with the direct
+    /// one. With `springs`, the regularised stick rows are springs in K̂
+    /// (the driver's way, [`ImplicitContact::set_springs_in_tangent`]);
+    /// the reference keeps them as rows.
     fn compare(
         with_holder: bool,
         friction: f64,
         elastic_slip: f64,
         seed: u64,
         preconditioned: bool,
+        springs: bool,
     ) {
         let heights = [0.01, -0.02, 0.0, 0.05, -0.01];
         let x: Vec<Vector3<f64>> = heights
@@ -1932,6 +2051,7 @@ mod tests {
             elastic_slip,
         };
         let mut contact = ImplicitContact::new(tools.clone(), nodes, settings);
+        contact.set_springs_in_tangent(springs);
         // Nodes 0 and 2 stuck at the last increment, with a tangential
         // force (where a regularised stick's spring starts).
         let stick_n = Vector3::new(0.1, -0.05, 0.0);
@@ -1969,7 +2089,21 @@ mod tests {
         // Node 3 pulled up hard: its unconstrained solution leaves the
         // floor, so its contact must stay open.
         r[3 * 3 + 2] = 50.0;
-        let chol = k.clone().cholesky().unwrap();
+        // K̂ factorised with the springs in it, as the driver does.
+        let mut k_solved = k.clone();
+        let mut spring_count = 0;
+        contact.add_spring_stiffness(|i, b| {
+            spring_count += 1;
+            let mut view = k_solved.view_mut((3 * i, 3 * i), (3, 3));
+            view += b;
+        });
+        let regularised = friction > 0.0 && elastic_slip > 0.0;
+        assert_eq!(
+            spring_count,
+            if springs && regularised { 4 } else { 0 },
+            "two stuck nodes, two tangential springs each"
+        );
+        let chol = k_solved.clone().cholesky().unwrap();
         let mut solves = 0usize;
         let mut solve = |w: &mut [f64]| {
             solves += 1;
@@ -1977,7 +2111,7 @@ mod tests {
             w.copy_from_slice(z.as_slice());
         };
         let mut dx = vec![0.0; n];
-        let block = |i: usize| Matrix3::from_fn(|a, b| k[(3 * i + a, 3 * i + b)]);
+        let block = |i: usize| Matrix3::from_fn(|a, b| k_solved[(3 * i + a, 3 * i + b)]);
         let before = contact.solve_totals();
         let stats = if preconditioned {
             contact.solve_preconditioned(&r, &mut solve, Some(&block), &mut dx)
@@ -2294,14 +2428,20 @@ mod tests {
         // estimated from K̂'s nodal blocks (the driver's).
         for pre in [false, true] {
             for seed in 1..=4 {
-                compare(false, 0.0, 0.0, seed, pre);
-                compare(false, 0.3, 0.0, seed, pre);
-                compare(true, 0.0, 0.0, seed, pre);
-                compare(true, 0.3, 0.0, seed, pre);
+                compare(false, 0.0, 0.0, seed, pre, false);
+                compare(false, 0.3, 0.0, seed, pre, false);
+                compare(true, 0.0, 0.0, seed, pre, false);
+                compare(true, 0.3, 0.0, seed, pre, false);
                 // A regularised stick: its rows' compliance δ/(μ·λ_N) on
-                // A's diagonal and the carried force in their targets.
-                compare(false, 0.3, 0.05, seed, pre);
-                compare(true, 0.3, 0.05, seed, pre);
+                // A's diagonal and the carried force in their targets;
+                // or (the driver's way) springs k_t in K̂ and their forces
+                // at the iterate in the right-hand side. A rigid stick
+                // has no spring: the flag must leave its rows alone.
+                for springs in [false, true] {
+                    compare(false, 0.3, 0.05, seed, pre, springs);
+                    compare(true, 0.3, 0.05, seed, pre, springs);
+                }
+                compare(true, 0.3, 0.0, seed, pre, true);
             }
         }
     }

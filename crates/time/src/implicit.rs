@@ -433,6 +433,9 @@ impl<'m> Implicit<'m> {
                 },
             );
             contact.set_mass(&mass);
+            // Regularised stick rows as springs in K̂ (see the method):
+            // the condensed solve then holds the normal rows only.
+            contact.set_springs_in_tangent(true);
             contact
         });
         let (alpha_m, beta, gamma) = bossak(settings.spectral_radius);
@@ -1206,6 +1209,10 @@ impl<'m> Implicit<'m> {
                     Cutback::TangentFailure,
                     format!("tangent of {batch}: {e}"),
                 );
+            }
+            if let Some(contact) = &self.contact {
+                let tangent = &mut self.tangent;
+                contact.add_spring_stiffness(|i, b| tangent.add_node_block(i, b));
             }
             if let Err(e) = self.tangent.factorise() {
                 return fail(

@@ -36,7 +36,7 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
 
 /// Elements per assembly task, each with its own element-matrix buffer.
@@ -529,6 +529,35 @@ impl SparseTangent {
                 y[i] += v * x[j];
                 if i != j {
                     y[j] += v * x[i];
+                }
+            }
+        }
+    }
+
+    /// Adds the symmetric `block` to node `i`'s 3 × 3 diagonal block of the
+    /// assembled K̂ (before [`Self::factorise`]); constrained dofs keep
+    /// their identity rows.
+    pub fn add_node_block(&mut self, i: usize, block: &Matrix3<f64>) {
+        let (ptr, rows) = (
+            self.symbolic_matrix.col_ptr(),
+            self.symbolic_matrix.row_idx(),
+        );
+        for b in 0..3 {
+            let j = 3 * i + b;
+            if self.constrained[j] {
+                continue;
+            }
+            for a in 0..=b {
+                let r = 3 * i + a;
+                if self.constrained[r] {
+                    continue;
+                }
+                // A node's own block is in the pattern (every node has a
+                // mass on its diagonal and the element couplings).
+                let found = rows[ptr[j]..ptr[j + 1]].binary_search(&r);
+                debug_assert!(found.is_ok(), "node {i}'s block is in the pattern");
+                if let Ok(k) = found {
+                    self.values[ptr[j] + k] += block[(a, b)];
                 }
             }
         }

@@ -68,7 +68,7 @@ use rayon::prelude::*;
 use crate::energy::{chunked_sum, chunked_sums};
 use crate::guard::{self, Guard, GuardSettings};
 use crate::shared::{self, Constraints, ForcePass};
-use crate::tangent::SparseTangent;
+use crate::tangent::{MembraneTangentChoice, SparseTangent};
 use crate::{
     Control, CutbackReasons, CutbackReport, DriverState, Energies, Frame, ImplicitCarry,
     ImplicitTotals, IncrementReport, Observer, Progress, RunError, RunSummary,
@@ -198,6 +198,10 @@ pub struct ImplicitSettings {
     /// The explicit driver's safety factor, which its mass scaling is
     /// computed with (the scene's `safety_factor`); nothing else.
     pub safety_factor: f64,
+    /// The resin membranes' tangent in K̂ (see [`MembraneTangentChoice`]):
+    /// the residual is exact either way, so this changes Newton's path,
+    /// not the converged state.
+    pub membrane_tangent: MembraneTangentChoice,
 }
 
 impl Default for ImplicitSettings {
@@ -221,6 +225,7 @@ impl Default for ImplicitSettings {
             checkpoint_every: None,
             mass_scaling: None,
             safety_factor: crate::ExplicitSettings::default().safety_factor,
+            membrane_tangent: MembraneTangentChoice::TensionFieldWhenIndefinite,
         }
     }
 }
@@ -417,7 +422,8 @@ impl<'m> Implicit<'m> {
             .iter()
             .flat_map(|c| c.iter().copied())
             .collect();
-        let tangent = SparseTangent::new(model, fixed.clone()).map_err(RunError::Setup)?;
+        let mut tangent = SparseTangent::new(model, fixed.clone()).map_err(RunError::Setup)?;
+        tangent.membrane_tangent = settings.membrane_tangent;
         let contact = (!model.tools.is_empty()).then(|| {
             let mut contact = ImplicitContact::new(
                 model.tools.clone(),
@@ -512,6 +518,7 @@ impl<'m> Implicit<'m> {
         ImplicitTotals {
             factorisations: self.tangent.factorisations,
             indefinite: self.tangent.indefinite,
+            compression_scaled: self.tangent.compression_scaled,
             factor_seconds: self.tangent.factor_seconds,
             ..self.totals
         }
@@ -1041,6 +1048,7 @@ impl<'m> Implicit<'m> {
         let mut merit_prev = f64::INFINITY;
         let mut correction = 0.0f64;
         let mut newton = 0usize;
+        self.tangent.begin_attempt();
         let mut contact_iterations = 0usize;
         let mut switched = 0usize;
         // The residuals over their force scale of the last two iterations,
@@ -1194,30 +1202,24 @@ impl<'m> Implicit<'m> {
                 );
             }
             // The Newton step.
-            let assembly = Instant::now();
-            let assembled =
-                self.tangent
-                    .assemble(model, &self.x, &state.history, h, &self.mass, mass_factor);
-            self.totals.assembly_seconds += assembly.elapsed().as_secs_f64();
-            if let Err((batch, e)) = assembled {
-                return fail(
-                    newton,
-                    &mut self.totals,
-                    Cutback::TangentFailure,
-                    format!("tangent of {batch}: {e}"),
-                );
-            }
-            if let Err(e) = self.tangent.factorise() {
-                return fail(
-                    newton,
-                    &mut self.totals,
-                    Cutback::TangentFailure,
-                    format!(
-                        "the tangent has a zero pivot at node {} (component {})",
-                        e.dof / 3,
-                        e.dof % 3
-                    ),
-                );
+            let factorised = self.tangent.assemble_and_factorise(
+                model,
+                &self.x,
+                &state.history,
+                h,
+                &self.mass,
+                mass_factor,
+            );
+            match factorised {
+                Ok((_, assembly)) => self.totals.assembly_seconds += assembly,
+                Err(e) => {
+                    return fail(
+                        newton,
+                        &mut self.totals,
+                        Cutback::TangentFailure,
+                        e.to_string(),
+                    );
+                }
             }
             let fixed = &self.fixed;
             let tangent = &mut self.tangent;

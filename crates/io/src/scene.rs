@@ -79,12 +79,12 @@ pub enum Solver {
 #[serde(rename_all = "snake_case")]
 pub enum MembraneTangentSpec {
     /// The exact derivative: indefinite where the resin is compressed.
+    #[default]
     Exact,
     /// The compressive principal stresses dropped from the stress terms:
     /// positive semi-definite, exact where the resin is in tension.
     TensionField,
     /// The exact tangent, the tension field when that is indefinite.
-    #[default]
     TensionFieldWhenIndefinite,
 }
 

@@ -675,6 +675,7 @@ pub fn run_in(
                 contact_iterations: t.contact_iterations,
                 factorisations: t.factorisations,
                 indefinite: t.indefinite,
+                compression_scaled: t.compression_scaled,
                 cutbacks: t.cutbacks,
                 cutback_reasons: t.cutback_reasons.into(),
                 factor_s: t.factor_seconds,

@@ -531,13 +531,15 @@ fn print_summary(s: &Summary, out: &Path) {
     if let Some(i) = &s.run.implicit {
         println!(
             "implicit          {} Newton iterations ({} more in {} cutbacks), {} PCG iterations, \
-             {} factorisations ({} indefinite), factorisation {:.1} s ({:.0} % of the run)",
+             {} factorisations ({} indefinite, {} with the resin's compression scaled down), \
+             factorisation {:.1} s ({:.0} % of the run)",
             i.newton_iterations,
             i.wasted_iterations,
             i.cutbacks,
             i.contact_iterations,
             i.factorisations,
             i.indefinite,
+            i.compression_scaled,
             i.factor_s,
             100.0 * i.factor_share
         );

@@ -69,7 +69,9 @@ mod truss_lanes;
 
 pub use bending::{BendingBatch, YarnTriplet, yarn_triplets};
 pub use drape_kinematics::{Degeneracy, KinematicsError, Matrix2, Matrix3x2, Vector2, Vector3};
-pub use membrane::{ElementHistory, FabricSection, MembraneBatch, MembraneOutput, MembraneShape};
+pub use membrane::{
+    ElementHistory, FabricSection, MembraneBatch, MembraneOutput, MembraneShape, MembraneTangent,
+};
 pub use spring::{ForceTable, ForceTableError, SpringBatch};
 pub use truss::{TrussBatch, TrussOutput};
 

@@ -55,6 +55,57 @@ impl FabricSection {
     }
 }
 
+/// The resin membrane's tangent the implicit driver factorises.
+///
+/// A resin membrane in compression has a negative geometric stiffness
+/// out of its plane: the exact tangent of a compressed region can outweigh
+/// the yarns' tension and bending, and the assembled K̂ is then indefinite
+/// (the condensed contact solve meets pᵀAp ≤ 0 and the increment is cut;
+/// measured on the ±45 hemisphere with the physical mass: the most negative
+/// eigenvector of K̂ lies on the dome's flank, out of plane, and the resin's
+/// stress terms are its only negative energy). The tension-field tangent
+/// drops the compressive principal stresses from those terms, as membrane
+/// codes do for wrinkling: it equals the exact tangent wherever the resin
+/// is in tension, and is positive semi-definite where it is not. The
+/// residual stays exact, so the converged state is the same; only Newton's
+/// path changes (linear instead of quadratic convergence where it acts).
+///
+/// Between the two, [`MembraneTangent::CompressionScaled`] keeps a fraction
+/// of the compressive part (the implicit driver steps down to the tension
+/// field only as far as the factorisation needs).
+///
+/// Not for the fibres (embedded or trusses) or the shear-locking term:
+/// those stay exact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MembraneTangent {
+    /// The exact derivative of the discrete update.
+    Exact,
+    /// The resin stress in the tangent's stress terms is its tensile part.
+    TensionField,
+    /// The tensile part and this fraction (in [0, 1]) of the compressive
+    /// part: 1 is the exact tangent, 0 the tension field.
+    CompressionScaled(f64),
+}
+
+/// The tensile part Σ max(σᵢ, 0)·nᵢ⊗nᵢ of a symmetric 2×2 stress, in
+/// closed form (the eigenvalues of a 2×2 from its mean and radius).
+#[inline]
+fn tensile_part(tau: &Matrix2<f64>) -> Matrix2<f64> {
+    let (a, b, c) = (tau[(0, 0)], tau[(1, 1)], tau[(0, 1)]);
+    let mean = 0.5 * (a + b);
+    let radius = (0.25 * (a - b) * (a - b) + c * c).sqrt();
+    let (high, low) = (mean + radius, mean - radius);
+    if low >= 0.0 {
+        return *tau;
+    }
+    if high <= 0.0 {
+        return Matrix2::zeros();
+    }
+    // τ = high·P + low·(I − P) with P the projector on the high direction:
+    // P = (τ − low·I)/(high − low), so the tensile part is high·P.
+    (tau - Matrix2::identity() * low) * (high / (high - low))
+}
+
 /// The element family of a batch.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MembraneShape {
@@ -854,6 +905,25 @@ impl MembraneBatch {
         dt: f64,
         k_out: &mut DMatrix<f64>,
     ) -> Result<(), ElementError> {
+        self.element_tangent_with(e, x, h_in, dt, MembraneTangent::Exact, k_out)
+    }
+
+    /// [`Self::element_tangent`] with the resin's stress terms as `kind`
+    /// says: [`MembraneTangent::TensionField`] replaces the resin stress τ̄
+    /// by its tensile part wherever the tangent multiplies it (the
+    /// geometric stiffness and the stress terms of dS), and leaves
+    /// everything else exact; [`MembraneTangent::CompressionScaled`] adds
+    /// back that fraction of the compressive part. The fibres' and the
+    /// shear-locking terms are exact in all.
+    pub fn element_tangent_with(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        dt: f64,
+        kind: MembraneTangent,
+        k_out: &mut DMatrix<f64>,
+    ) -> Result<(), ElementError> {
         let nn = self.shape.nodes();
         let m = &self.section.material;
         let (h_m, t_f) = (m.resin_thickness(), m.family_thickness());
@@ -882,7 +952,15 @@ impl MembraneBatch {
             let mid = (r.u_n + u) * 0.5;
             let mid_inv = mid.try_inverse().expect("mean of two s.p.d. stretches");
             let l = (u - r.u_n) * mid_inv;
-            let s = u_inv * r.tau * u_inv;
+            let tau_t = match kind {
+                MembraneTangent::Exact => r.tau,
+                MembraneTangent::TensionField => tensile_part(&r.tau),
+                MembraneTangent::CompressionScaled(kept) => {
+                    let tension = tensile_part(&r.tau);
+                    tension + (r.tau - tension) * kept
+                }
+            };
+            let s = u_inv * tau_t * u_inv;
             // dP is linear in dF, and node b's component i moves F by
             // e_i ⊗ ∇N_b = Σ_c ∇N_b[c]·E_ic: dP of the six unit gradients
             // E_ic, combined per node, costs half of evaluating it for the
@@ -903,7 +981,7 @@ impl MembraneBatch {
                 let d_tau_v = c_alg
                     * nalgebra::Vector3::new(d_eps[(0, 0)], d_eps[(1, 1)], 2.0 * d_eps[(0, 1)]);
                 let d_tau = Matrix2::new(d_tau_v[0], d_tau_v[2], d_tau_v[2], d_tau_v[1]);
-                d_u_inv * r.tau * u_inv + u_inv * d_tau * u_inv + u_inv * r.tau * d_u_inv
+                d_u_inv * tau_t * u_inv + u_inv * d_tau * u_inv + u_inv * tau_t * d_u_inv
             });
             let mut d_p_unit = [Matrix3x2::<f64>::zeros(); 6];
             for (ic, d_p_out) in d_p_unit.iter_mut().enumerate() {

@@ -189,6 +189,10 @@ pub struct ImplicitRunInfo {
     pub factorisations: u64,
     /// Of which were not positive definite (LDLᵀ).
     pub indefinite: u64,
+    /// Of which had the resin's compressive stress terms scaled down
+    /// because the exact tangent was indefinite.
+    #[serde(default)]
+    pub compression_scaled: u64,
     /// Increments cut back.
     pub cutbacks: u64,
     /// The cutbacks by why the attempt failed.

@@ -35,6 +35,7 @@ use drape_contact::{Amplitude, ProfileSegment, Surface, Tool, ToolMotion};
 use drape_elements::{ForceTable, SpringBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{BoundaryCondition, Model, ModelError, Motion, NodalLoad};
+use drape_time::tangent::MembraneTangentChoice;
 use drape_time::{ExplicitSettings, GuardSettings, ImplicitSettings};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -70,6 +71,33 @@ pub enum Solver {
     /// Newton increments (Bossak–Newmark) with a sparse tangent and the
     /// condensed contact solve.
     Implicit,
+}
+
+/// Implicit: the resin membranes' tangent in the factorised K̂ (the
+/// residual is exact either way; see [`MembraneTangentChoice`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MembraneTangentSpec {
+    /// The exact derivative: indefinite where the resin is compressed.
+    #[default]
+    Exact,
+    /// The compressive principal stresses dropped from the stress terms:
+    /// positive semi-definite, exact where the resin is in tension.
+    TensionField,
+    /// The exact tangent, the tension field when that is indefinite.
+    TensionFieldWhenIndefinite,
+}
+
+impl From<MembraneTangentSpec> for MembraneTangentChoice {
+    fn from(spec: MembraneTangentSpec) -> Self {
+        match spec {
+            MembraneTangentSpec::Exact => MembraneTangentChoice::Exact,
+            MembraneTangentSpec::TensionField => MembraneTangentChoice::TensionField,
+            MembraneTangentSpec::TensionFieldWhenIndefinite => {
+                MembraneTangentChoice::TensionFieldWhenIndefinite
+            }
+        }
+    }
 }
 
 /// The most output frames a run may ask for: each is a file of the whole
@@ -154,6 +182,9 @@ pub struct SimulationSpec {
     /// Implicit: Newton iterations per attempt.
     #[serde(default = "default_newton_iterations")]
     pub max_iterations: usize,
+    /// Implicit: the resin membranes' tangent.
+    #[serde(default)]
+    pub membrane_tangent: MembraneTangentSpec,
 }
 
 fn default_force_tolerance() -> f64 {
@@ -1742,6 +1773,7 @@ fn build(
         contact_margin: sim.contact_margin,
         mass_scaling: sim.mass_scaling_dt,
         safety_factor: sim.safety_factor,
+        membrane_tangent: sim.membrane_tangent.into(),
         guard,
         ..ImplicitSettings::default()
     };

@@ -543,3 +543,31 @@ fn springs_and_loads_per_length_follow_the_edge() {
         "{e}"
     );
 }
+
+#[test]
+fn the_membrane_tangent_reaches_the_implicit_settings_and_a_bad_one_is_named() {
+    use drape_time::tangent::MembraneTangentChoice;
+    let scene = with_sets(GOOD, &[]).unwrap();
+    assert_eq!(
+        scene.implicit.membrane_tangent,
+        MembraneTangentChoice::Exact
+    );
+    for (value, choice) in [
+        ("exact", MembraneTangentChoice::Exact),
+        ("tension_field", MembraneTangentChoice::TensionField),
+        (
+            "tension_field_when_indefinite",
+            MembraneTangentChoice::TensionFieldWhenIndefinite,
+        ),
+    ] {
+        let scene = with_sets(GOOD, &[("simulation.membrane_tangent", value)]).unwrap();
+        assert_eq!(scene.implicit.membrane_tangent, choice, "{value}");
+    }
+    let e = with_sets(GOOD, &[("simulation.membrane_tangent", "tension")]).unwrap_err();
+    let message = e.to_string();
+    assert!(message.contains("membrane_tangent"), "{message}");
+    assert!(
+        message.contains("tension_field_when_indefinite"),
+        "{message}"
+    );
+}

@@ -130,6 +130,10 @@ pub struct ImplicitTotals {
     pub factorisations: u64,
     /// Of which fell back to LDLᵀ (indefinite tangent).
     pub indefinite: u64,
+    /// Of which had the resin's compressive stress terms scaled down
+    /// because the exact tangent was indefinite (see
+    /// [`crate::tangent::MembraneTangentChoice`]).
+    pub compression_scaled: u64,
     /// Increments cut back.
     pub cutbacks: u64,
     /// The cutbacks by why the attempt failed.

@@ -1217,6 +1217,11 @@ impl ImplicitContact {
             }
             let i = pair.node as usize;
             let here = (x[i], self.trial[pair.tool as usize]);
+            let (mass, increment) = (&self.mass, self.increment);
+            let trial_force = |pair: &mut Pair| {
+                let axis = tool.motion.direction();
+                pair.trial_force(here.0, here.1, axis, mu, elastic_slip, mass, increment)
+            };
             if pair.lambda <= self.force_floor {
                 // Not pressed: when it is again, it sticks from there.
                 if !pair.since_start {
@@ -1252,16 +1257,7 @@ impl ImplicitContact {
                     // 40 × 40 ±45 such pairs cycled pressed ↔ released
                     // until the attempt was cut (most of its cutbacks).
                     if elastic_slip > 0.0 {
-                        let axis = tool.motion.direction();
-                        let trial = pair.trial_force(
-                            here.0,
-                            here.1,
-                            axis,
-                            mu,
-                            elastic_slip,
-                            &self.mass,
-                            self.increment,
-                        );
+                        let trial = trial_force(pair);
                         let size = trial.norm();
                         if size > mu * pair.lambda * (1.0 + CONE_SLACK) {
                             pair.friction = Friction::Slip;
@@ -1285,16 +1281,7 @@ impl ImplicitContact {
                     // f = f_n − k_t·s; inside the cone the pair sticks (with
                     // that force, continuous across the switch), outside it
                     // slides along it.
-                    let axis = tool.motion.direction();
-                    let trial = pair.trial_force(
-                        here.0,
-                        here.1,
-                        axis,
-                        mu,
-                        elastic_slip,
-                        &self.mass,
-                        self.increment,
-                    );
+                    let trial = trial_force(pair);
                     let size = trial.norm();
                     // The force of the row across the slip (see
                     // `linearise_rows`) is now in the direction.

@@ -15,10 +15,24 @@
 //!   blank, both orientations (in `--quick` since the regularised stick:
 //!   the implicit runs take seconds, the explicit ones without mass scaling
 //!   most of the case's time);
-//! - `implicit/hemisphere-agreement-shipped` (full): the same checks on the
-//!   shipped 40 × 40 scenes with their mass scaling, which both drivers
-//!   honour (the implicit run integrates with the explicit run's scaled
-//!   masses — checked: the same added mass).
+//! - `implicit/hemisphere-shipped` (full): the shipped 40 × 40 scenes with
+//!   their mass scaling (250 × the blank's mass), which both drivers honour
+//!   (checked: the implicit run integrates with the explicit run's scaled
+//!   masses, the same added mass; both complete). The differences in
+//!   maximum shear, draw-in and diagonal profile are reported, not
+//!   checked, with each run's mirror asymmetry along the diagonal (the
+//!   largest difference between the shear at d and at −d): the mass-scaled
+//!   explicit run is not determined to the agreement's 0.5° there. With
+//!   bending its 0/90 diagonal differs between mirror points by 2.24°
+//!   (physical mass: 0.043°; the implicit runs: within 0.02°), so the
+//!   profile RMS between the solvers was 0.85° while the maximum shear
+//!   differed by 0.22° and the draw-ins by 0.18 mm (measured at d99ac1a).
+//!   The mass-scaling error itself is measured against a physical-mass
+//!   reference by `cargo xtask bench work-precision`. Until that session
+//!   this case checked the agreement and failed on that profile; a check
+//!   whose reference is not determined to its tolerance cannot tell a
+//!   driver's error, so the agreement is checked at the physical mass
+//!   (the two cases above) and reported here.
 //!
 //! Both drivers run with yarn bending (`fabric.bending`, SPEC §4 "Beyond
 //! the paper", the preset's rigidities).
@@ -104,9 +118,9 @@ pub const CASES: &[Case] = &[
         run: hemisphere_agreement_coarse,
     },
     Case {
-        name: "implicit/hemisphere-agreement-shipped",
+        name: "implicit/hemisphere-shipped",
         quick: false,
-        run: hemisphere_agreement_shipped,
+        run: hemisphere_shipped,
     },
 ];
 
@@ -324,27 +338,51 @@ fn determinism() -> Vec<Check> {
 }
 
 fn hemisphere_agreement() -> Vec<Check> {
-    let mut checks = agreement("hemisphere-0-90", &[PHYSICAL_MASS]);
-    checks.extend(agreement("hemisphere-45", &[PHYSICAL_MASS]));
+    let mut checks = agreement("hemisphere-0-90", &[PHYSICAL_MASS], Gate::Checked);
+    checks.extend(agreement("hemisphere-45", &[PHYSICAL_MASS], Gate::Checked));
     checks
 }
 
 fn hemisphere_agreement_coarse() -> Vec<Check> {
     let coarse = [("fabric.blank.cells", "[10, 10]"), PHYSICAL_MASS];
-    let mut checks = agreement("hemisphere-0-90", &coarse);
-    checks.extend(agreement("hemisphere-45", &coarse));
+    let mut checks = agreement("hemisphere-0-90", &coarse, Gate::Checked);
+    checks.extend(agreement("hemisphere-45", &coarse, Gate::Checked));
     checks
 }
 
-fn hemisphere_agreement_shipped() -> Vec<Check> {
-    let mut checks = agreement("hemisphere-0-90", &[]);
-    checks.extend(agreement("hemisphere-45", &[]));
+fn hemisphere_shipped() -> Vec<Check> {
+    let mut checks = agreement("hemisphere-0-90", &[], Gate::Reported);
+    checks.extend(agreement("hemisphere-45", &[], Gate::Reported));
     checks
+}
+
+/// Whether [`agreement`] checks the two drivers' formed shapes against the
+/// 0.5° / 0.5 mm tolerances or only reports their differences.
+#[derive(Clone, Copy, PartialEq)]
+enum Gate {
+    Checked,
+    Reported,
+}
+
+/// The largest difference between the shear at a signed distance d along
+/// a profile and at −d (points paired when their distances sum to less
+/// than 1e-6 mm): zero for a mirror-symmetric forming.
+fn mirror_asymmetry(profile: &[drape_model::measures::ProfilePoint]) -> f64 {
+    profile
+        .iter()
+        .filter(|p| p.distance > 0.0)
+        .filter_map(|p| {
+            profile
+                .iter()
+                .find(|q| (q.distance + p.distance).abs() < 1e-6)
+                .map(|q| (p.shear_deg - q.shear_deg).abs())
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Runs the shipped scene `name` (with `overrides`) with each driver and
-/// compares the formed shapes.
-fn agreement(name: &str, overrides: &[(&str, &str)]) -> Vec<Check> {
+/// compares the formed shapes (checked or reported, as `gate` says).
+fn agreement(name: &str, overrides: &[(&str, &str)], gate: Gate) -> Vec<Check> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .expect("xtask lives inside the workspace");
@@ -415,13 +453,13 @@ fn agreement(name: &str, overrides: &[(&str, &str)]) -> Vec<Check> {
                 )
             }
         },
-        Check::abs(
-            format!("{label}: max shear, implicit vs explicit (°)"),
-            explicit.measures.max_shear_deg,
-            implicit.measures.max_shear_deg,
-            0.5,
-        ),
     ];
+    // Each comparison: what, explicit's value, implicit's, tolerance.
+    let mut compared = vec![(
+        "max shear, implicit vs explicit (°)".to_owned(),
+        explicit.measures.max_shear_deg,
+        implicit.measures.max_shear_deg,
+    )];
     let (e, i) = (explicit.measures.draw_in, implicit.measures.draw_in);
     for (what, pick) in [
         (
@@ -431,11 +469,10 @@ fn agreement(name: &str, overrides: &[(&str, &str)]) -> Vec<Check> {
         ("DY", |d| d.dy),
         ("DD", |d| d.dd),
     ] {
-        checks.push(Check::abs(
-            format!("{label}: draw-in {what}, implicit vs explicit (mm)"),
+        compared.push((
+            format!("draw-in {what}, implicit vs explicit (mm)"),
             e.as_ref().map_or(f64::NAN, pick),
             i.as_ref().map_or(f64::NAN, pick),
-            0.5,
         ));
     }
     // The diagonal profiles sample the same elements in the same order.
@@ -453,15 +490,37 @@ fn agreement(name: &str, overrides: &[(&str, &str)]) -> Vec<Check> {
     } else {
         f64::NAN
     };
-    checks.push(Check::abs(
+    compared.push((
         format!(
-            "{label}: RMS of the diagonal profiles' difference ({} points) (°)",
+            "RMS of the diagonal profiles' difference ({} points) (°)",
             pe.len()
         ),
         0.0,
         rms,
-        0.5,
     ));
+    let (asym_e, asym_i) = (mirror_asymmetry(pe), mirror_asymmetry(pi));
+    match gate {
+        Gate::Checked => checks.extend(
+            compared
+                .into_iter()
+                .map(|(what, e, i)| Check::abs(format!("{label}: {what}"), e, i, 0.5)),
+        ),
+        Gate::Reported => {
+            let mut table = format!(
+                "**{label}** (reported, not checked)\n\n| quantity | explicit | implicit | implicit − explicit |\n|---|---|---|---|\n"
+            );
+            for (what, e, i) in &compared {
+                table += &format!("| {what} | {e:.3} | {i:.3} | {:+.3} |\n", i - e);
+            }
+            table += &format!(
+                "| diagonal profile's mirror asymmetry (°) | {asym_e:.3} | {asym_i:.3} | |\n"
+            );
+            super::note(table);
+        }
+    }
+    eprintln!(
+        "{label}: the diagonal profile's mirror asymmetry {asym_e:.3}° explicit, {asym_i:.3}° implicit"
+    );
     if let Some(t) = implicit.summary.run.implicit {
         eprintln!(
             "{label}: explicit {} steps {:.1} s; implicit {} increments, {} Newton ({} wasted), \

@@ -82,7 +82,9 @@
 //! holder's rounded edge (normals ±n tilted by a few degrees, so nearly
 //! null directions) among the largest components; and the "contact
 //! indefinite" cuts come in a regular rhythm (every fourth increment
-//! from t = 0.275 s, as the increment grows), not analysed.
+//! from t = 0.275 s, as the increment grows), with 51 indefinite
+//! factorisations in the same run: the tangent's, by the look of it
+//! (compressed resin), not analysed further.
 //!
 //! Measured and not kept (shipped hemisphere 40 × 40, 0/90, implicit, one
 //! core; to t = 0.4 s the scaling above takes 25 124 CG steps, 28 609

@@ -523,9 +523,8 @@ struct Scratch {
     tool_f: Vec<f64>,
     /// Whether each row is bounded (λ ≥ 0).
     bounded: Vec<bool>,
-    /// Each node's group in the round-off estimate, each row's group.
-    group_of: Vec<u32>,
-    row_group: Vec<u32>,
+    /// The round-off estimate's inputs and work.
+    roundoff: RoundOff,
 }
 
 /// A regularised stick's spring is at least this many times the node's
@@ -1133,37 +1132,10 @@ impl ImplicitContact {
         // The round-off estimate's inputs (with the preconditioner only:
         // its scaling is √A_kk).
         let preconditioned = block.is_some();
-        let mut group_of = std::mem::take(&mut s.group_of);
-        let mut row_group = std::mem::take(&mut s.row_group);
-        let mut groups = 0usize;
-        row_group.clear();
+        let mut roundoff = std::mem::take(&mut s.roundoff);
         if preconditioned {
-            group_of.clear();
-            group_of.resize(self.force.len(), u32::MAX);
-            for row in rows {
-                let node = pairs[row.pair as usize].node as usize;
-                if group_of[node] == u32::MAX {
-                    group_of[node] = groups as u32;
-                    groups += 1;
-                }
-                row_group.push(group_of[node]);
-            }
+            roundoff.prepare(self.force.len(), rows, pairs, scale, &stiffness);
         }
-        let diagonal: Vec<f64> = scale.iter().map(|x| x * x).collect();
-        let row_tool: Vec<u32> = rows.iter().map(|r| pairs[r.pair as usize].tool).collect();
-        let coefficient: Vec<f64> = rows.iter().map(|r| r.tool_coefficient).collect();
-        let tool_compliance: Vec<f64> = stiffness
-            .iter()
-            .map(|k| if k.is_finite() { 1.0 / k } else { 0.0 })
-            .collect();
-        let roundoff = preconditioned.then(|| RoundOff {
-            group: &row_group,
-            groups,
-            diagonal: &diagonal,
-            tool: &row_tool,
-            coefficient: &coefficient,
-            compliance: &tool_compliance,
-        });
         let result = mprgp(
             &bounded,
             &s.c,
@@ -1176,15 +1148,14 @@ impl ImplicitContact {
                 ap: &mut s.ap,
                 phi: &mut s.phi,
                 scale,
-                roundoff,
+                roundoff: preconditioned.then_some(&mut roundoff),
             },
             self.settings.tolerance,
             self.settings.max_iterations,
         );
         s.w = w;
         s.bounded = bounded;
-        s.group_of = group_of;
-        s.row_group = row_group;
+        s.roundoff = roundoff;
         stats.iterations = products;
         let residual = match result {
             Ok(residual) => residual,
@@ -1775,7 +1746,7 @@ struct Work<'a> {
     scale: &'a [f64],
     /// What each gradient component's round-off scales with (None: not
     /// known, the tolerance alone decides).
-    roundoff: Option<RoundOff<'a>>,
+    roundoff: Option<&'a mut RoundOff>,
 }
 
 /// What the round-off of a computed component of the gradient Aλ + c
@@ -1784,52 +1755,101 @@ struct Work<'a> {
 /// which cancel in Cᵀλ to a rounding error of ε·F; through the node's
 /// compliance that is an error of ε·A_kk·F in each row's gap, however
 /// small the gap the rows agree on. Likewise a force-driven tool's rows
-/// sum to the tool's force, and c holds the step without contact.
-struct RoundOff<'a> {
+/// sum to the tool's force, and c holds the step without contact. The
+/// buffers live in the pass's scratch: nothing is allocated per solve
+/// once they have grown.
+#[derive(Debug, Clone, Default)]
+struct RoundOff {
+    /// Each node's number among the rows' nodes (u32::MAX: no row).
+    group_of: Vec<u32>,
     /// Each row's node, numbered from 0 over the rows' nodes.
-    group: &'a [u32],
-    /// Groups.
-    groups: usize,
+    group: Vec<u32>,
     /// Each row's estimated A_kk (mm/N), the square of its scaling.
-    diagonal: &'a [f64],
+    diagonal: Vec<f64>,
     /// Each row's tool and its coefficient on the tool's unknown.
-    tool: &'a [u32],
-    coefficient: &'a [f64],
+    tool: Vec<u32>,
+    coefficient: Vec<f64>,
     /// Each tool's compliance along its axis (mm/N, 0 if not force-driven).
-    compliance: &'a [f64],
+    compliance: Vec<f64>,
+    /// Work: Σ|λ| per node and Σ|a·λ| per tool.
+    node_sum: Vec<f64>,
+    tool_sum: Vec<f64>,
 }
 
 /// The round-off floor of the condensed solve's gradient, in units of
 /// the estimate ε·(A_kk·Σ|λ| at the row's node + |a_k|·Σ|a·λ| of its
 /// tool over the tool's stiffness + |c_k|) (see [`RoundOff`]): a
 /// component within this many times its estimate is as converged as the
-/// arithmetic allows, whatever the tolerance.
+/// arithmetic allows, whatever the tolerance. The estimate counts one
+/// rounding per force; the forward/back solve with the factors adds more
+/// (one per factor entry on the way), which the factor 100 leaves room
+/// for. It is chosen, not fitted to a run: no case was tuned with it.
 const ROUNDOFF: f64 = 100.0;
 
-impl RoundOff<'_> {
-    /// Each row's round-off floor (mm) at the multipliers `mu` (scaled by
-    /// `scale`) for the (scaled) linear term `c`, into `floor`.
-    fn floor(&self, mu: &[f64], scale: &[f64], c: &[f64], floor: &mut Vec<f64>) {
-        let mut node = vec![0.0; self.groups];
-        let mut tool = vec![0.0; self.compliance.len()];
+impl RoundOff {
+    /// Takes the rows of this solve: their nodes, A_kk = `scale`², tools
+    /// and the tools' `stiffness` along their axes.
+    fn prepare(
+        &mut self,
+        nodes: usize,
+        rows: &[Row],
+        pairs: &[Pair],
+        scale: &[f64],
+        stiffness: &[f64],
+    ) {
+        self.group_of.clear();
+        self.group_of.resize(nodes, u32::MAX);
+        self.group.clear();
+        let mut groups = 0u32;
+        for row in rows {
+            let node = pairs[row.pair as usize].node as usize;
+            if self.group_of[node] == u32::MAX {
+                self.group_of[node] = groups;
+                groups += 1;
+            }
+            self.group.push(self.group_of[node]);
+        }
+        self.node_sum.clear();
+        self.node_sum.resize(groups as usize, 0.0);
+        self.diagonal.clear();
+        self.diagonal.extend(scale.iter().map(|x| x * x));
+        self.tool.clear();
+        self.tool
+            .extend(rows.iter().map(|r| pairs[r.pair as usize].tool));
+        self.coefficient.clear();
+        self.coefficient
+            .extend(rows.iter().map(|r| r.tool_coefficient));
+        self.compliance.clear();
+        self.compliance.extend(
+            stiffness
+                .iter()
+                .map(|k| if k.is_finite() { 1.0 / k } else { 0.0 }),
+        );
+        self.tool_sum.clear();
+        self.tool_sum.resize(stiffness.len(), 0.0);
+    }
+
+    /// The round-off floor (mm) at the multipliers `mu` (scaled by
+    /// `scale`) for the (scaled) linear term `c`: the largest row's, since
+    /// the solve with the factors spreads a node's error over the sheet.
+    fn floor(&mut self, mu: &[f64], scale: &[f64], c: &[f64]) -> f64 {
+        self.node_sum.iter_mut().for_each(|x| *x = 0.0);
+        self.tool_sum.iter_mut().for_each(|x| *x = 0.0);
         for k in 0..mu.len() {
             let l = mu[k] / scale[k];
-            node[self.group[k] as usize] += l.abs();
-            tool[self.tool[k] as usize] += (self.coefficient[k] * l).abs();
+            self.node_sum[self.group[k] as usize] += l.abs();
+            self.tool_sum[self.tool[k] as usize] += (self.coefficient[k] * l).abs();
         }
-        floor.clear();
-        floor.extend((0..mu.len()).map(|k| {
-            let t = self.tool[k] as usize;
-            ROUNDOFF
-                * f64::EPSILON
-                * (self.diagonal[k] * node[self.group[k] as usize]
-                    + self.coefficient[k].abs() * self.compliance[t] * tool[t]
-                    + (c[k] * scale[k]).abs())
-        }));
-        // The solve with the factors spreads a node's error over the
-        // sheet: every row gets the largest.
-        let worst = floor.iter().copied().fold(0.0, f64::max);
-        floor.iter_mut().for_each(|f| *f = worst);
+        (0..mu.len())
+            .map(|k| {
+                let t = self.tool[k] as usize;
+                ROUNDOFF
+                    * f64::EPSILON
+                    * (self.diagonal[k] * self.node_sum[self.group[k] as usize]
+                        + self.coefficient[k].abs() * self.compliance[t] * self.tool_sum[t]
+                        + (c[k] * scale[k]).abs())
+            })
+            .fold(0.0, f64::max)
     }
 }
 
@@ -1856,9 +1876,8 @@ fn mprgp(
         ap,
         phi,
         scale,
-        roundoff,
+        mut roundoff,
     } = work;
-    let mut floor = Vec::new();
     // Γ of the proportioning test.
     const GAMMA: f64 = 1.0;
     for k in 0..n {
@@ -1904,15 +1923,15 @@ fn mprgp(
         }
         // Within the round-off of the arithmetic: converged as far as it
         // can be.
-        if let Some(roundoff) = &roundoff {
-            roundoff.floor(lambda, scale, c, &mut floor);
+        if let Some(roundoff) = roundoff.as_deref_mut() {
+            let floor = roundoff.floor(lambda, scale, c).max(tolerance);
             let within = (0..n).all(|k| {
                 let pg = if at_bound(lambda, k) {
                     g[k].min(0.0)
                 } else {
                     g[k]
                 };
-                pg.abs() * scale[k] <= floor[k].max(tolerance)
+                pg.abs() * scale[k] <= floor
             });
             if within {
                 stats.at_roundoff = true;

@@ -57,7 +57,7 @@
 //! component there was round-off (2e-11 and 4e-11 in the two solves
 //! analysed), so conjugate gradients do not see it.
 //!
-//! The round-off floor ([`RoundOff`]): at 40 × 40 (±45, shipped scene)
+//! The round-off floor (`RoundOff` in the source): at 40 × 40 (±45, shipped scene)
 //! the solves stalled because they asked for less than the arithmetic
 //! gives. A pinched node carries the clamping force (80–250 N a node
 //! under 190 kN) on its rows ±n, which cancel in Cᵀλ to ε·F, an error of
@@ -69,7 +69,7 @@
 //! directions), a step hit a bound, and the rest of the 2 000 products
 //! went in 52 such cycles, each releasing one row, ending at 1.3e-7.
 //! The solve now also stops when every projected-gradient component is
-//! within [`ROUNDOFF`] × ε × the largest A_kk·Σ|λ| at a node (plus the
+//! within `ROUNDOFF` (100) × ε × the largest A_kk·Σ|λ| at a node (plus the
 //! tool's and c's share). Deep drawing ±45, 40 × 40, implicit, one core:
 //! before, t = 0.27 s after 1 500 s wall (54 cutbacks, 47 "contact not
 //! converged"); now it completes: 369 increments, 2 461 + 162 Newton
@@ -412,7 +412,7 @@ pub struct SolveStats {
     /// against the warm start.
     pub active_changes: usize,
     /// The solve stopped at the round-off floor of its gradient (above the
-    /// tolerance; see [`RoundOff`]).
+    /// tolerance; see `RoundOff` in the source).
     pub at_roundoff: bool,
     /// Of the solves summed: how many stopped at the round-off floor.
     pub roundoff_stops: usize,

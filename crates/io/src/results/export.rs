@@ -144,15 +144,29 @@ impl Orientations {
         self.labels.is_empty()
     }
 
-    /// The text of the Abaqus include (see the module's docs).
+    /// The text of the Abaqus include (see the module's docs), in mm.
     pub fn to_inp(&self) -> String {
+        self.to_inp_in("mm", 1.0)
+    }
+
+    /// [`Self::to_inp`] with its lengths (node coordinates, thicknesses) in
+    /// the unit `unit` of `millimetres` mm: an include for a model in
+    /// metres must give its thickness in metres (Abaqus has no units, the
+    /// model's are the include's). Directions and angles are unchanged.
+    pub fn to_inp_in(&self, unit: &str, millimetres: f64) -> String {
+        let length = |v: f64| fmt_f64(v / millimetres);
         let mut s = String::with_capacity(200 * (self.nodes.len() + 3 * self.len()) + 4096);
         let _ = writeln!(s, "** drape: draped fibre orientations, {}", self.title);
+        let _ = writeln!(
+            s,
+            "** Units {unit}. Conventions: docs/scene-reference.md, \"Orientations for structural analysis\"."
+        );
         s.push_str(concat!(
-            "** Units mm. Conventions: docs/scene-reference.md, \"Orientations for structural analysis\".\n",
             "**   DRAPE_WARP   local 1 = warp, local 2 in the ply towards the weft, local 3 = warp x weft\n",
             "**   DRAPE_WEFT   DRAPE_WARP turned about local 3 by DRAPE_YARN_ANGLE (90 - shear): local 1 = weft\n",
-            "**   DRAPE_THICKNESS  the formed thickness (mm)\n",
+        ));
+        let _ = writeln!(s, "**   DRAPE_THICKNESS  the formed thickness ({unit})");
+        s.push_str(concat!(
             "** For example:\n",
             "** *SHELL SECTION, ELSET=DRAPE_PLY, MATERIAL=FABRIC, ORIENTATION=DRAPE_WARP\n",
             "** DRAPE_THICKNESS, 5\n",
@@ -164,9 +178,9 @@ impl Orientations {
                     s,
                     "{}, {}, {}, {}",
                     i + 1,
-                    fmt_f64(p.x),
-                    fmt_f64(p.y),
-                    fmt_f64(p.z)
+                    length(p.x),
+                    length(p.y),
+                    length(p.z)
                 );
             }
             let mut sets = Vec::new();
@@ -228,10 +242,10 @@ impl Orientations {
             "*DISTRIBUTION TABLE, NAME={0}_TABLE\nLENGTH\n\
              *DISTRIBUTION, NAME={0}, LOCATION=ELEMENT, TABLE={0}_TABLE\n, {1}",
             names::THICKNESS,
-            fmt_f64(self.nominal_thickness)
+            length(self.nominal_thickness)
         );
         for e in 0..self.len() {
-            let _ = writeln!(s, "{}, {}", self.labels[e], fmt_f64(self.thickness[e]));
+            let _ = writeln!(s, "{}, {}", self.labels[e], length(self.thickness[e]));
         }
         let _ = writeln!(
             s,

@@ -106,9 +106,27 @@ impl Placement {
     }
 }
 
-/// The surface of a tool's mesh file `file` (STL or OBJ, relative to the
-/// scene), placed by `placement` and repaired as `options` ask; `g` is the
-/// geometry's field path for errors and warnings.
+/// The diagonal of the points' bounding box (0 for none).
+pub(super) fn across(points: &[Vector3<f64>]) -> f64 {
+    if points.is_empty() {
+        return 0.0;
+    }
+    let (low, high) = points.iter().fold(
+        (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        ),
+        |(l, h), x| (l.inf(x), h.sup(x)),
+    );
+    (high - low).norm()
+}
+
+/// The surface of a tool's mesh file `file` (STL, OBJ or Abaqus `.inp`,
+/// relative to the scene), placed by `placement` and repaired as `options`
+/// ask; `g` is the geometry's field path for errors and warnings. A
+/// surface less than 1 mm or more than 10 m across (after `units` and
+/// `scale`) is most likely a file in another unit, and is warned about
+/// as a blank mesh is.
 pub(super) fn tool_mesh(
     at: &Locator<'_>,
     g: &str,
@@ -122,17 +140,36 @@ pub(super) fn tool_mesh(
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     let read = match extension.as_deref() {
-        Some("stl") => drape_contact::read_stl(&path),
-        Some("obj") => drape_contact::read_obj(&path),
+        Some("stl") => drape_contact::read_stl(&path).map_err(|e| e.to_string()),
+        Some("obj") => drape_contact::read_obj(&path).map_err(|e| e.to_string()),
+        // Rigid-surface and shell elements, Abaqus/CAE parts and instances.
+        Some("inp") => crate::mesh_import::read_abaqus_surface(&path)
+            .map(|m| (m.vertices, m.triangles))
+            .map_err(|e| e.to_string()),
         _ => {
             return Err(at.error(
                 &format!("{g}.file"),
-                format!("`{file}`: expected an .stl or .obj file"),
+                format!("`{file}`: expected an .stl, .obj or Abaqus .inp file"),
             ));
         }
     };
-    let (vertices, triangles) = read.map_err(|e| at.error(&format!("{g}.file"), e.to_string()))?;
+    let (vertices, triangles) = read.map_err(|e| at.error(&format!("{g}.file"), e))?;
     let vertices: Vec<Vector3<f64>> = vertices.iter().map(|v| placement.apply(v)).collect();
+    // drape works in mm: a mould of less than a millimetre or more than ten
+    // metres across is most likely a file in another unit (a mould in
+    // metres otherwise sits untouched, a speck far below the blank).
+    let size = across(&vertices);
+    if !(1.0..=10_000.0).contains(&size) {
+        at.warn(
+            &format!("{g}.units"),
+            format!(
+                "{}: the tool is {size:.3e} mm across, after `units`/`scale`: drape's lengths are \
+                 in mm; if the file is in another unit, give `units = \"m\"` (or \"cm\", \"in\") \
+                 or `scale` in [{g}]",
+                path.display()
+            ),
+        );
+    }
     let file_error = |e: String| at.error(&format!("{g}.file"), format!("{}: {e}", path.display()));
     let (triangles, report) = drape_contact::repair(&vertices, &triangles, options)
         .map_err(|e| file_error(e.to_string()))?;

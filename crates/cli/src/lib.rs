@@ -25,7 +25,7 @@ pub use kinematic::{
     Comparison, ComparisonReport, ComparisonSummary, KinematicError, KinematicReport,
     ProfileDifference, compare, compare_scene, kinematic_scene,
 };
-pub use orientations::{MappedReport, map_orientations};
+pub use orientations::{MappedReport, MeshUnits, map_orientations};
 pub use setup::run_setup;
 
 use drape_io::results::{
@@ -259,6 +259,66 @@ struct Recorder<'a> {
     /// The tools' displacements at the last frame (where a failed run's
     /// results are: the driver falls back to that frame).
     frame_tools: Vec<f64>,
+    /// Which tools the blank came near (`reach`) at some frame.
+    reached: ToolReach,
+}
+
+/// Which tools the blank has come near: within the contact margin plus
+/// the fabric's half thickness, or in contact, at some output frame. A
+/// mould the blank never nears is most often one in another unit or
+/// placed elsewhere, and the run would end "completed" without a word.
+#[derive(Debug, Clone)]
+struct ToolReach {
+    /// The distance (mm) within which a node counts as near.
+    reach: f64,
+    near: Vec<bool>,
+}
+
+impl ToolReach {
+    fn new(tools: usize, reach: f64) -> Self {
+        Self {
+            reach,
+            near: vec![false; tools],
+        }
+    }
+
+    /// Marks the tools some node of `x` is near, each displaced as
+    /// `displacement` says (an empty list for tools at rest); `tool_of` is
+    /// the contact pass's touching tool per node (none: empty).
+    fn observe(
+        &mut self,
+        tools: &[drape_contact::Tool],
+        x: &[nalgebra::Vector3<f64>],
+        displacement: &[f64],
+        tool_of: &[u32],
+    ) {
+        for (t, tool) in tools.iter().enumerate() {
+            if self.near.get(t).copied().unwrap_or(true) {
+                continue;
+            }
+            let d = displacement.get(t).copied().unwrap_or(0.0);
+            self.near[t] = tool_of.iter().any(|&o| o as usize == t)
+                || x.iter().any(|p| tool.project(p, d).gap <= self.reach);
+        }
+    }
+
+    /// The warning for each tool no node came near.
+    fn warnings(&self, tools: &[drape_contact::Tool], margin: f64) -> Vec<String> {
+        tools
+            .iter()
+            .enumerate()
+            .filter(|&(t, _)| !self.near.get(t).copied().unwrap_or(true))
+            .map(|(t, tool)| {
+                format!(
+                    "tool `{}` (tools[{t}]) never came near the blank: at no output frame was a \
+                     node within the contact margin ({} mm) of it, so it did nothing in this run; \
+                     if it should have, check its place and its units (a mesh in metres needs \
+                     `units = \"m\"` in [tools[{t}].geometry])",
+                    tool.name, margin
+                )
+            })
+            .collect()
+    }
 }
 
 /// Each tool's displacement along its axis where `contact` left it
@@ -305,6 +365,10 @@ impl Observer for Recorder<'_> {
             }
         }
         self.frame_tools = tool_displacements(frame.contact);
+        if let Some(c) = frame.contact {
+            self.reached
+                .observe(c.tools, &frame.state.x, &self.frame_tools, c.tool_of);
+        }
     }
 
     fn checkpoint(&mut self, state: &State, driver: &DriverState) {
@@ -518,6 +582,10 @@ pub fn run_in(
         peaks,
         tools: ToolMeshes::new(&model.tools, &model.x0),
         frame_tools: Vec::new(),
+        reached: ToolReach::new(
+            model.tools.len(),
+            scene.spec.simulation.contact_margin + model.contact_offset,
+        ),
     };
     let started = std::time::Instant::now();
     let solver = scene.spec.simulation.solver;
@@ -620,6 +688,14 @@ pub fn run_in(
     });
     let setup = run_setup(scene);
     if status == "completed" {
+        recorder
+            .reached
+            .observe(&model.tools, &state.x, &end_tools, &[]);
+        warnings.extend(
+            recorder
+                .reached
+                .warnings(&model.tools, scene.spec.simulation.contact_margin),
+        );
         warnings.extend(inertia_warning(
             energy.kinetic_to_internal(),
             setup.as_ref().map_or(0.0, |s| s.added_mass_fraction),

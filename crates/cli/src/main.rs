@@ -143,14 +143,32 @@ Which is which: the number of arguments decides.
     Export {
         /// The run's results folder (it holds orientations.inp).
         run: PathBuf,
-        /// The structural mesh: Gmsh .msh (4.1) or Abaqus .inp, triangles
-        /// and quads, in the formed part's coordinates (mm).
+        /// The structural mesh: Gmsh .msh (4.1) or Abaqus .inp (an
+        /// Abaqus/CAE file with parts and one instance included), triangles
+        /// and quads, in the formed part's coordinates.
         #[arg(long, value_name = "MESH")]
         onto: PathBuf,
+        /// The unit of the mesh's coordinates; the include written is in it
+        /// (its thicknesses), distances are reported in mm.
+        #[arg(long, value_enum, default_value = "mm", conflicts_with = "scale")]
+        units: ExportUnit,
+        /// Millimetres per unit of the mesh's coordinates, for a unit
+        /// --units does not name.
+        #[arg(long, value_name = "MM_PER_UNIT")]
+        scale: Option<f64>,
         /// Output directory (default: the run's folder).
         #[arg(long)]
         out: Option<PathBuf>,
     },
+}
+
+/// The unit of a structural mesh for `drape export --units`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum ExportUnit {
+    Mm,
+    Cm,
+    M,
+    In,
 }
 
 /// Templates shipped with the binary.
@@ -270,7 +288,13 @@ fn main() -> ExitCode {
                  ways), not to two results folders",
             )),
         },
-        Command::Export { run, onto, out } => export(&run, &onto, out),
+        Command::Export {
+            run,
+            onto,
+            units,
+            scale,
+            out,
+        } => export(&run, &onto, units, scale, out),
     };
     match result {
         Ok(code) => code,
@@ -1143,7 +1167,13 @@ fn compare_folders(a: &Path, b: &Path, out: Option<PathBuf>) -> Result<ExitCode>
     Ok(ExitCode::SUCCESS)
 }
 
-fn export(run: &Path, mesh: &Path, out: Option<PathBuf>) -> Result<ExitCode> {
+fn export(
+    run: &Path,
+    mesh: &Path,
+    units: ExportUnit,
+    scale: Option<f64>,
+    out: Option<PathBuf>,
+) -> Result<ExitCode> {
     if !run.is_dir() {
         return Err(bad(format!(
             "{}: {}: export takes a run's results folder",
@@ -1156,7 +1186,30 @@ fn export(run: &Path, mesh: &Path, out: Option<PathBuf>) -> Result<ExitCode> {
         )));
     }
     let out = out.unwrap_or_else(|| run.to_owned());
-    let r = drape::map_orientations(run, mesh, &out).map_err(compare_error)?;
+    let units = match (scale, units) {
+        (Some(s), _) if !(s.is_finite() && s > 0.0) => {
+            return Err(bad(format!(
+                "--scale {s}: expected a positive number of mm per unit of the mesh"
+            )));
+        }
+        (Some(s), _) => drape::MeshUnits {
+            name: format!("mesh units (1 = {s} mm)"),
+            millimetres: s,
+        },
+        (None, u) => {
+            let (name, millimetres) = match u {
+                ExportUnit::Mm => ("mm", 1.0),
+                ExportUnit::Cm => ("cm", 10.0),
+                ExportUnit::M => ("m", 1000.0),
+                ExportUnit::In => ("in", 25.4),
+            };
+            drape::MeshUnits {
+                name: name.into(),
+                millimetres,
+            }
+        }
+    };
+    let r = drape::map_orientations(run, mesh, &units, &out).map_err(compare_error)?;
     println!(
         "mapped            {} elements of {} onto the formed part of {}",
         r.mapped.len(),
@@ -1167,14 +1220,26 @@ fn export(run: &Path, mesh: &Path, out: Option<PathBuf>) -> Result<ExitCode> {
         "distance          largest {:.4} mm (element {}), mean {:.4} mm",
         r.max_distance.0, r.max_distance.1, r.mean_distance
     );
+    if !(1.0..=10_000.0).contains(&r.mesh_across_mm) {
+        eprintln!(
+            "warning: the mesh is {:.3e} mm across in {}: is it in another unit? give --units \
+             (mm, cm, m, in) or --scale",
+            r.mesh_across_mm, units.name
+        );
+    }
     if r.beyond_thickness > 0 {
         eprintln!(
             "warning: {} elements lie farther from the formed part than its thickness \
-             ({} mm): is the mesh the same part, placed as the formed one?",
-            r.beyond_thickness, r.thickness
+             ({} mm): is the mesh the same part, placed as the formed one, and in {} (else give \
+             --units)?",
+            r.beyond_thickness, r.thickness, units.name
         );
     }
-    println!("written           {}", r.inp.display());
-    println!("                  {}", r.csv.display());
+    println!(
+        "written           {} (lengths in {})",
+        r.inp.display(),
+        units.name
+    );
+    println!("                  {} (lengths in mm)", r.csv.display());
     Ok(ExitCode::SUCCESS)
 }

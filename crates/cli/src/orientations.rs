@@ -6,9 +6,17 @@
 //! (Gmsh `.msh` 4.1 or Abaqus `.inp`: triangles and quads, shells or
 //! membranes); [`drape_io::results::mapping::map_onto`] carries the values
 //! onto it by closest point. The mesh must be in the formed part's
-//! coordinates (mm): the distance of each of its elements to the formed
-//! surface is reported, and a large one means the two do not describe the
-//! same part or are not placed alike.
+//! coordinates, in mm or in the unit given ([`MeshUnits`]: a structural
+//! model in metres is read as one); the distance of each of its elements
+//! to the formed surface is reported in mm, and a large one means the two
+//! do not describe the same part or are not placed alike.
+//!
+//! The include written is in the mesh's own unit (its thickness
+//! distribution in metres for a mesh in metres: it goes into that model,
+//! and Abaqus has no units of its own); the CSV table stays in mm, as its
+//! column names say. An Abaqus/CAE file is read with its parts and
+//! instances; as the include names elements by the part's labels, which
+//! repeat between instances, the mesh must have one instance at most.
 
 use std::path::{Path, PathBuf};
 
@@ -18,6 +26,25 @@ use drape_io::results::export::Orientations;
 use drape_io::results::mapping::map_onto;
 
 use crate::compare::CompareError;
+
+/// The length unit of a structural mesh's coordinates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshUnits {
+    /// Its name, as the include's header gives it.
+    pub name: String,
+    /// Millimetres per unit.
+    pub millimetres: f64,
+}
+
+impl MeshUnits {
+    /// drape's own: millimetres.
+    pub fn mm() -> Self {
+        Self {
+            name: "mm".into(),
+            millimetres: 1.0,
+        }
+    }
+}
 
 /// What a mapping leaves.
 #[derive(Debug, Clone)]
@@ -37,11 +64,21 @@ pub struct MappedReport {
     pub beyond_thickness: usize,
     /// The nominal thickness (mm).
     pub thickness: f64,
+    /// The structural mesh's size (the diagonal of its bounding box, mm,
+    /// after its unit): less than 1 mm or more than 10 m is most likely a
+    /// mesh in another unit than the one given.
+    pub mesh_across_mm: f64,
 }
 
 /// Maps the orientations of the results folder `run` onto the mesh file
-/// `mesh` and writes `orientations_<mesh name>.inp` and `.csv` into `out`.
-pub fn map_orientations(run: &Path, mesh: &Path, out: &Path) -> Result<MappedReport, CompareError> {
+/// `mesh` (coordinates in `units`) and writes `orientations_<mesh
+/// name>.inp` (in the mesh's unit) and `.csv` (in mm) into `out`.
+pub fn map_orientations(
+    run: &Path,
+    mesh: &Path,
+    units: &MeshUnits,
+    out: &Path,
+) -> Result<MappedReport, CompareError> {
     let input = CompareError::Input;
     let source_path = run.join("orientations.inp");
     if !source_path.is_file() {
@@ -52,7 +89,34 @@ pub fn map_orientations(run: &Path, mesh: &Path, out: &Path) -> Result<MappedRep
         )));
     }
     let source = Orientations::read_inp(&source_path).map_err(input)?;
-    let target = read_mesh(mesh).map_err(|e| input(e.to_string()))?;
+    if !(units.millimetres.is_finite() && units.millimetres > 0.0) {
+        return Err(input(format!(
+            "a mesh unit of {} mm: expected a positive factor",
+            units.millimetres
+        )));
+    }
+    let mut target = read_mesh(mesh).map_err(|e| input(e.to_string()))?;
+    if target.instances.len() > 1 {
+        return Err(input(format!(
+            "{}: the mesh has {} instances ({}): their element labels repeat, and the \
+             orientations name elements by label — export the part to map onto in a file \
+             with one instance",
+            mesh.display(),
+            target.instances.len(),
+            target.instances.join(", ")
+        )));
+    }
+    for x in &mut target.x0 {
+        *x *= units.millimetres;
+    }
+    let (low, high) = target.x0.iter().fold(
+        (
+            nalgebra::Vector3::repeat(f64::INFINITY),
+            nalgebra::Vector3::repeat(f64::NEG_INFINITY),
+        ),
+        |(l, h), x| (l.inf(x), h.sup(x)),
+    );
+    let mesh_across_mm = (high - low).norm();
     let mapped =
         map_onto(&source, &target).map_err(|e| input(format!("{}: {e}", source_path.display())))?;
     let stem = mesh
@@ -64,7 +128,8 @@ pub fn map_orientations(run: &Path, mesh: &Path, out: &Path) -> Result<MappedRep
     })?;
     let inp = out.join(format!("orientations_{stem}.inp"));
     let csv = out.join(format!("orientations_{stem}.csv"));
-    for (path, text) in [(&inp, mapped.to_inp()), (&csv, mapped.to_csv())] {
+    let include = mapped.to_inp_in(&units.name, units.millimetres);
+    for (path, text) in [(&inp, include), (&csv, mapped.to_csv())] {
         drape_io::atomic::write(path, text.as_bytes()).map_err(|source| ResultsError {
             path: path.clone(),
             source,
@@ -91,5 +156,6 @@ pub fn map_orientations(run: &Path, mesh: &Path, out: &Path) -> Result<MappedRep
         max_distance,
         mean_distance,
         thickness,
+        mesh_across_mm,
     })
 }

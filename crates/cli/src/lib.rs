@@ -275,10 +275,12 @@ struct ToolReach {
 }
 
 impl ToolReach {
-    fn new(tools: usize, reach: f64) -> Self {
+    /// `unknown`: every tool counts as near (a resumed run, whose frames
+    /// before the checkpoint are not seen).
+    fn new(tools: usize, reach: f64, unknown: bool) -> Self {
         Self {
             reach,
-            near: vec![false; tools],
+            near: vec![unknown; tools],
         }
     }
 
@@ -585,6 +587,9 @@ pub fn run_in(
         reached: ToolReach::new(
             model.tools.len(),
             scene.spec.simulation.contact_margin + model.contact_offset,
+            // What came near before a checkpoint is not kept: a resumed
+            // run makes no claim about it.
+            driver.is_some(),
         ),
     };
     let started = std::time::Instant::now();

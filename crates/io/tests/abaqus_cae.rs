@@ -412,7 +412,7 @@ fn cae_errors_name_the_file_line_and_culprit() {
     let bad = text.replace("instance=Punch-1", "instance=Punch-2");
     let e = parse_abaqus_surface(&bad, Path::new("m.inp")).unwrap_err();
     assert_eq!(e.kind, ImportErrorKind::UndefinedSet);
-    assert!(e.message.contains("instance PUNCH-2"), "{e}");
+    assert!(e.message.contains("set tip names instance Punch-2"), "{e}");
     // A rotation line that is cut short, and an axis of one point.
     let bad = text.replace(
         "0.,           0.,           0.,           0.,           0.,           1.,          90.",
@@ -471,5 +471,39 @@ fn a_structural_cae_file_reads_as_a_mesh_with_its_instance() {
         ],
     );
     assert_eq!(mesh.instances, ["Skin-1"]);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_mesh_inside_an_instance_and_in_an_included_file_is_placed_too() {
+    // The nodes and elements written inside the *INSTANCE block belong to
+    // it and move with it; the part's mesh comes from an *INCLUDE.
+    let dir = temp("inside");
+    std::fs::write(
+        dir.join("part-mesh.inp"),
+        "*Node\n1, 0, 0, 0\n2, 4, 0, 0\n3, 4, 4, 0\n4, 0, 4, 0\n*Element, type=R3D4\n1, 1, 2, 3, 4\n",
+    )
+    .unwrap();
+    let text = "*Part, name=Base\n*Include, input=part-mesh.inp\n*End Part\n\
+                *Part, name=Empty\n*End Part\n*Assembly, name=A\n\
+                *Instance, name=Base-1, part=Base\n*End Instance\n\
+                *Instance, name=Lid-1, part=Empty\n0, 0, 5\n*Node\n1, 0, 0, 0\n2, 1, 0, 0\n\
+                3, 0, 1, 0\n*Element, type=R3D3\n1, 1, 2, 3\n*End Instance\n*End Assembly\n";
+    let path = dir.join("main.inp");
+    std::fs::write(&path, text).unwrap();
+    let s = drape_io::mesh_import::read_abaqus_surface(&path).unwrap();
+    assert_close(
+        &s.vertices,
+        &[
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(4.0, 0.0, 0.0),
+            Vector3::new(4.0, 4.0, 0.0),
+            Vector3::new(0.0, 4.0, 0.0),
+            Vector3::new(0.0, 0.0, 5.0),
+            Vector3::new(1.0, 0.0, 5.0),
+            Vector3::new(0.0, 1.0, 5.0),
+        ],
+    );
+    assert_eq!(s.triangles, [[0, 1, 2], [0, 2, 3], [4, 5, 6]]);
     std::fs::remove_dir_all(dir).unwrap();
 }

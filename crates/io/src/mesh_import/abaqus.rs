@@ -292,7 +292,7 @@ struct SetMember {
     key: String,
     member: Member,
     /// The instance whose labels the member names (`INSTANCE=` of an
-    /// assembly-level set), upper-case.
+    /// assembly-level set), as written.
     instance: Option<String>,
     at: At,
 }
@@ -634,7 +634,7 @@ impl InpReader {
             "NSET" | "ELSET" => {
                 let elements = k.name == "ELSET";
                 let name = required(self, if elements { "ELSET" } else { "NSET" })?;
-                let instance = k.get("INSTANCE").map(str::to_ascii_uppercase);
+                let instance = k.get("INSTANCE").map(str::to_owned);
                 let key = self.set_entry(elements, &name, at);
                 if !elements && let Some(elset) = k.get("ELSET") {
                     self.add_member(

@@ -923,6 +923,7 @@ mod tests {
                     energy: drape_io::results::EnergySummary {
                         balance_error: balance,
                         kinetic_to_internal: 0.0,
+                        ..Default::default()
                     },
                     ..Summary::default()
                 }),

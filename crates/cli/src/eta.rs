@@ -121,7 +121,8 @@ mod tests {
         // 8 smoothing times after the change: e⁻⁸ of the old pace left.
         assert!((left / exact - 1.0).abs() < 2e-3, "{left} vs {exact}");
         let average = (10.0 - time) / (time / 100.0);
-        assert!((average / exact - 1.0).abs() > 0.5, "{average} vs {exact}");
+        // The average since the start (0.004 s/s) says 2400 s, 37 % short.
+        assert!((average / exact - 1.0).abs() > 0.3, "{average} vs {exact}");
     }
 
     #[test]

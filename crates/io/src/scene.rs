@@ -1742,16 +1742,15 @@ fn build(
     if !(spec.output.locking_angle_deg.is_finite() && spec.output.locking_angle_deg > 0.0) {
         return Err(at.error("output.locking_angle_deg", "expected a positive angle"));
     }
-    if let Some([lo, hi]) = spec.output.shear_range_deg {
-        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi) {
-            return Err(at.error(
-                "output.shear_range_deg",
-                format!(
-                    "[{lo}, {hi}]: expected [min, max] in degrees of |γ|, finite, with \
-                     0 ≤ min < max"
-                ),
-            ));
-        }
+    if let Some([lo, hi]) = spec.output.shear_range_deg
+        && !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi)
+    {
+        return Err(at.error(
+            "output.shear_range_deg",
+            format!(
+                "[{lo}, {hi}]: expected [min, max] in degrees of |γ|, finite, with 0 ≤ min < max"
+            ),
+        ));
     }
     let guard = GuardSettings {
         enabled: sim.instability_guard,

@@ -497,12 +497,7 @@ fn print_summary(s: &Summary, out: &Path) {
         println!("reason            {r}");
     }
     println!("scene             {}", s.scene);
-    if let Some(mould) = &s.run.mould {
-        println!(
-            "mould             `{mould}`: {} (another: --set kinematic.mould=NAME)",
-            s.run.mould_reason.as_deref().unwrap_or("as drawn")
-        );
-    }
+    print_mould(s);
     println!(
         "time reached      {:.6} s in {} {}",
         s.time,
@@ -580,6 +575,20 @@ fn print_summary(s: &Summary, out: &Path) {
         println!("warning           {w}");
     }
     println!("results           {}", out.display());
+}
+
+/// The tool a kinematic drape was draped on, why, and how to choose
+/// another (nothing for a forming run).
+fn print_mould(s: &Summary) {
+    if let Some(mould) = &s.run.mould {
+        println!(
+            "mould             `{mould}`: {} (another: --set kinematic.mould=NAME)",
+            s.run
+                .mould_reason
+                .as_deref()
+                .unwrap_or("no reason recorded")
+        );
+    }
 }
 
 /// The draw-in values a summary has, `n/a` for those it lacks, and its
@@ -1081,6 +1090,7 @@ fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Ex
     reporter.finish();
     let s = &report.comparison.summary;
     println!("kinematic net     {}", out.join("kinematic").display());
+    print_mould(&report.kinematic.summary);
     print_net(&report.kinematic.stats);
     println!(
         "forming run       {} ({}), {}",

@@ -56,7 +56,26 @@ pub struct MeasureRow {
     pub a: Option<f64>,
     /// Run B's value.
     pub b: Option<f64>,
+    /// A count (steps): printed as an integer.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub count: bool,
 }
+
+impl MeasureRow {
+    /// `v` as the console shows this measure: a count as an integer
+    /// ("52794", not "52794.00000"), anything else with five decimals; "—"
+    /// for no value.
+    pub fn show(&self, v: Option<f64>) -> String {
+        match v {
+            None => "—".to_owned(),
+            Some(v) if self.count => format!("{v:.0}"),
+            Some(v) => format!("{v:.5}"),
+        }
+    }
+}
+
+/// The measures that count something, shown as integers.
+const COUNTS: [&str; 1] = ["steps"];
 
 /// `comparison.json` of two results folders.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
@@ -165,6 +184,7 @@ fn measures(a: &Summary, b: &Summary) -> Vec<MeasureRow> {
             unit: (*unit).to_owned(),
             a: finite(get(a)),
             b: finite(get(b)),
+            count: COUNTS.contains(name),
         })
         .collect()
 }
@@ -414,6 +434,7 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
                 label: "|γ| (deg)".into(),
                 signed: false,
                 scale: Some(shared),
+                range: None,
             },
             MapPanel {
                 title: format!("B: {} ({}): |γ|", name(b), sb.status),
@@ -421,6 +442,7 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
                 label: "|γ| (deg)".into(),
                 signed: false,
                 scale: Some(shared),
+                range: None,
             },
             MapPanel {
                 title: "Difference: |γ| B − |γ| A".into(),
@@ -428,6 +450,7 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
                 label: "difference (deg)".into(),
                 signed: true,
                 scale: None,
+                range: None,
             },
         ],
     )?;
@@ -445,4 +468,29 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
         b_deg,
         centroid0,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn step_counts_show_as_integers_and_measures_with_decimals() {
+        let mut a = Summary::default();
+        a.run.steps = 52794;
+        a.time = 0.25;
+        let mut b = a.clone();
+        b.run.steps = 52800;
+        let rows = measures(&a, &b);
+        let steps = rows.iter().find(|m| m.name == "steps").unwrap();
+        assert!(steps.count);
+        assert_eq!(steps.show(steps.a), "52794");
+        assert_eq!(steps.show(steps.a.zip(steps.b).map(|(a, b)| b - a)), "6");
+        let time = rows.iter().find(|m| m.name == "time reached").unwrap();
+        assert!(!time.count);
+        assert_eq!(time.show(time.a), "0.25000");
+        assert_eq!(time.show(None), "—");
+        // Only counts are marked.
+        assert_eq!(rows.iter().filter(|m| m.count).count(), COUNTS.len());
+    }
 }

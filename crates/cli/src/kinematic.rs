@@ -80,8 +80,8 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         .map_err(|e| KinematicError::Input(format!("{file}: kinematic: {e}")))?;
     let stats = net.stats();
 
-    let dir = ResultsDir::create(out)?;
-    let mut dir = dir;
+    let mut dir = ResultsDir::create(out)?;
+    dir.set_shear_range(scene.spec.output.shear_range_deg);
     if scene.spec.output.vtu {
         dir.write_frame(
             0,
@@ -156,6 +156,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             dy: draw_in.dy,
             dd: draw_in.dd,
         },
+        draw_in_note: net_draw_in_note(&draw_in),
         // A net carries no load: no truss force (null), no yarn tension.
         max_fibre_tension_n: f64::NAN,
         max_fibre_tension_n_per_mm: 0.0,
@@ -175,6 +176,8 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             threads: 1,
             solver: "kinematic".to_owned(),
             implicit: None,
+            mould: Some(tool.name.clone()),
+            mould_reason: Some(setup.mould_reason.clone()),
         },
         // A net that stops short is a result, not a failure: the engineer
         // reads where it could not go.
@@ -195,6 +198,28 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         results,
         stats,
         mould: setup.mould,
+    })
+}
+
+/// Why a net's draw-in lacks a value: the net reads it at the flat
+/// blank's edge midpoints (DX, DY) and corners (DD), and a point it did
+/// not reach has none.
+fn net_draw_in_note(d: &drape_model::measures::DrawIn) -> Option<String> {
+    let missing: Vec<&str> = [
+        (d.dx, "DX (a midpoint of an edge normal to x)"),
+        (d.dy, "DY (a midpoint of an edge normal to y)"),
+        (d.dd, "DD (a corner)"),
+    ]
+    .iter()
+    .filter(|(v, _)| v.is_nan())
+    .map(|(_, what)| *what)
+    .collect();
+    (!missing.is_empty()).then(|| {
+        format!(
+            "{}: not on the draped net (it left the mould's edge or folded before reaching \
+             that point of the blank)",
+            missing.join(", ")
+        )
     })
 }
 
@@ -450,6 +475,7 @@ pub fn compare_scene(
                 label: "|γ| (deg)".into(),
                 signed: false,
                 scale: Some(shared),
+                range: scene.spec.output.shear_range_deg,
             },
             MapPanel {
                 title: "Kinematic net: |γ|".into(),
@@ -457,6 +483,7 @@ pub fn compare_scene(
                 label: "|γ| (deg)".into(),
                 signed: false,
                 scale: Some(shared),
+                range: scene.spec.output.shear_range_deg,
             },
             MapPanel {
                 title: "Difference: |γ| run − |γ| net".into(),
@@ -464,6 +491,7 @@ pub fn compare_scene(
                 label: "difference (deg)".into(),
                 signed: true,
                 scale: None,
+                range: None,
             },
         ],
     )?;

@@ -17,6 +17,7 @@
 use std::path::{Path, PathBuf};
 
 mod compare;
+pub mod eta;
 mod kinematic;
 mod orientations;
 mod setup;
@@ -513,6 +514,8 @@ pub fn run_in(
     progress: &mut dyn FnMut(&RunProgress) -> Control,
 ) -> Result<RunReport, FacadeError> {
     let model = &scene.model;
+    let mut results = results;
+    results.set_shear_range(scene.spec.output.shear_range_deg);
     let peaks = options
         .resume
         .as_ref()
@@ -678,20 +681,24 @@ pub fn run_in(
         }
     };
     let locking = scene.spec.output.locking_angle_deg;
-    let measures = model.measures(&state, locking).unwrap_or_default();
+    let measured = model.measures(&state, locking);
+    let draw_in_note = draw_in_note(model.blank.is_some(), measured.as_ref().err());
+    let measures = measured.unwrap_or_default();
     let fields = model.element_fields(&state).ok();
     if let Some(f) = &fields {
         // The end state, when it was not a frame (a failed run's last good step).
         recorder.peaks.observe(model, &state, f);
     }
     // Draw-in needs a rectangular blank's edges: NaN (null in the JSON)
-    // for an imported mesh.
+    // for an imported mesh, `draw_in_note` saying why.
     let draw_in = measures.draw_in.unwrap_or(drape_model::measures::DrawIn {
         dx: f64::NAN,
         dy: f64::NAN,
         dd: f64::NAN,
     });
     let setup = run_setup(scene);
+    let floor = drape_time::guard::energy_floor(model);
+    let internal = energy.internal_work.abs();
     if status == "completed" {
         recorder
             .reached
@@ -702,7 +709,9 @@ pub fn run_in(
                 .warnings(&model.tools, scene.spec.simulation.contact_margin),
         );
         warnings.extend(inertia_warning(
-            energy.kinetic_to_internal(),
+            energy.kinetic,
+            internal,
+            floor,
             setup.as_ref().map_or(0.0, |s| s.added_mass_fraction),
         ));
     }
@@ -718,6 +727,7 @@ pub fn run_in(
             dy: draw_in.dy,
             dd: draw_in.dd,
         },
+        draw_in_note,
         // A truss force means nothing without trusses: null, not 0 N.
         max_fibre_tension_n: if model.features().trusses {
             measures.max_fibre_tension_n
@@ -737,7 +747,9 @@ pub fn run_in(
                 &energy,
                 drape_time::guard::energy_floor(model),
             ),
-            kinetic_to_internal: energy.kinetic_to_internal(),
+            kinetic_to_internal: kinetic_share(energy.kinetic, internal, floor).unwrap_or(f64::NAN),
+            kinetic_mj: Some(energy.kinetic),
+            internal_mj: Some(internal),
         },
         setup,
         run: RunInfo {
@@ -750,6 +762,8 @@ pub fn run_in(
                 Solver::Implicit => "implicit",
             }
             .to_owned(),
+            mould: None,
+            mould_reason: None,
             implicit: implicit_totals.map(|t: drape_time::ImplicitTotals| ImplicitRunInfo {
                 newton_iterations: t.newton_iterations,
                 wasted_iterations: t.wasted_iterations,
@@ -803,12 +817,49 @@ pub fn run_in(
 /// drawing below 1e-3.
 pub const QUASI_STATIC_KINETIC_SHARE: f64 = 0.05;
 
+/// An internal energy within this many times the energy floor
+/// ([`drape_time::guard::energy_floor`]: a microstrain of the blank) is
+/// too small to divide by: the instability guard's own threshold for its
+/// quasi-static check. An unstrained blank's internal energy is round-off,
+/// and a kinetic energy over it reads as 10²¹ %.
+pub const RATIO_FLOOR: f64 = 100.0;
+
+/// E_kin/E_int, or None when the internal energy is within
+/// [`RATIO_FLOOR`] times `floor` (or either is not a number).
+pub fn kinetic_share(kinetic: f64, internal: f64, floor: f64) -> Option<f64> {
+    let internal = internal.abs();
+    (kinetic.is_finite() && internal.is_finite() && internal > RATIO_FLOOR * floor)
+        .then(|| kinetic / internal)
+}
+
+/// Why a run's summary has no draw-in: a blank from a mesh file has no
+/// rectangle's edge midpoints and corners; a rectangle's end state whose
+/// elements cannot be evaluated (`failed`) has no measures at all. None
+/// when the draw-in is there.
+pub fn draw_in_note(rectangular: bool, failed: Option<&impl std::fmt::Display>) -> Option<String> {
+    match (rectangular, failed) {
+        (false, _) => Some(
+            "the blank is a mesh file: draw-in is measured at a rectangular blank's edge \
+             midpoints and corners"
+                .to_owned(),
+        ),
+        (true, Some(e)) => Some(format!("the end state cannot be measured: {e}")),
+        (true, None) => None,
+    }
+}
+
 /// What a completed run whose blank still moves at the end must say: its
 /// shapes and angles include inertia, which mass scaling (`added_mass`,
-/// the added over the physical mass) or a fast tool put there. None
-/// within [`QUASI_STATIC_KINETIC_SHARE`].
-pub fn inertia_warning(kinetic_to_internal: f64, added_mass: f64) -> Option<String> {
-    if kinetic_to_internal.is_nan() || kinetic_to_internal <= QUASI_STATIC_KINETIC_SHARE {
+/// the added over the physical mass) or a fast tool put there. None while
+/// the `kinetic` energy is within [`QUASI_STATIC_KINETIC_SHARE`] of the
+/// `internal` one, that one taken as at least [`RATIO_FLOOR`] times
+/// `floor` (mJ all three): over the internal energy of a barely strained
+/// blank a share means nothing, and the message gives both energies
+/// instead.
+pub fn inertia_warning(kinetic: f64, internal: f64, floor: f64, added_mass: f64) -> Option<String> {
+    let internal = internal.abs();
+    let scale = internal.max(RATIO_FLOOR * floor);
+    if kinetic.is_nan() || internal.is_nan() || kinetic <= QUASI_STATIC_KINETIC_SHARE * scale {
         return None;
     }
     let cause = if added_mass > 0.0 {
@@ -819,12 +870,21 @@ pub fn inertia_warning(kinetic_to_internal: f64, added_mass: f64) -> Option<Stri
     } else {
         "a slower tool or a longer end time".to_owned()
     };
+    let amount = match kinetic_share(kinetic, internal, floor) {
+        Some(share) => format!(
+            "{:.1} % of the internal energy (more than {:.0} %)",
+            100.0 * share,
+            100.0 * QUASI_STATIC_KINETIC_SHARE
+        ),
+        None => format!(
+            "{kinetic:.3e} mJ while the blank is barely strained (internal energy \
+             {internal:.3e} mJ, too small for a ratio)"
+        ),
+    };
     Some(format!(
-        "the kinetic energy at the end is {:.1} % of the internal energy (more than {:.0} %): \
-         the blank is still moving, so its shape, shear and draw-in include inertia; if the \
-         process is meant to be quasi-static, run it with {cause}",
-        100.0 * kinetic_to_internal,
-        100.0 * QUASI_STATIC_KINETIC_SHARE
+        "the kinetic energy at the end is {amount}: the blank is still moving, so its shape, \
+         shear and draw-in include inertia; if the process is meant to be quasi-static, run it \
+         with {cause}"
     ))
 }
 
@@ -860,14 +920,54 @@ mod tests {
 
     #[test]
     fn a_moving_blank_at_the_end_is_reported_with_its_cause() {
-        assert_eq!(inertia_warning(1.4e-3, 38.6), None);
-        assert_eq!(inertia_warning(QUASI_STATIC_KINETIC_SHARE, 38.6), None);
-        let w = inertia_warning(8.77e-2, 496.6).unwrap();
+        // Internal energy 1000 mJ, far above the floor (1e-3 mJ).
+        let share = |k: f64, added| inertia_warning(k * 1000.0, 1000.0, 1e-3, added);
+        assert_eq!(share(1.4e-3, 38.6), None);
+        assert_eq!(share(QUASI_STATIC_KINETIC_SHARE, 38.6), None);
+        let w = share(8.77e-2, 496.6).unwrap();
         assert!(w.contains("8.8 % of the internal"), "{w}");
         assert!(w.contains("adds 49660 % of the blank's mass"), "{w}");
-        let w = inertia_warning(0.2, 0.0).unwrap();
+        let w = share(0.2, 0.0).unwrap();
         assert!(w.contains("a slower tool or a longer end time"), "{w}");
         // NaN energies are the balance check's business, not this one's.
-        assert_eq!(inertia_warning(f64::NAN, 0.0), None);
+        assert_eq!(inertia_warning(f64::NAN, 1000.0, 1e-3, 0.0), None);
+    }
+
+    /// The issue's case: an unstrained blank (internal energy round-off)
+    /// still moving read "4641261081691772420096.0 %". Within 100 × the
+    /// floor no share is printed, the energies are; and a kinetic energy
+    /// small against that floor is no warning at all.
+    #[test]
+    fn a_barely_strained_blank_gets_energies_not_a_percentage() {
+        let floor = 2e-3;
+        let w = inertia_warning(12.5, 2.7e-21, floor, 0.0).unwrap();
+        assert!(!w.contains('%'), "{w}");
+        assert!(
+            w.contains(
+                "1.250e1 mJ while the blank is barely strained (internal energy 2.700e-21 mJ"
+            ),
+            "{w}"
+        );
+        // 5 % of 100 × the floor is 0.01 mJ: below it, nothing to say.
+        assert_eq!(inertia_warning(0.0099, 2.7e-21, floor, 0.0), None);
+        assert!(inertia_warning(0.0101, 2.7e-21, floor, 0.0).is_some());
+        // Just above 100 × the floor the share is a share again.
+        assert_eq!(kinetic_share(1.0, 0.2, floor), None);
+        assert_eq!(kinetic_share(1.0, 0.25, floor), Some(4.0));
+        let w = inertia_warning(1.0, 0.25, floor, 0.0).unwrap();
+        assert!(w.contains("400.0 % of the internal energy"), "{w}");
+        assert_eq!(kinetic_share(f64::NAN, 1.0, floor), None);
+    }
+
+    #[test]
+    fn a_missing_draw_in_says_why() {
+        let none: Option<&String> = None;
+        assert_eq!(draw_in_note(true, none), None);
+        assert!(draw_in_note(false, none).unwrap().contains("mesh file"));
+        let e = "element 7 is inverted".to_owned();
+        assert_eq!(
+            draw_in_note(true, Some(&e)).unwrap(),
+            "the end state cannot be measured: element 7 is inverted"
+        );
     }
 }

@@ -67,8 +67,9 @@ enum Command {
     },
     /// Write a ready-to-run scene from a template.
     New {
-        /// hemisphere, deep-drawing, picture-frame or bias-extension.
-        template: String,
+        /// hemisphere, deep-drawing, picture-frame or bias-extension
+        /// (without it: the list, and exit code 2 as for any usage error).
+        template: Option<String>,
         /// Where to write it (default: <template>.toml).
         path: Option<PathBuf>,
     },
@@ -171,25 +172,38 @@ enum ExportUnit {
     In,
 }
 
-/// Templates shipped with the binary.
-const TEMPLATES: [(&str, &str); 4] = [
+/// Templates shipped with the binary: name, what it is, the scene.
+const TEMPLATES: [(&str, &str, &str); 4] = [
     (
         "hemisphere",
+        "carbon prepreg laid up on a hemispherical punch (El Hami et al. 2009, §5.1)",
         include_str!("../../../scenes/hemisphere-0-90.toml"),
     ),
     (
         "deep-drawing",
+        "glass fabric drawn by a punch through a die under a blank holder (§5.2)",
         include_str!("../../../scenes/deep-drawing-0-90.toml"),
     ),
     (
         "picture-frame",
+        "picture-frame shear test of a glass fabric square, to 60°",
         include_str!("../../../scenes/picture-frame.toml"),
     ),
     (
         "bias-extension",
+        "bias-extension test of a ±45 glass fabric strip",
         include_str!("../../../scenes/bias-extension.toml"),
     ),
 ];
+
+/// The templates, one a line, for `drape new` without a name.
+fn template_list() -> String {
+    TEMPLATES
+        .iter()
+        .map(|(name, what, _)| format!("  {name:<15} {what}"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
 
 /// Bad input: exit 2.
 #[derive(Debug)]
@@ -266,7 +280,7 @@ fn main() -> ExitCode {
             (None, Some(scene)) => run(&scene, out, &set, checkpoint_every),
             (None, None) => Err(bad("give a scene file or --resume DIR")),
         }),
-        Command::New { template, path } => new(&template, path),
+        Command::New { template, path } => new(template.as_deref(), path),
         Command::Sweep {
             scene,
             set,
@@ -404,11 +418,13 @@ fn default_out(scene: &Path, suffix: &str) -> PathBuf {
     Path::new("results").join(format!("{stem}{suffix}"))
 }
 
-/// A progress bar on a terminal, plain lines every 10 % otherwise.
+/// A progress bar on a terminal, plain lines every 10 % otherwise; both
+/// with the time left at the run's recent pace ([`drape::eta`]).
 struct Reporter {
     bar: Option<ProgressBar>,
     next_line: f64,
     started: Instant,
+    eta: drape::eta::Eta,
 }
 
 impl Reporter {
@@ -416,7 +432,7 @@ impl Reporter {
         let bar = std::io::stderr().is_terminal().then(|| {
             let bar = ProgressBar::new(1000);
             bar.set_style(
-                ProgressStyle::with_template("{spinner} [{bar:32}] {percent:>3}% {msg} ETA {eta}")
+                ProgressStyle::with_template("{spinner} [{bar:32}] {percent:>3}% {msg}")
                     .expect("valid template")
                     .progress_chars("=> "),
             );
@@ -426,6 +442,7 @@ impl Reporter {
             bar,
             next_line: 0.1,
             started: Instant::now(),
+            eta: drape::eta::Eta::new(),
         }
     }
 
@@ -461,6 +478,15 @@ impl Reporter {
         if interrupted() {
             return RunControl::Stop;
         }
+        let left = self.eta.update(
+            self.started.elapsed().as_secs_f64(),
+            p.progress.time,
+            p.progress.end_time,
+        );
+        let message = match left {
+            Some(s) => format!("{message}, eta {}", drape::eta::duration(s)),
+            None => message,
+        };
         match &self.bar {
             Some(bar) => {
                 bar.set_position((fraction * 1000.0) as u64);
@@ -495,6 +521,7 @@ fn print_summary(s: &Summary, out: &Path) {
         println!("reason            {r}");
     }
     println!("scene             {}", s.scene);
+    print_mould(s);
     println!(
         "time reached      {:.6} s in {} {}",
         s.time,
@@ -509,14 +536,7 @@ fn print_summary(s: &Summary, out: &Path) {
         "max shear         {:.2}° at ({:.1}, {:.1}, {:.1}) mm",
         s.max_shear_deg, s.max_shear_at[0], s.max_shear_at[1], s.max_shear_at[2]
     );
-    if s.draw_in_mm.dx.is_finite() {
-        println!(
-            "draw-in           DX {:.2} mm, DY {:.2} mm, DD {:.2} mm",
-            s.draw_in_mm.dx, s.draw_in_mm.dy, s.draw_in_mm.dd
-        );
-    } else {
-        println!("draw-in           n/a (not a rectangular blank)");
-    }
+    println!("draw-in           {}", draw_in_line(s));
     let p = &s.peak;
     if p.max_shear_time_s < s.time && p.max_shear_deg > s.max_shear_deg {
         println!(
@@ -545,8 +565,9 @@ fn print_summary(s: &Summary, out: &Path) {
         s.max_waviness_deg, s.wrinkle_area_mm2
     );
     println!(
-        "energy            balance error {:.2e}, E_kin/E_int {:.2e}",
-        s.energy.balance_error, s.energy.kinetic_to_internal
+        "energy            balance error {:.2e}, {}",
+        s.energy.balance_error,
+        kinetic_share_text(&s.energy)
     );
     println!(
         "run               {:.1} s wall, {} threads, {}",
@@ -578,6 +599,55 @@ fn print_summary(s: &Summary, out: &Path) {
         println!("warning           {w}");
     }
     println!("results           {}", out.display());
+}
+
+/// The tool a kinematic drape was draped on, why, and how to choose
+/// another (nothing for a forming run).
+fn print_mould(s: &Summary) {
+    if let Some(mould) = &s.run.mould {
+        println!(
+            "mould             `{mould}`: {} (another: --set kinematic.mould=NAME)",
+            s.run
+                .mould_reason
+                .as_deref()
+                .unwrap_or("no reason recorded")
+        );
+    }
+}
+
+/// The draw-in values a summary has, `n/a` for those it lacks, and its
+/// note saying why.
+fn draw_in_line(s: &Summary) -> String {
+    let d = &s.draw_in_mm;
+    let value = |name: &str, v: f64| {
+        if v.is_finite() {
+            format!("{name} {v:.2} mm")
+        } else {
+            format!("{name} n/a")
+        }
+    };
+    let mut line = [value("DX", d.dx), value("DY", d.dy), value("DD", d.dd)].join(", ");
+    if ![d.dx, d.dy, d.dd].iter().all(|v| v.is_finite()) {
+        line.push_str(&format!(
+            " ({})",
+            s.draw_in_note.as_deref().unwrap_or("not measured")
+        ));
+    }
+    line
+}
+
+/// E_kin/E_int, or both energies where the internal one is too small for
+/// a ratio (the summary's ratio is null then).
+fn kinetic_share_text(e: &drape_io::results::EnergySummary) -> String {
+    if e.kinetic_to_internal.is_finite() {
+        return format!("E_kin/E_int {:.2e}", e.kinetic_to_internal);
+    }
+    match (e.kinetic_mj, e.internal_mj) {
+        (Some(k), Some(i)) => {
+            format!("E_kin {k:.3e} mJ, E_int {i:.3e} mJ (the blank is barely strained: no ratio)")
+        }
+        _ => "E_kin/E_int n/a".to_owned(),
+    }
 }
 
 /// The model and the time step of a run, before it starts (on stderr, with
@@ -748,12 +818,19 @@ fn finish_run(scene: &Scene, out: &Path, options: RunOptions) -> Result<ExitCode
     })
 }
 
-fn new(template: &str, path: Option<PathBuf>) -> Result<ExitCode> {
-    let Some((name, text)) = TEMPLATES.iter().find(|(n, _)| *n == template) else {
-        let names: Vec<&str> = TEMPLATES.iter().map(|(n, _)| *n).collect();
+fn new(template: Option<&str>, path: Option<PathBuf>) -> Result<ExitCode> {
+    // Without a name, the list: a usage error (exit 2, as clap's own), so
+    // a script that forgot the name stops.
+    let Some(template) = template else {
         return Err(bad(format!(
-            "unknown template `{template}`: expected one of {}",
-            names.join(", ")
+            "give a template: drape new TEMPLATE [PATH]; the templates are\n{}",
+            template_list()
+        )));
+    };
+    let Some((name, _, text)) = TEMPLATES.iter().find(|(n, _, _)| *n == template) else {
+        return Err(bad(format!(
+            "unknown template `{template}`; the templates are\n{}",
+            template_list()
         )));
     };
     let path = path.unwrap_or_else(|| PathBuf::from(format!("{name}.toml")));
@@ -1037,6 +1114,7 @@ fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Ex
     reporter.finish();
     let s = &report.comparison.summary;
     println!("kinematic net     {}", out.join("kinematic").display());
+    print_mould(&report.kinematic.summary);
     print_net(&report.kinematic.stats);
     println!(
         "forming run       {} ({}), {}",
@@ -1123,21 +1201,17 @@ fn compare_folders(a: &Path, b: &Path, out: Option<PathBuf>) -> Result<ExitCode>
         folder_name(b)
     );
     println!("{:<34} {:>14} {:>14}", "status", s.status_a, s.status_b);
-    let show = |v: Option<f64>| v.map_or_else(|| "—".to_owned(), |v| format!("{v:.5}"));
     for m in &s.measures {
         let name = if m.unit.is_empty() {
             m.name.clone()
         } else {
             format!("{} ({})", m.name, m.unit)
         };
-        let difference = match (m.a, m.b) {
-            (Some(a), Some(b)) => format!("{:.5}", b - a),
-            _ => "—".to_owned(),
-        };
+        let difference = m.show(m.a.zip(m.b).map(|(a, b)| b - a));
         println!(
             "{name:<34} {:>14} {:>14} {difference:>14}",
-            show(m.a),
-            show(m.b)
+            m.show(m.a),
+            m.show(m.b)
         );
     }
     println!(

@@ -226,6 +226,11 @@ fn compare_writes_both_runs_and_their_difference() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("mould             `dome`: the scene's only tool"),
+        "{}",
+        text(&o)
+    );
     for f in [
         "kinematic/summary.json",
         "mechanical/summary.json",

@@ -20,8 +20,8 @@
 //! median profiles (flat cell centres within half a cell of the line),
 //! the flat area above the locking angle, and the draw-in of the blank's
 //! edge midpoints and corners, read at those flat points by bilinear
-//! interpolation in their draped cell (None when one of them is off the
-//! draped net).
+//! interpolation in their draped cell (DX, DY or DD NaN when one of its
+//! points is off the draped net).
 
 use drape_constitutive::Material;
 use drape_model::blank::{BlankMesh, FibreRepresentation};
@@ -116,6 +116,14 @@ impl Net {
         }
         m.area_above_locking =
             measures::area_above(&fields.shear, &fields.area, locking_deg.to_radians());
+        // The wrinkle indicator as a forming run's (`Model::measures`).
+        m.max_waviness_deg = fields.waviness.iter().fold(0.0, |a: f64, &w| a.max(w));
+        m.wrinkle_area = fields
+            .waviness
+            .iter()
+            .zip(&fields.area)
+            .filter(|(w, _)| **w > measures::WRINKLE_THRESHOLD_DEG)
+            .fold(0.0, |total, (_, a)| total + a);
         let band = 0.5 * flat_area.sqrt();
         let profile =
             |line| measures::shear_profile(&frame, &fields.centroid0, &fields.shear, line, band);
@@ -138,12 +146,29 @@ impl Net {
         .iter()
         .map(|&(a, b)| c + Vector3::new(a, b, 0.0))
         .collect();
-        let moved: Option<Vec<Vector3<f64>>> = points
+        // Each measure needs its own points only: a net that stops short
+        // of the corners (an open mould's edge) still has DX and DY.
+        let moved: Vec<Option<Vector3<f64>>> = points
             .iter()
             .map(|p| self.position_at(p).map(|q| q + shift))
             .collect();
-        m.draw_in = moved
-            .map(|moved| measures::draw_in(&frame, &points, &moved, [0, 1, 2, 3], [4, 5, 6, 7]));
+        let filled: Vec<Vector3<f64>> = moved
+            .iter()
+            .zip(&points)
+            .map(|(m, p)| m.unwrap_or(*p))
+            .collect();
+        let mut draw_in = measures::draw_in(&frame, &points, &filled, [0, 1, 2, 3], [4, 5, 6, 7]);
+        let missing = |r: std::ops::Range<usize>| moved[r].iter().any(Option::is_none);
+        for (range, value) in [
+            (0..2, &mut draw_in.dx),
+            (2..4, &mut draw_in.dy),
+            (4..8, &mut draw_in.dd),
+        ] {
+            if missing(range) {
+                *value = f64::NAN;
+            }
+        }
+        m.draw_in = Some(draw_in);
         Ok(NetResults {
             model,
             state,

@@ -77,6 +77,11 @@ fn fields_and_measures_of_a_net_on_a_sphere_are_the_cells() {
     let m = &r.measures;
     let largest = f.shear.iter().fold(0.0f64, |a, g| a.max(g.abs()));
     assert_eq!(m.max_shear_deg, largest.to_degrees());
+    // The wrinkle indicator is the cells' largest waviness, as a run's:
+    // on a smooth sphere, above 0 and below the 5° threshold.
+    let wavy = f.waviness.iter().fold(0.0f64, |a, &w| a.max(w));
+    assert_eq!(m.max_waviness_deg, wavy);
+    assert!(wavy > 0.0 && wavy < 5.0 && m.wrinkle_area == 0.0, "{wavy}");
     let above: f64 = f
         .shear
         .iter()
@@ -96,6 +101,27 @@ fn fields_and_measures_of_a_net_on_a_sphere_are_the_cells() {
     let step = 2.0 * (2.0 / r0).asin();
     let expect = 60.0 - r0 * (15.0 * step).sin();
     assert!((d.dx - expect).abs() < 1e-9, "{} vs {expect}", d.dx);
+}
+
+/// A flat disc of radius 70 mm under a 120 mm square: the edge midpoints
+/// (60 mm out) are on it, the corners (85 mm) are not. The draw-in that
+/// can be read is (zero on a plane), the corners' is NaN: not a missing
+/// draw-in for the whole blank, as if it were not a rectangle.
+#[test]
+fn a_net_short_of_the_corners_still_has_the_edge_draw_in() {
+    let disc = Surface::revolution(
+        Vector3::new(0.0, 0.0, -1.0),
+        vec![drape_contact::ProfileSegment::Line {
+            from: [0.0, 0.0],
+            to: [70.0, 0.0],
+        }],
+    )
+    .unwrap();
+    let net = Net::drape(&disc, &spec(120.0, 120.0, 4.0)).unwrap();
+    let r = net.results(&carbon(), Vector3::zeros(), 50.0).unwrap();
+    let d = r.measures.draw_in.unwrap();
+    assert!(d.dx.abs() < 1e-12 && d.dy.abs() < 1e-12, "{d:?}");
+    assert!(d.dd.is_nan(), "{d:?}");
 }
 
 #[test]

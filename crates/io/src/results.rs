@@ -131,7 +131,8 @@ pub struct CutbackRow {
     pub message: String,
 }
 
-/// Draw-in, mm. NaN (written as `null`) when the blank is not a rectangle.
+/// Draw-in, mm. NaN (written as `null`) where it cannot be measured; the
+/// summary's `draw_in_note` says why.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct DrawInMm {
     /// DX.
@@ -155,8 +156,17 @@ fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> 
 pub struct EnergySummary {
     /// |balance error| / largest energy.
     pub balance_error: f64,
-    /// E_kin / E_int at the end.
+    /// E_kin / E_int at the end; NaN (`null`) when the internal energy is
+    /// too small for a ratio to mean anything (an unstrained blank): then
+    /// `kinetic_mj` and `internal_mj` say what there is.
+    #[serde(deserialize_with = "nan_if_null")]
     pub kinetic_to_internal: f64,
+    /// The kinetic energy at the end (mJ, N·mm).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kinetic_mj: Option<f64>,
+    /// The internal energy at the end (mJ, N·mm).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub internal_mj: Option<f64>,
 }
 
 /// Run statistics.
@@ -173,6 +183,13 @@ pub struct RunInfo {
     /// What the implicit driver did (absent for explicit runs).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub implicit: Option<ImplicitRunInfo>,
+    /// The tool a kinematic drape was draped on (absent for a forming
+    /// run).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub mould: Option<String>,
+    /// Why that tool: named by `kinematic.mould`, or the default's rule.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub mould_reason: Option<String>,
 }
 
 /// The implicit driver's totals in `summary.json`.
@@ -280,6 +297,9 @@ pub struct Summary {
     pub max_shear_at: [f64; 3],
     /// Draw-in.
     pub draw_in_mm: DrawInMm,
+    /// Why a draw-in value is missing (`null`), when one is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub draw_in_note: Option<String>,
     /// Largest truss force (N) at the end; NaN (`null`) when the fibres
     /// are embedded (there is no truss).
     #[serde(deserialize_with = "nan_if_null")]
@@ -322,12 +342,15 @@ pub struct ResultsDir {
     truss_frames: BTreeMap<usize, (f64, String)>,
     /// The tools' frames (`tools.pvd`), the same way.
     tool_frames: BTreeMap<usize, (f64, String)>,
+    /// The fixed colour range of the shear pictures (degrees of |γ|),
+    /// `[output] shear_range_deg`; None: 0 to the largest.
+    shear_range: Option<[f64; 2]>,
     /// The folder's lock, held while the run writes.
     _lock: OutputLock,
 }
 
 /// The files a [`ResultsDir`] writes at its top level.
-const OUTPUT_FILES: [&str; 12] = [
+const OUTPUT_FILES: [&str; 13] = [
     "series.pvd",
     "trusses.pvd",
     "tools.pvd",
@@ -337,6 +360,7 @@ const OUTPUT_FILES: [&str; 12] = [
     "summary.json",
     "shear_map.png",
     "shear_3d.png",
+    "waviness_map.png",
     "profiles.png",
     "orientations.inp",
     "orientations.csv",
@@ -418,6 +442,7 @@ impl ResultsDir {
             frames: BTreeMap::new(),
             truss_frames: BTreeMap::new(),
             tool_frames: BTreeMap::new(),
+            shear_range: None,
             _lock: lock,
         })
     }
@@ -454,6 +479,7 @@ impl ResultsDir {
             frames,
             truss_frames,
             tool_frames,
+            shear_range: None,
             _lock: lock,
         };
         for (k, (pvd, _)) in SERIES.iter().enumerate() {
@@ -643,14 +669,28 @@ impl ResultsDir {
         crate::atomic::write(&path, &json).map_err(at(&path))
     }
 
+    /// Colours the shear pictures ([`Self::write_pictures`],
+    /// [`Self::write_view`]) over the fixed |γ| range `range` (degrees,
+    /// `[output] shear_range_deg`, checked finite and increasing by the
+    /// scene) instead of 0 to the run's largest, so that two runs' pictures
+    /// compare colour for colour; values outside take the end colours.
+    pub fn set_shear_range(&mut self, range: Option<[f64; 2]>) {
+        self.shear_range = range;
+    }
+
     /// Writes `shear_map.png` (the formed part seen from above, coloured by
-    /// shear angle, with a colour bar) and `profiles.png`.
+    /// shear angle, with a colour bar), `waviness_map.png` and
+    /// `profiles.png`.
     ///
     /// The shear map projects the current positions on the x–y plane and
     /// paints each membrane element with the viridis colour of its
-    /// |shear angle|, from 0 to the largest, higher elements over lower
+    /// |shear angle|, from 0 to the largest (or over the range of
+    /// [`Self::set_shear_range`]), higher elements over lower
     /// ones; a grey line shows the blank's outline before forming and a
-    /// marker the element of largest shear. The profile plot shows the
+    /// marker the element of largest shear. The waviness map paints each
+    /// element of the flat blank with its waviness (the wrinkle indicator,
+    /// [`drape_model::measures::waviness`]), where a fold hidden under the
+    /// formed part still shows. The profile plot shows the
     /// signed shear angle against the signed initial distance from the
     /// blank's centre, along the diagonal and the median.
     pub fn write_pictures(
@@ -662,10 +702,18 @@ impl ResultsDir {
     ) -> Result<(), ResultsError> {
         let path = self.dir.join("shear_map.png");
         let png =
-            pictures::shear_map(model, state, fields, measures).map_err(|e| ResultsError {
-                path: path.clone(),
-                source: std::io::Error::other(e),
+            pictures::shear_map(model, state, fields, measures, self.shear_range).map_err(|e| {
+                ResultsError {
+                    path: path.clone(),
+                    source: std::io::Error::other(e),
+                }
             })?;
+        crate::atomic::write(&path, &png).map_err(at(&path))?;
+        let path = self.dir.join("waviness_map.png");
+        let png = pictures::waviness_map(model, fields, measures).map_err(|e| ResultsError {
+            path: path.clone(),
+            source: std::io::Error::other(e),
+        })?;
         crate::atomic::write(&path, &png).map_err(at(&path))?;
         let path = self.dir.join("profiles.png");
         let png = pictures::profiles(measures, state.time).map_err(|e| ResultsError {
@@ -688,11 +736,18 @@ impl ResultsDir {
         displacements: &[f64],
     ) -> Result<(), ResultsError> {
         let path = self.dir.join("shear_3d.png");
-        let png = pictures::oblique::oblique_view(model, state, fields, tools, displacements)
-            .map_err(|e| ResultsError {
-                path: path.clone(),
-                source: std::io::Error::other(e),
-            })?;
+        let png = pictures::oblique::oblique_view(
+            model,
+            state,
+            fields,
+            tools,
+            displacements,
+            self.shear_range,
+        )
+        .map_err(|e| ResultsError {
+            path: path.clone(),
+            source: std::io::Error::other(e),
+        })?;
         crate::atomic::write(&path, &png).map_err(at(&path))
     }
 

@@ -669,6 +669,10 @@ pub struct OutputSpec {
     /// Write PNG pictures.
     #[serde(default = "yes")]
     pub pictures: bool,
+    /// A fixed |γ| range of the shear pictures' colours (degrees), so
+    /// that runs compare picture to picture; None: 0 to each run's largest.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shear_range_deg: Option<[f64; 2]>,
 }
 
 impl Default for OutputSpec {
@@ -677,6 +681,7 @@ impl Default for OutputSpec {
             locking_angle_deg: default_locking(),
             vtu: true,
             pictures: true,
+            shear_range_deg: None,
         }
     }
 }
@@ -1736,6 +1741,16 @@ fn build(
     }
     if !(spec.output.locking_angle_deg.is_finite() && spec.output.locking_angle_deg > 0.0) {
         return Err(at.error("output.locking_angle_deg", "expected a positive angle"));
+    }
+    if let Some([lo, hi]) = spec.output.shear_range_deg
+        && !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi)
+    {
+        return Err(at.error(
+            "output.shear_range_deg",
+            format!(
+                "[{lo}, {hi}]: expected [min, max] in degrees of |γ|, finite, with 0 ≤ min < max"
+            ),
+        ));
     }
     let guard = GuardSettings {
         enabled: sim.instability_guard,

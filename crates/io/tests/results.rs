@@ -433,6 +433,7 @@ fn writes_a_complete_results_directory() {
         energy: EnergySummary {
             balance_error: 1e-4,
             kinetic_to_internal: 0.01,
+            ..EnergySummary::default()
         },
         setup: Some(RunSetup {
             nodes: model.node_count(),
@@ -445,9 +446,10 @@ fn writes_a_complete_results_directory() {
             steps: 1000,
             threads: 2,
             solver: "explicit".into(),
-            implicit: None,
+            ..RunInfo::default()
         },
         warnings: Vec::new(),
+        ..Summary::default()
     };
     out.write_summary(&summary).unwrap();
     let json = read(&dir.join("summary.json"));
@@ -468,6 +470,10 @@ fn writes_a_complete_results_directory() {
     let (w, h, colours) = is_png(&dir.join("profiles.png"));
     assert_eq!((w, h), (1000, 600));
     assert!(colours > 4, "{colours}");
+    // One flat-blank panel with its colour bar.
+    let (w, h, colours) = is_png(&dir.join("waviness_map.png"));
+    assert_eq!((w, h), (620, 720));
+    assert!(colours > 50, "{colours}");
 
     // Keep the directory for a person (or another reader) to look at.
     if let Some(keep) = std::env::var_os("DRAPE_KEEP_RESULTS") {

@@ -322,7 +322,15 @@ fn non_finite(report: &drape::RunReport, out: &Path, rectangle: bool) -> Option<
         ("max_fibre_tension_n", report.measures.max_fibre_tension_n),
         ("area_above_locking_mm2", s.area_above_locking_mm2),
         ("energy.balance_error", s.energy.balance_error),
-        ("energy.kinetic_to_internal", s.energy.kinetic_to_internal),
+        (
+            "energy.kinetic_to_internal",
+            // Null on purpose over a barely strained blank's internal
+            // energy: then both energies must be numbers.
+            match (s.energy.kinetic_mj, s.energy.internal_mj) {
+                (Some(k), Some(i)) if s.energy.kinetic_to_internal.is_nan() => k + i,
+                _ => s.energy.kinetic_to_internal,
+            },
+        ),
     ];
     values.extend(s.max_shear_at.iter().map(|&v| ("max_shear_at", v)));
     if rectangle {
@@ -923,6 +931,7 @@ mod tests {
                     energy: drape_io::results::EnergySummary {
                         balance_error: balance,
                         kinetic_to_internal: 0.0,
+                        ..Default::default()
                     },
                     ..Summary::default()
                 }),

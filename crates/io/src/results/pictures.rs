@@ -207,14 +207,32 @@ fn bounds(points: impl Iterator<Item = (f64, f64)>) -> Option<([f64; 2], [f64; 2
     Some(([x[0] - pad, x[1] + pad], [y[0] - pad, y[1] + pad]))
 }
 
+/// The |γ| range (degrees) a shear picture's colours span: `fixed` (the
+/// scene's `output.shear_range_deg`), or 0 to the largest `vmax` (to 1
+/// when nothing is sheared, so that the bar has a length).
+fn shear_scale(fixed: Option<[f64; 2]>, vmax: f64) -> [f64; 2] {
+    match fixed {
+        Some([lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => [lo, hi],
+        _ if vmax > 0.0 => [0.0, vmax],
+        _ => [0.0, 1.0],
+    }
+}
+
+/// The viridis colour of `v` on `range` (clamped to its ends).
+fn on_scale(v: f64, [lo, hi]: [f64; 2]) -> RGBColor {
+    viridis((v - lo) / (hi - lo))
+}
+
 /// `shear_map.png`: the part seen from above (x to the right, y up, equal
-/// scales), each element filled with the viridis colour of |γ|, a colour
-/// bar, the blank's outline before forming and the largest shear marked.
+/// scales), each element filled with the viridis colour of |γ| over
+/// `range` (None: 0 to the largest), a colour bar, the blank's outline
+/// before forming and the largest shear marked.
 pub(super) fn shear_map(
     model: &Model,
     state: &State,
     fields: &ElementFields,
     measures: &Measures,
+    range: Option<[f64; 2]>,
 ) -> Result<Vec<u8>> {
     let mut patches = Vec::with_capacity(fields.shear.len());
     for batch in &model.membranes {
@@ -246,7 +264,7 @@ pub(super) fn shear_map(
         .map(|p| p.value)
         .filter(|v| v.is_finite())
         .fold(0.0, f64::max);
-    let scale_max = if vmax > 0.0 { vmax } else { 1.0 };
+    let scale = shear_scale(range, vmax);
     let outline = boundary_edges(model);
 
     // No "=" in titles: plotters 0.3.7's ab_glyph text drops each glyph's
@@ -309,7 +327,7 @@ pub(super) fn shear_map(
         let show_mesh = mean_area.sqrt() / mm_per_px > 14.0;
         chart
             .draw_series(patches.iter().flat_map(|p| {
-                let colour = viridis(p.value / scale_max);
+                let colour = on_scale(p.value, scale);
                 let mut ring = p.corners.clone();
                 ring.push(p.corners[0]);
                 let edge = if show_mesh {
@@ -346,7 +364,7 @@ pub(super) fn shear_map(
         // to its right; under it, the key to the outline and the marker.
         let (_, rows) = chart.plotting_area().get_pixel_range();
         let key_height = 110;
-        let (bar_left, base_y) = colour_bar(root, w, rows.clone(), key_height, scale_max)?;
+        let (bar_left, base_y) = colour_bar(root, w, rows.clone(), key_height, scale, "|γ| (deg)")?;
         let key_top = rows.end - base_y - key_height as i32 + 40;
         let key = root.clone().shrink((bar_left, key_top), (170, 70));
         let text = (FAMILY, 15).into_font().color(&BLACK);
@@ -364,7 +382,43 @@ pub(super) fn shear_map(
     })
 }
 
-/// The viridis colour bar of |γ| from 0 to `scale_max` in the right-hand
+/// `waviness_map.png`: the element waviness (the wrinkle indicator,
+/// [`drape_model::measures::waviness`]) on the flat blank, each element at
+/// its reference position: a fold or wrinkle hidden under the formed part
+/// seen from above still shows, at the place of the blank it happened to.
+/// The colours run from 0 to the largest waviness, but at least to twice
+/// the wrinkle threshold, so that the few tenths of a degree a smooth part
+/// has stay dark instead of filling the scale.
+pub(super) fn waviness_map(
+    model: &Model,
+    fields: &ElementFields,
+    measures: &Measures,
+) -> Result<Vec<u8>> {
+    let threshold = drape_model::measures::WRINKLE_THRESHOLD_DEG;
+    let largest = fields
+        .waviness
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |a, &b| a.max(b));
+    maps::flat_maps(
+        model,
+        &[maps::MapPanel {
+            title: format!(
+                "Waviness, flat blank: largest {}°, {} mm² above {}°",
+                human(largest),
+                human(measures.wrinkle_area),
+                human(threshold)
+            ),
+            values: &fields.waviness,
+            label: "waviness (deg)".into(),
+            signed: false,
+            scale: Some(largest.max(2.0 * threshold)),
+            range: None,
+        }],
+    )
+}
+
+/// The viridis colour bar of `label` over `[lo, hi]` in the right-hand
 /// column (170 px) of a picture `w` pixels wide, over the absolute pixel
 /// rows `rows` less `key_height` at their foot (for a key). Returns the
 /// bar's left edge relative to `root` and `root`'s vertical offset.
@@ -373,7 +427,8 @@ fn colour_bar(
     w: u32,
     rows: std::ops::Range<i32>,
     key_height: u32,
-    scale_max: f64,
+    [lo, hi]: [f64; 2],
+    label: &str,
 ) -> Result<(i32, i32)> {
     // Pixel ranges are absolute, `shrink` offsets relative to `root`.
     let (base_x, base_y) = root.get_base_pixel();
@@ -386,12 +441,12 @@ fn colour_bar(
     let mut bar = ChartBuilder::on(&bar_area)
         .margin_right(4)
         .right_y_label_area_size(66)
-        .build_cartesian_2d(0.0..1.0, 0.0..scale_max)
+        .build_cartesian_2d(0.0..1.0, lo..hi)
         .map_err(drawing)?;
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
-        .y_desc("|γ| (deg)")
+        .y_desc(label)
         .y_label_formatter(&tick)
         .label_style((FAMILY, 16))
         .axis_desc_style((FAMILY, 18))
@@ -401,13 +456,13 @@ fn colour_bar(
     bar.draw_series((0..steps).map(|k| {
         let (a, b) = (k as f64 / steps as f64, (k + 1) as f64 / steps as f64);
         Rectangle::new(
-            [(0.0, a * scale_max), (1.0, b * scale_max)],
+            [(0.0, lo + a * (hi - lo)), (1.0, lo + b * (hi - lo))],
             viridis(0.5 * (a + b)).filled(),
         )
     }))
     .map_err(drawing)?;
     bar.draw_series([Rectangle::new(
-        [(0.0, 0.0), (1.0, scale_max)],
+        [(0.0, lo), (1.0, hi)],
         BLACK.stroke_width(1),
     )])
     .map_err(drawing)?;
@@ -593,6 +648,18 @@ mod tests {
         };
         let points = magnitudes(&[p(-1.0, 2.0), p(-1.0, -4.0), p(0.0, 1.0), p(1.0, f64::NAN)]);
         assert_eq!(mean_curve(&points), vec![(-1.0, 3.0), (0.0, 1.0)]);
+    }
+
+    #[test]
+    fn a_fixed_shear_range_replaces_the_largest() {
+        assert_eq!(shear_scale(None, 23.0), [0.0, 23.0]);
+        assert_eq!(shear_scale(None, 0.0), [0.0, 1.0]);
+        assert_eq!(shear_scale(Some([10.0, 60.0]), 23.0), [10.0, 60.0]);
+        // A colour is its place on the range, the ends clamped.
+        assert_eq!(on_scale(35.0, [10.0, 60.0]), viridis(0.5));
+        assert_eq!(on_scale(5.0, [10.0, 60.0]), viridis(0.0));
+        assert_eq!(on_scale(75.0, [10.0, 60.0]), viridis(1.0));
+        assert_eq!(on_scale(f64::NAN, [10.0, 60.0]), NAN_COLOUR);
     }
 
     #[test]

@@ -3,12 +3,15 @@
 //! starts, the yarn spacing, the draping direction and the generators.
 //!
 //! Every key has the default a forming engineer expects, so a forming
-//! scene drapes kinematically without the table: the mould is the scene's
-//! only tool (or its only moving one), the seed is the blank's centre put
+//! scene drapes kinematically without the table: the mould is the shape
+//! the blank is formed to (see [`default_mould`]: the only tool, a fixed
+//! female mould a punch presses the blank into, or the punch of a deep
+//! drawing), the seed is the blank's centre put
 //! on the mould along the draping direction (the top of a punch under the
 //! blank), the warp leaves it along the blank's orientation, the spacing is
 //! the blank's element size, the draping direction is against the mould's
-//! motion (−z for a fixed mould). When the table is absent and a default
+//! motion (a fixed mould's: the motion of the punch pressing into it, or
+//! −z). When the table is absent and a default
 //! cannot be found (several tools, a blank from a mesh file), the scene
 //! still loads for `drape run` and the reason is kept for `drape kinematic`.
 
@@ -50,12 +53,95 @@ pub struct KinematicSpec {
 pub struct KinematicSetup {
     /// Index of the mould in the model's tools.
     pub mould: usize,
+    /// Why this tool is the mould, for the output ("given by
+    /// kinematic.mould", "the scene's only tool", …).
+    pub mould_reason: String,
     /// The mould's displacement along its motion at the scene's end time
     /// (mm; 0 for a fixed or force-driven tool): the net is moved with it,
     /// so that it lies where a forming run's part does.
     pub mould_displacement: f64,
     /// The net.
     pub net: NetSpec,
+}
+
+/// The default mould and why it is the one.
+struct MouldChoice {
+    mould: usize,
+    /// The moving tool that presses the blank into a fixed mould: the
+    /// blank moves onto the mould along its motion.
+    pressed_by: Option<usize>,
+    reason: String,
+}
+
+/// The mould when `[kinematic]` names none: the shape the blank is formed
+/// to. A die (`kind = "die"`) and a blank holder (`kind = "ring"`) have an
+/// opening where the part forms, so they are never the default; of the
+/// other tools, the only one; else, of one fixed and one moving tool, the
+/// fixed one when it lies beyond the blank in the moving one's direction
+/// (a punch pressing the blank into a female mould), the moving one when
+/// it does not (a punch drawing the blank away from a fixed tool behind
+/// it); else the only moving one. Anything else is ambiguous: the message
+/// names the tools.
+fn default_mould(spec: &SceneFile, model: &Model) -> Result<MouldChoice, String> {
+    let tools = &model.tools;
+    let names: Vec<&str> = tools.iter().map(|t| t.name.as_str()).collect();
+    let chosen = |mould: usize, reason: String| MouldChoice {
+        mould,
+        pressed_by: None,
+        reason,
+    };
+    match tools.len() {
+        0 => return Err("a kinematic drape needs a mould: the scene has no tools".to_owned()),
+        1 => return Ok(chosen(0, "the scene's only tool".to_owned())),
+        _ => {}
+    }
+    let opening = |i: usize| {
+        spec.tools.get(i).is_some_and(|t| {
+            matches!(
+                t.geometry,
+                super::GeometrySpec::Die { .. } | super::GeometrySpec::Ring { .. }
+            )
+        })
+    };
+    let mut candidates: Vec<usize> = (0..tools.len()).filter(|&i| !opening(i)).collect();
+    if candidates.is_empty() {
+        candidates = (0..tools.len()).collect();
+    }
+    if let [only] = candidates[..] {
+        return Ok(chosen(
+            only,
+            "the only tool that is not a die or a blank holder (ring)".to_owned(),
+        ));
+    }
+    let moves = |i: usize| tools[i].motion.direction() != Vector3::zeros();
+    let moving: Vec<usize> = candidates.iter().copied().filter(|&i| moves(i)).collect();
+    let fixed: Vec<usize> = candidates.iter().copied().filter(|&i| !moves(i)).collect();
+    if let ([punch], [mould]) = (&moving[..], &fixed[..]) {
+        // How far along the punch's motion each tool's point closest to
+        // the blank's centre lies: the blank is pressed into the fixed
+        // tool when that one lies further on.
+        let centre = model.x0.iter().sum::<Vector3<f64>>() / model.x0.len().max(1) as f64;
+        let d = tools[*punch].motion.direction();
+        let ahead = |i: usize| (tools[i].project(&centre, 0.0).point - centre).dot(&d);
+        if ahead(*mould) > ahead(*punch) {
+            return Ok(MouldChoice {
+                mould: *mould,
+                pressed_by: Some(*punch),
+                reason: format!(
+                    "the fixed tool that the moving tool `{}` presses the blank into",
+                    names[*punch]
+                ),
+            });
+        }
+    }
+    if let [only] = moving[..] {
+        return Ok(chosen(only, "the only moving tool".to_owned()));
+    }
+    Err(format!(
+        "the scene has {} tools ({}): name the mould with `mould = \"…\"` in [kinematic]",
+        names.len(),
+        names.join(", ")
+    ))
 }
 
 /// The setup of `spec`'s `[kinematic]` table (or of its defaults) on the
@@ -67,43 +153,26 @@ pub(super) fn setup(
 ) -> Result<KinematicSetup, SceneError> {
     let k = spec.kinematic.clone().unwrap_or_default();
     let names: Vec<&str> = model.tools.iter().map(|t| t.name.as_str()).collect();
-    let mould = match &k.mould {
-        Some(name) => names.iter().position(|n| n == name).ok_or_else(|| {
-            at.error(
-                "kinematic.mould",
-                if names.is_empty() {
-                    format!("no tool `{name}`: the scene has no tools")
-                } else {
-                    format!("no tool `{name}`: expected one of {}", names.join(", "))
-                },
-            )
-        })?,
+    let choice = match &k.mould {
+        Some(name) => MouldChoice {
+            mould: names.iter().position(|n| n == name).ok_or_else(|| {
+                at.error(
+                    "kinematic.mould",
+                    if names.is_empty() {
+                        format!("no tool `{name}`: the scene has no tools")
+                    } else {
+                        format!("no tool `{name}`: expected one of {}", names.join(", "))
+                    },
+                )
+            })?,
+            pressed_by: None,
+            reason: "given by kinematic.mould".to_owned(),
+        },
         None => {
-            let moving: Vec<usize> = (0..model.tools.len())
-                .filter(|&i| model.tools[i].motion.direction() != Vector3::zeros())
-                .collect();
-            match (model.tools.len(), moving.as_slice()) {
-                (0, _) => {
-                    return Err(at.error(
-                        "kinematic.mould",
-                        "a kinematic drape needs a mould: the scene has no tools",
-                    ));
-                }
-                (1, _) => 0,
-                (_, &[only]) => only,
-                _ => {
-                    return Err(at.error(
-                        "kinematic.mould",
-                        format!(
-                            "the scene has {} tools ({}): name the mould with `mould = \"…\"` in [kinematic]",
-                            names.len(),
-                            names.join(", ")
-                        ),
-                    ));
-                }
-            }
+            default_mould(spec, model).map_err(|message| at.error("kinematic.mould", message))?
         }
     };
+    let mould = choice.mould;
     let tool = &model.tools[mould];
     let Some(blank) = &model.blank else {
         return Err(at.error(
@@ -154,10 +223,12 @@ pub(super) fn setup(
         Some(d) => unit(at, "kinematic.direction", d)?,
         None => {
             let moving = tool.motion.direction();
-            if moving == Vector3::zeros() {
-                -Vector3::z()
-            } else {
-                -moving
+            match choice.pressed_by {
+                // The blank travels with the tool that presses it into
+                // the fixed mould.
+                Some(punch) => model.tools[punch].motion.direction(),
+                None if moving == Vector3::zeros() => -Vector3::z(),
+                None => -moving,
             }
         }
     };
@@ -181,6 +252,7 @@ pub(super) fn setup(
     let weft_curve = curve("kinematic.weft_generator", &k.weft_generator)?;
     Ok(KinematicSetup {
         mould,
+        mould_reason: choice.reason,
         mould_displacement: tool
             .prescribed_displacement(spec.simulation.end_time)
             .unwrap_or(0.0),
@@ -276,5 +348,61 @@ geometry = { kind = "plane", point = [0, 0, -100], normal = [0, 0, 1] }
         let scene = Scene::parse(&two_fixed, "s.toml".as_ref(), &[]).unwrap();
         let e = scene.kinematic.unwrap_err();
         assert!(e.message.contains("2 tools (punch, die)"), "{e}");
+    }
+
+    /// A fixed female mould under the blank and a punch above it coming
+    /// down: the blank is formed into the mould, so the net goes there,
+    /// along the punch's motion, whichever order the tools come in.
+    #[test]
+    fn a_punch_pressing_into_a_fixed_mould_drapes_on_the_mould() {
+        let punch = r#"
+[[tools]]
+name = "punch"
+geometry = { kind = "sphere", center = [0, 0, 60], radius = 50 }
+motion = { kind = "displacement", direction = [0, 0, -1], distance = 40, amplitude = { kind = "ramp", duration = 1.0 } }
+"#;
+        let mould = r#"
+[[tools]]
+name = "cavity"
+geometry = { kind = "revolution", origin = [0, 0, 0], profile = [{ kind = "line", from = [0, -40], to = [80, -40] }, { kind = "line", from = [80, -40], to = [80, 0] }] }
+"#;
+        let head = r#"
+[simulation]
+end_time = 1.0
+
+[fabric]
+material = "glass-serge-4x3"
+fibres = "embedded"
+blank = { width = 120, height = 120, cells = [12, 12], center = [0, 0, 2] }
+"#;
+        for tools in [format!("{punch}{mould}"), format!("{mould}{punch}")] {
+            let scene = Scene::parse(&format!("{head}{tools}"), "s.toml".as_ref(), &[]).unwrap();
+            let k = scene.kinematic.unwrap();
+            assert_eq!(scene.model.tools[k.mould].name, "cavity");
+            assert_eq!(
+                k.mould_reason,
+                "the fixed tool that the moving tool `punch` presses the blank into"
+            );
+            assert_eq!(k.mould_displacement, 0.0);
+            assert_eq!(k.net.direction, -nalgebra::Vector3::z());
+        }
+    }
+
+    /// The shipped forming scenes: a deep drawing's die and blank holder
+    /// have an opening where the part forms, so the punch is the mould.
+    #[test]
+    fn the_shipped_scenes_drape_on_their_punch() {
+        let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        for (file, mould) in [
+            ("deep-drawing-0-90.toml", "punch"),
+            ("deep-drawing-45.toml", "punch"),
+            ("hemisphere-ring.toml", "punch"),
+            ("hemisphere-0-90.toml", "punch"),
+            ("hemisphere-conform.toml", "mould"),
+        ] {
+            let scene = Scene::from_file(&scenes.join(file), &[]).unwrap();
+            let k = scene.kinematic.unwrap_or_else(|e| panic!("{file}: {e}"));
+            assert_eq!(scene.model.tools[k.mould].name, mould, "{file}");
+        }
     }
 }

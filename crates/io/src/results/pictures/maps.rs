@@ -30,6 +30,10 @@ pub struct MapPanel<'a> {
     /// The colour range: [0, scale], or [−scale, scale] when signed; None
     /// takes the largest |value|.
     pub scale: Option<f64>,
+    /// A fixed colour range [low, high] of magnitudes, in place of
+    /// `scale` (the scene's `output.shear_range_deg`); ignored when
+    /// signed.
+    pub range: Option<[f64; 2]>,
 }
 
 /// Size of one panel, pixels.
@@ -101,11 +105,16 @@ pub(in crate::results) fn flat_maps_of(
                 .fold(0.0f64, |m, v| m.max(v.abs()));
             let scale = panel.scale.unwrap_or(largest);
             let scale = if scale > 0.0 { scale } else { 1.0 };
+            let [lo, scale] = match panel.range {
+                Some([a, b]) if !panel.signed && a.is_finite() && b.is_finite() && a < b => [a, b],
+                _ if panel.signed => [-scale, scale],
+                _ => [0.0, scale],
+            };
             let colour = |v: f64| {
                 if panel.signed {
                     diverging(v / scale)
                 } else {
-                    viridis(v.abs() / scale)
+                    viridis((v.abs() - lo) / (scale - lo))
                 }
             };
             let body = area.titled(&panel.title, (FAMILY, 20)).map_err(drawing)?;
@@ -150,7 +159,6 @@ pub(in crate::results) fn flat_maps_of(
                 }))
                 .map_err(drawing)?;
 
-            let lo = if panel.signed { -scale } else { 0.0 };
             let mut bar = ChartBuilder::on(&bar_area)
                 .margin_left(70)
                 .margin_right(30)

@@ -22,7 +22,7 @@ use nalgebra::Vector3;
 use plotters::prelude::*;
 
 use super::super::tools::ToolMeshes;
-use super::{FAMILY, MAP_SIZE, Result, colour_bar, drawing, human, render, viridis};
+use super::{FAMILY, MAP_SIZE, Result, colour_bar, drawing, human, on_scale, render, shear_scale};
 
 /// The view's azimuth and elevation (degrees).
 pub(in crate::results) const VIEW_DEG: (f64, f64) = (-60.0, 35.0);
@@ -99,13 +99,15 @@ fn outline(
 }
 
 /// `shear_3d.png` of `model` at `state`, the tools of `tools` displaced by
-/// `displacements` along their axes.
+/// `displacements` along their axes, the colours over the |γ| `range`
+/// (None: 0 to the largest).
 pub(in crate::results) fn oblique_view(
     model: &Model,
     state: &State,
     fields: &ElementFields,
     tools: &ToolMeshes,
     displacements: &[f64],
+    range: Option<[f64; 2]>,
 ) -> Result<Vec<u8>> {
     let [right, up, towards] = view_axes();
     let screen = |p: &Vector3<f64>| (p.dot(&right), p.dot(&up));
@@ -149,7 +151,7 @@ pub(in crate::results) fn oblique_view(
         .map(|p| p.value)
         .filter(|v| v.is_finite())
         .fold(0.0, f64::max);
-    let scale_max = if vmax > 0.0 { vmax } else { 1.0 };
+    let scale = shear_scale(range, vmax);
     let (mut u, mut v) = (
         [f64::INFINITY, f64::NEG_INFINITY],
         [f64::INFINITY, f64::NEG_INFINITY],
@@ -211,7 +213,7 @@ pub(in crate::results) fn oblique_view(
         let mean_area = fields.area.iter().sum::<f64>() / fields.area.len().max(1) as f64;
         let show_mesh = mean_area.sqrt() * s > 14.0;
         for p in &patches {
-            let colour = viridis(p.value / scale_max);
+            let colour = on_scale(p.value, scale);
             let corners: Vec<(i32, i32)> = p.corners.iter().map(|&c| to_px(c)).collect();
             let mut ring = corners.clone();
             ring.push(corners[0]);
@@ -255,7 +257,7 @@ pub(in crate::results) fn oblique_view(
         let (_, base_y) = map_area.get_base_pixel();
         let rows = base_y + margin as i32..base_y + ph as i32 - margin as i32;
         let key_height = 80;
-        let (bar_left, root_y) = colour_bar(root, w, rows.clone(), key_height, scale_max)?;
+        let (bar_left, root_y) = colour_bar(root, w, rows.clone(), key_height, scale, "|γ| (deg)")?;
         if !tool_lines.is_empty() {
             let key = root.clone().shrink(
                 (bar_left, rows.end - root_y - key_height as i32 + 40),

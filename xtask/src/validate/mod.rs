@@ -309,6 +309,17 @@ const HEADER: [&str; 6] = [
     "status",
 ];
 
+/// A value of the table: a whole number (a count of steps, increments,
+/// elements, or an exact zero) as an integer, "52794" rather than
+/// "5.2794000000e4"; anything else with eleven significant digits.
+fn value(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.10e}")
+    }
+}
+
 fn cells(check: &Check) -> [String; 6] {
     let tolerance = match check.tolerance {
         Tolerance::Abs(t) => format!("abs {t:.1e}"),
@@ -316,8 +327,8 @@ fn cells(check: &Check) -> [String; 6] {
     };
     [
         check.quantity.clone(),
-        format!("{:.10e}", check.reference),
-        format!("{:.10e}", check.computed),
+        value(check.reference),
+        value(check.computed),
         tolerance,
         format!("{:.2e}", check.error),
         if check.passed { "PASS" } else { "FAIL" }.to_owned(),
@@ -436,6 +447,16 @@ impl Rng {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn counts_print_as_integers_and_measures_in_full() {
+        assert_eq!(value(52794.0), "52794");
+        assert_eq!(value(0.0), "0");
+        assert_eq!(value(-3.0), "-3");
+        assert_eq!(value(0.25), "2.5000000000e-1");
+        assert_eq!(value(1e20), "1.0000000000e20");
+        assert_eq!(value(f64::NAN), "NaN");
+    }
 
     /// The per-point cases run in `cargo test` too; the simulation cases
     /// (explicit, contact: tens of seconds) run in `cargo xtask validate

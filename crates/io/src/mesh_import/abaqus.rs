@@ -77,7 +77,7 @@ pub(super) fn parse_abaqus_raw(
     text: &str,
     path: &Path,
 ) -> Result<(RawMesh, &'static str), ImportError> {
-    let raw = read_raw(text, path, Use::Blank)?;
+    let raw = read_raw(text, path, Use::Blank, None)?;
     Ok((
         raw,
         ": drape reads the element types M3D3, M3D4, M3D4R, S3, S3R, S4, S4R, CPS3, CPS4 and \
@@ -100,16 +100,26 @@ pub(super) fn parse_abaqus_raw(
 /// an STL. Nodes no triangle uses (reference points) are dropped. The
 /// geometry (degenerate triangles, winding) is checked by the surface,
 /// not here.
-pub fn read_abaqus_surface(path: impl AsRef<Path>) -> Result<SurfaceMesh, ImportError> {
+///
+/// With `instance`, only that instance is read (in a file without
+/// instances, that part): one file may hold a mould and a punch.
+pub fn read_abaqus_surface(
+    path: impl AsRef<Path>,
+    instance: Option<&str>,
+) -> Result<SurfaceMesh, ImportError> {
     let path = path.as_ref();
     let bytes = read_bytes(path)?;
-    parse_abaqus_surface(&String::from_utf8_lossy(&bytes), path)
+    parse_abaqus_surface(&String::from_utf8_lossy(&bytes), path, instance)
 }
 
 /// [`read_abaqus_surface`] from the file's text; `path` names it in errors
 /// and anchors `*INCLUDE` files.
-pub fn parse_abaqus_surface(text: &str, path: &Path) -> Result<SurfaceMesh, ImportError> {
-    let raw = read_raw(text, path, Use::Surface)?;
+pub fn parse_abaqus_surface(
+    text: &str,
+    path: &Path,
+    instance: Option<&str>,
+) -> Result<SurfaceMesh, ImportError> {
+    let raw = read_raw(text, path, Use::Surface, instance)?;
     if raw.elements.is_empty() {
         return Err(error(
             path,
@@ -225,8 +235,13 @@ impl Use {
 }
 
 /// Reads a whole file (and its includes) into a raw mesh: instances
-/// placed, labels resolved, sets named.
-fn read_raw(text: &str, path: &Path, use_: Use) -> Result<RawMesh, ImportError> {
+/// placed (only `only`, if given), labels resolved, sets named.
+fn read_raw(
+    text: &str,
+    path: &Path,
+    use_: Use,
+    only: Option<&str>,
+) -> Result<RawMesh, ImportError> {
     let mut reader = InpReader {
         use_,
         scopes: vec![Scope::default()],
@@ -235,7 +250,7 @@ fn read_raw(text: &str, path: &Path, use_: Use) -> Result<RawMesh, ImportError> 
     reader.files.push(path.to_owned());
     reader.read(text, 0, 0)?;
     reader.end_block()?;
-    reader.resolve()
+    reader.resolve(only)
 }
 
 /// How many `*INCLUDE` levels are followed (a cycle would never end).
@@ -1123,9 +1138,33 @@ impl InpReader {
         Ok(out)
     }
 
-    /// Instances placed, labels → indices, sets resolved and named.
-    fn resolve(self) -> Result<RawMesh, ImportError> {
-        let placements = self.placements()?;
+    /// Instances placed (only `only`, if given), labels → indices, sets
+    /// resolved and named.
+    fn resolve(self, only: Option<&str>) -> Result<RawMesh, ImportError> {
+        let mut placements = self.placements()?;
+        if let Some(only) = only {
+            let names: Vec<String> = placements.iter().filter_map(|p| p.name.clone()).collect();
+            // The model level's sets may name the others: it goes too.
+            placements.retain(|p| {
+                p.name
+                    .as_deref()
+                    .is_some_and(|n| n.eq_ignore_ascii_case(only))
+            });
+            if placements.is_empty() {
+                return Err(self.err(
+                    At::default(),
+                    ImportErrorKind::UndefinedSet,
+                    format!(
+                        "`instance = \"{only}\"`: the file has no such instance ({})",
+                        if names.is_empty() {
+                            "it has neither instances nor parts".to_owned()
+                        } else {
+                            format!("it has {}", names.join(", "))
+                        }
+                    ),
+                ));
+            }
+        }
         let mut raw = RawMesh {
             files: self.files.clone(),
             instances: placements

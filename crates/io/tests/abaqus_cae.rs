@@ -186,6 +186,26 @@ fn a_rotation_about_an_axis_off_the_origin_follows_the_translation() {
             Vector3::new(2.0, 1.0, 9.0),
         ],
     );
+    // A pure rotation: Abaqus's blank translation line (skipped), then the
+    // rotation, 180° about the axis through (1, 0, 0) along y.
+    let pure = text.replace(
+        "0, 0, 10\n1, 0, 10, 1, 1, 10, 180",
+        "\n1, 0, 0, 1, 1, 0, 180",
+    );
+    let s = parse_abaqus_surface(&pure, Path::new("axis.inp"), None).unwrap();
+    assert_close(
+        &s.vertices,
+        &[
+            Vector3::new(2.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(2.0, 1.0, -1.0),
+        ],
+    );
+    // A third position line is refused (a missing *END INSTANCE).
+    let third = text.replace("180\n", "180\n1, 2, 3\n");
+    let e = parse_abaqus_surface(&third, Path::new("axis.inp"), None).unwrap_err();
+    assert_eq!(e.line, Some(13), "{e}");
+    assert!(e.message.contains("third data line"), "{e}");
 }
 
 #[test]

@@ -831,6 +831,7 @@ impl InpReader {
         // Taken out for the call (the readers need `&mut self`), put back
         // after: no copy of the block's strings per line.
         let block = std::mem::take(&mut self.block);
+        let mut instance_lines = usize::MAX;
         let result = match &block {
             Block::Skip => Ok(()),
             Block::Node { nset } => self.node_line(line, at, nset.as_deref()),
@@ -849,10 +850,14 @@ impl InpReader {
                 generate,
                 instance,
             } => self.set_line(line, at, true, key, *generate, instance),
-            Block::Instance { lines } => self.instance_line(line, at, *lines),
+            Block::Instance { lines } => self.instance_line(line, at, *lines).map(|taken| {
+                instance_lines = taken + 1;
+            }),
         };
         self.block = match block {
-            Block::Instance { lines } => Block::Instance { lines: lines + 1 },
+            Block::Instance { .. } => Block::Instance {
+                lines: instance_lines,
+            },
             other => other,
         };
         result
@@ -860,14 +865,32 @@ impl InpReader {
 
     /// An `*INSTANCE` data line: the first is a translation, the second a
     /// rotation (point a, point b, angle in degrees about a→b).
-    fn instance_line(&mut self, line: &str, at: At, before: usize) -> Result<(), ImportError> {
+    /// Returns which line it was taken as (0 translation, 1 rotation).
+    fn instance_line(&mut self, line: &str, at: At, before: usize) -> Result<usize, ImportError> {
         let values = fields(line)
             .iter()
             .map(|f| self.float(f, at, "instance position"))
             .collect::<Result<Vec<_>, _>>()?;
+        // Abaqus leaves the translation line blank for a pure rotation, and
+        // blank lines are skipped here: seven values first are the rotation.
+        let before = if before == 0 && values.len() == 7 {
+            1
+        } else {
+            before
+        };
         let v = |i: usize| values.get(i).copied().unwrap_or(0.0);
         let name = self.scopes[self.current].name.clone();
         let rotation = match before {
+            0 if values.len() > 3 => {
+                return Err(self.err(
+                    at,
+                    ImportErrorKind::Syntax,
+                    format!(
+                        "instance {name}: the translation line has {} values, expected 3",
+                        values.len()
+                    ),
+                ));
+            }
             0 => None,
             1 => {
                 if values.len() != 7 {
@@ -918,7 +941,7 @@ impl InpReader {
                 Some(r) => position.rotation = r,
             }
         }
-        Ok(())
+        Ok(before)
     }
 
     fn int(&self, field: &str, at: At, what: &str) -> Result<i64, ImportError> {

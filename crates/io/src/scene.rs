@@ -400,6 +400,10 @@ pub enum GeometrySpec {
         /// Drop degenerate triangles (a warning counts them).
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         drop_degenerate: bool,
+        /// With an Abaqus file: only this instance (or part, in a file
+        /// without instances), when the file holds several tools.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        instance: Option<String>,
     },
 }
 
@@ -1524,13 +1528,14 @@ fn build(
                 rotate,
                 reorient,
                 drop_degenerate,
+                instance,
             } => {
                 let placement = Placement::new(at, &g, *units, *scale, *rotate, Some(*offset))?;
                 let options = drape_contact::RepairOptions {
                     drop_degenerate: *drop_degenerate,
                     reorient: *reorient,
                 };
-                placement::tool_mesh(at, &g, file, &placement, options)?
+                placement::tool_mesh(at, &g, file, &placement, options, instance.as_deref())?
             }
         };
         let m = format!("{here}.motion");

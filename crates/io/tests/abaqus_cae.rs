@@ -129,7 +129,7 @@ fn assert_close(got: &[Vector3<f64>], want: &[Vector3<f64>]) {
 #[test]
 fn instances_place_copies_of_their_parts_node_by_node() {
     let text = cae("R3D4", "R3D3");
-    let s = parse_abaqus_surface(&text, Path::new("mould.inp")).unwrap();
+    let s = parse_abaqus_surface(&text, Path::new("mould.inp"), None).unwrap();
     let mut want = mould_nodes();
     want.extend(punch_nodes());
     // The reference point (used by no element) is dropped.
@@ -159,7 +159,7 @@ fn instances_place_copies_of_their_parts_node_by_node() {
         "*Instance, name=Mould-2, part=Mould\n 0., 0., 100.\n*End Instance\n\
          *Instance, name=Punch-1, part=Punch",
     );
-    let s = parse_abaqus_surface(&twice, Path::new("twice.inp")).unwrap();
+    let s = parse_abaqus_surface(&twice, Path::new("twice.inp"), None).unwrap();
     assert_eq!(s.vertices.len(), 11);
     for k in 0..4 {
         assert_eq!(
@@ -177,7 +177,7 @@ fn a_rotation_about_an_axis_off_the_origin_follows_the_translation() {
                 *Element, type=R3D3\n1, 1, 2, 3\n*End Part\n*Assembly, name=A\n\
                 *Instance, name=P-1, part=P\n0, 0, 10\n1, 0, 10, 1, 1, 10, 180\n\
                 *End Instance\n*End Assembly\n";
-    let s = parse_abaqus_surface(text, Path::new("axis.inp")).unwrap();
+    let s = parse_abaqus_surface(text, Path::new("axis.inp"), None).unwrap();
     assert_close(
         &s.vertices,
         &[
@@ -186,6 +186,26 @@ fn a_rotation_about_an_axis_off_the_origin_follows_the_translation() {
             Vector3::new(2.0, 1.0, 9.0),
         ],
     );
+    // A pure rotation: Abaqus's blank translation line (skipped), then the
+    // rotation, 180° about the axis through (1, 0, 0) along y.
+    let pure = text.replace(
+        "0, 0, 10\n1, 0, 10, 1, 1, 10, 180",
+        "\n1, 0, 0, 1, 1, 0, 180",
+    );
+    let s = parse_abaqus_surface(&pure, Path::new("axis.inp"), None).unwrap();
+    assert_close(
+        &s.vertices,
+        &[
+            Vector3::new(2.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(2.0, 1.0, -1.0),
+        ],
+    );
+    // A third position line is refused (a missing *END INSTANCE).
+    let third = text.replace("180\n", "180\n1, 2, 3\n");
+    let e = parse_abaqus_surface(&third, Path::new("axis.inp"), None).unwrap_err();
+    assert_eq!(e.line, Some(13), "{e}");
+    assert!(e.message.contains("third data line"), "{e}");
 }
 
 #[test]
@@ -205,7 +225,7 @@ fn quads_split_along_their_shorter_diagonal() {
     // Read from a file: the two triangles keep the quad's normal (+z).
     let text = "*Node\n1, 0, 0\n2, 10, 0\n3, 15, 5\n4, 5, 5\n*Element, type=R3D4\n\
                 7, 1, 2, 3, 4\n";
-    let s = parse_abaqus_surface(text, Path::new("skew.inp")).unwrap();
+    let s = parse_abaqus_surface(text, Path::new("skew.inp"), None).unwrap();
     assert_eq!(s.triangles, [[0, 1, 3], [1, 2, 3]]);
     for t in &s.triangles {
         let p = |i: usize| s.vertices[t[i] as usize];
@@ -214,7 +234,8 @@ fn quads_split_along_their_shorter_diagonal() {
     }
     // Surface elements and shells too.
     for kind in ["SFM3D4R", "S4R", "M3D4"] {
-        let s = parse_abaqus_surface(&text.replace("R3D4", kind), Path::new("skew.inp")).unwrap();
+        let s =
+            parse_abaqus_surface(&text.replace("R3D4", kind), Path::new("skew.inp"), None).unwrap();
         assert_eq!(s.triangles, [[0, 1, 3], [1, 2, 3]], "{kind}");
     }
 }
@@ -372,7 +393,7 @@ fn cae_errors_name_the_file_line_and_culprit() {
     let line_of = |t: &str, content: &str| t.lines().position(|l| l.trim() == content).unwrap() + 1;
     // An element type a tool cannot use.
     let bad = cae("C3D8R", "R3D3");
-    let e = parse_abaqus_surface(&bad, Path::new("m.inp")).unwrap_err();
+    let e = parse_abaqus_surface(&bad, Path::new("m.inp"), None).unwrap_err();
     assert_eq!(e.kind, ImportErrorKind::UnsupportedElement);
     assert_eq!(e.line, Some(line_of(&bad, "*Element, type=C3D8R")));
     assert!(
@@ -388,7 +409,7 @@ fn cae_errors_name_the_file_line_and_culprit() {
     );
     // An instance of an unknown part.
     let bad = text.replace("part=Punch", "part=Pnuch");
-    let e = parse_abaqus_surface(&bad, Path::new("m.inp")).unwrap_err();
+    let e = parse_abaqus_surface(&bad, Path::new("m.inp"), None).unwrap_err();
     assert_eq!(
         e.line,
         Some(line_of(&bad, "*Instance, name=Punch-1, part=Pnuch"))
@@ -400,7 +421,7 @@ fn cae_errors_name_the_file_line_and_culprit() {
     );
     // A node label the part does not define.
     let bad = text.replace("1, 1, 2, 3, 4", "1, 1, 2, 3, 9");
-    let e = parse_abaqus_surface(&bad, Path::new("m.inp")).unwrap_err();
+    let e = parse_abaqus_surface(&bad, Path::new("m.inp"), None).unwrap_err();
     assert_eq!(e.kind, ImportErrorKind::UndefinedNode);
     assert_eq!(e.line, Some(line_of(&bad, "1, 1, 2, 3, 9")));
     assert!(
@@ -410,7 +431,7 @@ fn cae_errors_name_the_file_line_and_culprit() {
     );
     // A set naming an instance that does not exist.
     let bad = text.replace("instance=Punch-1", "instance=Punch-2");
-    let e = parse_abaqus_surface(&bad, Path::new("m.inp")).unwrap_err();
+    let e = parse_abaqus_surface(&bad, Path::new("m.inp"), None).unwrap_err();
     assert_eq!(e.kind, ImportErrorKind::UndefinedSet);
     assert!(e.message.contains("set tip names instance Punch-2"), "{e}");
     // A rotation line that is cut short, and an axis of one point.
@@ -418,18 +439,18 @@ fn cae_errors_name_the_file_line_and_culprit() {
         "0.,           0.,           0.,           0.,           0.,           1.,          90.",
         "0., 0., 0., 0., 0., 1.",
     );
-    let e = parse_abaqus_surface(&bad, Path::new("m.inp")).unwrap_err();
+    let e = parse_abaqus_surface(&bad, Path::new("m.inp"), None).unwrap_err();
     assert_eq!(e.line, Some(line_of(&bad, "0., 0., 0., 0., 0., 1.")));
     assert!(e.message.contains("expected 7"), "{e}");
     let bad = text.replace(
         "0.,           0.,           0.,           0.,           0.,           1.,          90.",
         "1., 1., 1., 1., 1., 1., 90.",
     );
-    let e = parse_abaqus_surface(&bad, Path::new("m.inp")).unwrap_err();
+    let e = parse_abaqus_surface(&bad, Path::new("m.inp"), None).unwrap_err();
     assert!(e.message.contains("two different points"), "{e}");
     // A part left open.
     let bad = text.replacen("*End Part\n", "", 1);
-    let e = parse_abaqus_surface(&bad, Path::new("m.inp")).unwrap_err();
+    let e = parse_abaqus_surface(&bad, Path::new("m.inp"), None).unwrap_err();
     assert_eq!(e.line, Some(line_of(&bad, "*Part, name=Punch")));
     assert!(e.message.contains("*END PART is missing"), "{e}");
     // A duplicate node within one part, but not across parts.
@@ -437,11 +458,11 @@ fn cae_errors_name_the_file_line_and_culprit() {
         "      4,           0.,          10.",
         "      3,           0.,          10.",
     );
-    let e = parse_abaqus_surface(&bad, Path::new("m.inp")).unwrap_err();
+    let e = parse_abaqus_surface(&bad, Path::new("m.inp"), None).unwrap_err();
     assert_eq!(e.kind, ImportErrorKind::Duplicate);
     assert!(e.message.contains("node 3 is defined twice"), "{e}");
     // No surface element at all.
-    let e = parse_abaqus_surface("*Node\n1, 0, 0\n", Path::new("none.inp")).unwrap_err();
+    let e = parse_abaqus_surface("*Node\n1, 0, 0\n", Path::new("none.inp"), None).unwrap_err();
     assert_eq!(e.kind, ImportErrorKind::Empty);
 }
 
@@ -491,7 +512,7 @@ fn a_mesh_inside_an_instance_and_in_an_included_file_is_placed_too() {
                 3, 0, 1, 0\n*Element, type=R3D3\n1, 1, 2, 3\n*End Instance\n*End Assembly\n";
     let path = dir.join("main.inp");
     std::fs::write(&path, text).unwrap();
-    let s = drape_io::mesh_import::read_abaqus_surface(&path).unwrap();
+    let s = drape_io::mesh_import::read_abaqus_surface(&path, None).unwrap();
     assert_close(
         &s.vertices,
         &[
@@ -505,5 +526,44 @@ fn a_mesh_inside_an_instance_and_in_an_included_file_is_placed_too() {
         ],
     );
     assert_eq!(s.triangles, [[0, 1, 2], [0, 2, 3], [4, 5, 6]]);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn one_instance_of_a_file_is_picked_as_a_tool() {
+    let text = cae("R3D4", "R3D3");
+    // Names are case-insensitive, as in Abaqus.
+    let s = parse_abaqus_surface(&text, Path::new("m.inp"), Some("punch-1")).unwrap();
+    assert_close(&s.vertices, &punch_nodes());
+    assert_eq!(s.triangles, [[0, 1, 2]]);
+    let e = parse_abaqus_surface(&text, Path::new("m.inp"), Some("Die-1")).unwrap_err();
+    assert!(
+        e.message
+            .contains("no such instance (it has Mould-1, Punch-1)"),
+        "{e}"
+    );
+    // In a scene: the key `instance`, refused for an STL.
+    let dir = temp("pick");
+    std::fs::write(dir.join("tools.inp"), &text).unwrap();
+    let scene = scene_with_tool(
+        &dir,
+        r#"{ kind = "mesh", file = "tools.inp", instance = "Mould-1" }"#,
+    );
+    let b = scene.model.tools[0].surface.aabb();
+    assert_eq!((b.min, b.max), (mould_nodes()[0], mould_nodes()[2]));
+    std::fs::write(dir.join("t.stl"), "solid t\nendsolid t\n").unwrap();
+    let path = dir.join("scene.toml");
+    std::fs::write(
+        &path,
+        std::fs::read_to_string(&path)
+            .unwrap()
+            .replace("tools.inp", "t.stl"),
+    )
+    .unwrap();
+    let e = Scene::from_file(&path, &[]).unwrap_err().to_string();
+    assert!(
+        e.contains("tools[0].geometry.instance") && e.contains("Abaqus .inp"),
+        "{e}"
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -122,8 +122,8 @@ pub(super) fn across(points: &[Vector3<f64>]) -> f64 {
 }
 
 /// The surface of a tool's mesh file `file` (STL, OBJ or Abaqus `.inp`,
-/// relative to the scene), placed by `placement` and repaired as `options`
-/// ask; `g` is the geometry's field path for errors and warnings. A
+/// relative to the scene; of an `.inp`, only `instance` if given), placed
+/// by `placement` and repaired as `options` ask; `g` is the geometry's field path for errors and warnings. A
 /// surface less than 1 mm or more than 10 m across (after `units` and
 /// `scale`) is most likely a file in another unit, and is warned about
 /// as a blank mesh is.
@@ -133,17 +133,24 @@ pub(super) fn tool_mesh(
     file: &str,
     placement: &Placement,
     options: RepairOptions,
+    instance: Option<&str>,
 ) -> Result<Surface, SceneError> {
     let path = at.file.parent().unwrap_or(Path::new(".")).join(file);
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
+    if instance.is_some() && extension.as_deref() != Some("inp") {
+        return Err(at.error(
+            &format!("{g}.instance"),
+            format!("`{file}`: `instance` picks an instance of an Abaqus .inp file"),
+        ));
+    }
     let read = match extension.as_deref() {
         Some("stl") => drape_contact::read_stl(&path).map_err(|e| e.to_string()),
         Some("obj") => drape_contact::read_obj(&path).map_err(|e| e.to_string()),
         // Rigid-surface and shell elements, Abaqus/CAE parts and instances.
-        Some("inp") => crate::mesh_import::read_abaqus_surface(&path)
+        Some("inp") => crate::mesh_import::read_abaqus_surface(&path, instance)
             .map(|m| (m.vertices, m.triangles))
             .map_err(|e| e.to_string()),
         _ => {

@@ -1121,7 +1121,7 @@ fn pressure(
                 }
                 total += area.norm();
             }
-            if !(facing.abs() > 0.05 * total) {
+            if facing.is_nan() || facing.abs() <= 0.05 * total {
                 return Err(at.error(
                     &field,
                     format!(

@@ -60,7 +60,7 @@ impl LoadTiming {
             .fold(0.0, f64::max)
             / physical;
         // A thousandth more mass is no scaling worth a word.
-        if !(ratio > 1.001) || gravity + pressure == 0.0 || !ratio.is_finite() {
+        if !ratio.is_finite() || ratio <= 1.001 || gravity + pressure == 0.0 {
             return None;
         }
         let loads = match (gravity > 0.0, pressure > 0.0) {

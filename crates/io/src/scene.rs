@@ -653,6 +653,30 @@ pub struct LoadSpec {
     pub per_length: bool,
 }
 
+/// `[[pressure]]`: a uniform follower pressure on the blank's surface (a
+/// vacuum bag, a diaphragm), along each element's current normal.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressureSpec {
+    /// Pressure (MPa; 0.1 is one bar, a full vacuum).
+    pub value: f64,
+    /// Push the blank towards the tool of this name (the side it lies on
+    /// at the start). Exactly one of `towards` and `side`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub towards: Option<String>,
+    /// Push along the blank's normal at the start ("+": +z for a rectangle,
+    /// a mesh's by its elements' node order) or against it ("-").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub side: Option<String>,
+    /// a(t).
+    #[serde(default = "constant")]
+    pub amplitude: Amplitude,
+    /// Only the elements whose nodes all belong to these (default: the
+    /// whole blank).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nodes: Option<NodeSelection>,
+}
+
 fn default_locking() -> f64 {
     50.0
 }
@@ -710,6 +734,9 @@ pub struct SceneFile {
     /// `[[loads]]`.
     #[serde(default)]
     pub loads: Vec<LoadSpec>,
+    /// `[[pressure]]`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pressure: Vec<PressureSpec>,
     /// Gravity (mm/s²).
     #[serde(default)]
     pub gravity: Option<[f64; 3]>,
@@ -1016,6 +1043,107 @@ fn unit(at: &Locator<'_>, field: &str, v: [f64; 3]) -> Result<Vector3<f64>, Scen
 fn amplitude(at: &Locator<'_>, field: &str, a: &Amplitude) -> Result<Amplitude, SceneError> {
     a.validate().map_err(|m| at.error(field, m))?;
     Ok(a.clone())
+}
+
+/// A `[[pressure]]` on `model` (its tools already in): the elements
+/// selected, oriented to the side asked for.
+fn pressure(
+    at: &Locator<'_>,
+    here: &str,
+    model: &Model,
+    p: &PressureSpec,
+) -> Result<drape_model::PressureLoad, SceneError> {
+    if !(p.value.is_finite() && p.value >= 0.0) {
+        return Err(at.error(
+            &format!("{here}.value"),
+            format!(
+                "{} is not allowed: expected a pressure ≥ 0 in MPa (0.1 is one bar); \
+                 `towards` or `side` says which way it pushes",
+                p.value
+            ),
+        ));
+    }
+    let amplitude = amplitude(at, &format!("{here}.amplitude"), &p.amplitude)?;
+    let selected = match &p.nodes {
+        Some(sel) => Some(nodes(at, &format!("{here}.nodes"), model, sel)?),
+        None => None,
+    };
+    let load = |flip| {
+        drape_model::PressureLoad::on_membranes(
+            model,
+            selected.as_deref(),
+            flip,
+            p.value,
+            amplitude.clone(),
+        )
+    };
+    let plus = load(false);
+    if plus.is_empty() {
+        return Err(at.error(
+            &format!("{here}.nodes"),
+            "no element of the blank has all its nodes in this selection: the pressure would act on nothing",
+        ));
+    }
+    let flip = match (&p.towards, p.side.as_deref()) {
+        (Some(_), Some(_)) | (None, None) => {
+            return Err(at.error(
+                here,
+                "give exactly one of `towards = \"<tool name>\"` and `side = \"+\"` or `\"-\"`",
+            ));
+        }
+        (None, Some("+")) => false,
+        (None, Some("-")) => true,
+        (None, Some(other)) => {
+            return Err(at.error(
+                &format!("{here}.side"),
+                format!("`{other}` is not allowed: expected \"+\" (along the blank's normal, +z for a rectangle) or \"-\""),
+            ));
+        }
+        (Some(name), None) => {
+            let field = format!("{here}.towards");
+            let Some(tool) = model.tools.iter().find(|t| &t.name == name) else {
+                let known: Vec<&str> = model.tools.iter().map(|t| t.name.as_str()).collect();
+                return Err(at.error(
+                    &field,
+                    if known.is_empty() {
+                        format!("unknown tool `{name}`: the scene has no tools; use `side` instead")
+                    } else {
+                        format!("unknown tool `{name}`; the tools are: {}", known.join(", "))
+                    },
+                ));
+            };
+            // Which way the elements' normals (node order) face the tool,
+            // weighted by area: the tool's side of the blank at the start.
+            let (mut facing, mut total) = (0.0, 0.0);
+            for e in 0..plus.len() {
+                let nodes = plus.element(e);
+                let area = drape_model::pressure::vector_area(nodes, &model.x0);
+                let centroid = nodes
+                    .iter()
+                    .map(|&n| model.x0[n as usize])
+                    .sum::<Vector3<f64>>()
+                    / nodes.len() as f64;
+                let to = tool.surface.project(&centroid).point - centroid;
+                let d = to.norm();
+                if d > 0.0 {
+                    facing += area.dot(&to) / d;
+                }
+                total += area.norm();
+            }
+            if facing.is_nan() || facing.abs() <= 0.05 * total {
+                return Err(at.error(
+                    &field,
+                    format!(
+                        "cannot tell which side of the blank tool `{name}` is on (it lies \
+                         edgewise to the blank or on both sides of it): give `side = \"+\"` \
+                         (along +z for a rectangle) or `side = \"-\"` instead"
+                    ),
+                ));
+            }
+            facing < 0.0
+        }
+    };
+    Ok(if flip { load(true) } else { plus })
 }
 
 /// The nodes `held`, grouped by their share of the blank's outline (mm):
@@ -1728,6 +1856,10 @@ fn build(
     }
     if let Some(g) = spec.gravity {
         model.gravity = finite3(at, "gravity", g)?;
+    }
+    for (i, p) in spec.pressure.iter().enumerate() {
+        let load = pressure(at, &format!("pressure[{i}]"), &model, p)?;
+        model.pressure.push(load);
     }
     // After the boundary conditions: lines are clamped at the fixed nodes.
     if fabric.bending {

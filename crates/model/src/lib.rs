@@ -37,6 +37,7 @@
 
 pub mod blank;
 pub mod measures;
+pub mod pressure;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -53,6 +54,7 @@ use serde::{Deserialize, Serialize};
 
 use blank::{BlankFrame, BlankMesh, FibreRepresentation, MeshError, RectangleBlank};
 use measures::{DrawIn, ProfileLine, ProfilePoint};
+pub use pressure::PressureLoad;
 
 /// What can go wrong while building a model.
 #[derive(Debug, thiserror::Error)]
@@ -207,6 +209,8 @@ pub struct Features {
     pub force_driven_tools: bool,
     /// Yarn bending (beyond the paper).
     pub bending: bool,
+    /// A follower pressure on the blank's surface.
+    pub pressure: bool,
 }
 
 /// Where each element batch writes its nodal forces in the global slot
@@ -287,6 +291,8 @@ pub struct Model {
     pub gravity: Vector3<f64>,
     /// Concentrated nodal forces.
     pub loads: Vec<NodalLoad>,
+    /// Follower pressures on membrane elements.
+    pub pressure: Vec<PressureLoad>,
     /// Named node sets.
     pub node_sets: BTreeMap<String, Vec<u32>>,
     /// The blank, when the model was meshed from one.
@@ -427,6 +433,7 @@ impl Model {
             boundary: Vec::new(),
             gravity: Vector3::zeros(),
             loads: Vec::new(),
+            pressure: Vec::new(),
             node_sets: mesh.node_sets.clone(),
             blank: None,
             tools: Vec::new(),
@@ -596,6 +603,12 @@ impl Model {
                 return Err(bad(n));
             }
         }
+        for p in &self.pressure {
+            let mut nodes = p.quads.iter().flatten().chain(p.triangles.iter().flatten());
+            if let Some(&n) = nodes.find(|&&n| n as usize >= count) {
+                return Err(bad(n));
+            }
+        }
         Ok(())
     }
 
@@ -622,6 +635,7 @@ impl Model {
             friction: self.tools.iter().any(|t| t.friction > 0.0),
             force_driven_tools: self.tools.iter().any(|t| t.is_force_driven()),
             bending: self.bending.iter().any(|b| !b.is_empty()),
+            pressure: self.pressure.iter().any(|p| !p.is_empty()),
         }
     }
 

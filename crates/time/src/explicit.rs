@@ -10,7 +10,8 @@ use rayon::prelude::*;
 use crate::energy::{chunked_sum, chunked_sums_into};
 use crate::guard::{self, Guard, GuardSettings};
 use crate::profile::{Pass, ProfileClock, Profiler, StepProfile};
-use crate::shared::{self, Constraints, ForcePass};
+use crate::scaling::LoadTiming;
+use crate::shared::{self, Constraints, ForcePass, PressurePass};
 use crate::{Control, DriverState, Energies, Frame, Observer, Progress, RunError, RunSummary};
 
 /// Nodes per task of the velocity/position update.
@@ -93,6 +94,8 @@ pub struct Explicit<'m> {
     constraints: Constraints,
     added_mass: f64,
     forces: ForcePass,
+    /// The follower pressures (empty without).
+    pressure: PressurePass,
     f_ext: Vec<Vector3<f64>>,
     x_new: Vec<Vector3<f64>>,
     v_new: Vec<Vector3<f64>>,
@@ -164,6 +167,7 @@ impl<'m> Explicit<'m> {
             warnings: Vec::new(),
             tool_touched: vec![false; model.tools.len()],
             forces: ForcePass::new(model),
+            pressure: PressurePass::new(model),
             profiler: None,
             mass: model.mass.clone(),
             truss_mass: Vec::new(),
@@ -220,6 +224,9 @@ impl<'m> Explicit<'m> {
         let dt = driver.settings.time_step.unwrap_or(estimate);
         driver.warnings =
             guard::check_tools_at_start(model, &model.x0, dt).map_err(RunError::Setup)?;
+        if let Some(timing) = LoadTiming::of(model, &driver.mass, driver.settings.end_time) {
+            driver.warnings.push(timing.message());
+        }
         Ok(driver)
     }
 
@@ -482,6 +489,8 @@ impl<'m> Explicit<'m> {
         let damping = self.settings.damping;
         shared::check_state(model, state)?;
         shared::external_forces(model, state.time, &mut self.f_ext);
+        self.pressure
+            .add_into(model, &state.x, state.time, &mut self.f_ext);
         // Forces at the start, with no time passing so no relaxation.
         self.forces.evaluate(
             model,
@@ -709,8 +718,11 @@ impl<'m> Explicit<'m> {
                 energy.boundary_work += w_bc;
             }
             self.lap(Pass::Works);
-            if !model.loads.is_empty() {
+            if !model.loads.is_empty() || !self.pressure.is_empty() {
                 shared::external_forces(model, t_new, &mut self.f_ext);
+                // Follower pressures at n+1, on the positions of n+1.
+                self.pressure
+                    .add_into(model, &self.x_new, t_new, &mut self.f_ext);
                 self.lap(Pass::Loads);
             }
             // Forces at n+1, the history advanced to n+1 where it lies (one

@@ -367,7 +367,14 @@ impl Guard {
             .loads
             .iter()
             .map(|l| l.force.norm() * peak_value(&l.amplitude) * l.nodes.len() as f64)
-            .sum();
+            .sum::<f64>()
+            // A pressure pushes with at most p·(its elements' area): twice
+            // the reference area bounds what a forming run stretches them to.
+            + model
+                .pressure
+                .iter()
+                .map(|p| p.value.abs() * peak_value(&p.amplitude) * 2.0 * p.area(&model.x0))
+                .sum::<f64>();
         let a = total_load / total_mass;
         if a.is_finite() {
             speed = speed.max(a * t);

@@ -67,7 +67,7 @@ use rayon::prelude::*;
 
 use crate::energy::{chunked_sum, chunked_sums};
 use crate::guard::{self, Guard, GuardSettings};
-use crate::shared::{self, Constraints, ForcePass};
+use crate::shared::{self, Constraints, ForcePass, PressurePass};
 use crate::tangent::{MembraneTangentChoice, SparseTangent};
 use crate::{
     Control, CutbackReasons, CutbackReport, DriverState, Energies, Frame, ImplicitCarry,
@@ -332,6 +332,9 @@ pub struct Implicit<'m> {
     /// Constrained flag per dof (3·node + component).
     fixed: Vec<bool>,
     forces: ForcePass,
+    /// The follower pressures (empty without): part of f_ext, evaluated at
+    /// every iterate.
+    pressure: PressurePass,
     tangent: SparseTangent,
     contact: Option<ImplicitContact>,
     alpha_m: f64,
@@ -465,8 +468,11 @@ impl<'m> Implicit<'m> {
         let zeros = vec![Vector3::zeros(); n];
         // No step-size check of force-driven tools: they are unknowns of the
         // contact solve, which cannot let them through the blank.
-        let warnings =
+        let mut warnings =
             guard::check_tools_at_start(model, &model.x0, 0.0).map_err(RunError::Setup)?;
+        if let Some(timing) = crate::scaling::LoadTiming::of(model, &mass, settings.end_time) {
+            warnings.push(timing.message());
+        }
         let guard = Guard::new(model, settings.guard.clone(), settings.end_time);
         Ok(Self {
             model,
@@ -474,6 +480,7 @@ impl<'m> Implicit<'m> {
             constraints,
             fixed,
             forces: ForcePass::new(model),
+            pressure: PressurePass::new(model),
             tangent,
             contact,
             alpha_m,
@@ -656,6 +663,8 @@ impl<'m> Implicit<'m> {
         let end = self.settings.end_time;
         shared::check_state(model, state)?;
         shared::external_forces(model, state.time, &mut self.f_ext);
+        self.pressure
+            .add_into(model, &state.x, state.time, &mut self.f_ext);
         self.forces.evaluate(
             model,
             &state.x,
@@ -1091,6 +1100,11 @@ impl<'m> Implicit<'m> {
                 None,
             );
             let mut friction_changes = 0;
+            if !self.pressure.is_empty() {
+                // The pressures follow the iterate: f_ext of x_{n+1}.
+                shared::external_forces(model, t1, &mut self.f_ext);
+                self.pressure.add_into(model, &self.x, t1, &mut self.f_ext);
+            }
             let (res, node, scale) = match evaluated {
                 Ok(()) => {
                     if let Some(contact) = &mut self.contact {
@@ -1222,9 +1236,11 @@ impl<'m> Implicit<'m> {
                 );
             }
             // The Newton step.
-            // The contact pass's stick springs go into every assembly the
-            // ladder of membrane tangents makes, before it factorises.
+            // The contact pass's stick springs and the pressures' load
+            // stiffness go into every assembly the ladder of membrane
+            // tangents makes, before it factorises.
             let contact = &self.contact;
+            let x_iterate = &self.x;
             let factorised = self.tangent.assemble_and_factorise(
                 model,
                 &self.x,
@@ -1236,6 +1252,7 @@ impl<'m> Implicit<'m> {
                     if let Some(contact) = contact {
                         contact.add_spring_stiffness(|i, b| tangent.add_node_block(i, b));
                     }
+                    tangent.add_pressure_stiffness(model, x_iterate, t1);
                 },
             );
             match factorised {

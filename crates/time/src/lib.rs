@@ -56,6 +56,7 @@ pub mod guard;
 mod implicit;
 mod observer;
 pub mod profile;
+pub mod scaling;
 mod shared;
 pub mod tangent;
 

@@ -1,7 +1,8 @@
 //! What both drivers use alike: the constrained components and their
 //! prescribed motions, the internal force pass (element batches into slots,
-//! gathered per node), gravity and nodal loads, the stored strain energy,
-//! and the checks a model must pass before it runs.
+//! gathered per node), gravity and nodal loads, the follower pressures
+//! (element slots gathered per node, like the internal forces), the stored
+//! strain energy, and the checks a model must pass before it runs.
 //!
 //! Not here: anything about how a driver advances time (central
 //! differences, Newton increments) or treats contact.
@@ -410,6 +411,112 @@ pub(crate) fn external_forces(model: &Model, t: f64, f_ext: &mut [Vector3<f64>])
         for &n in &load.nodes {
             f_ext[n as usize] += f;
         }
+    }
+}
+
+/// The follower pressures' nodal forces ([`drape_model::pressure`]): each
+/// loaded element writes its p·a(t)·A/k into its own slot (in parallel),
+/// and each node sums its elements' slots in ascending order, so the forces
+/// do not depend on the thread count. Built once; an evaluation allocates
+/// nothing. A model without pressure has an empty pass that adds nothing.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PressurePass {
+    /// Per slot: (load, element of the load).
+    elements: Vec<(u32, u32)>,
+    /// Each slot's force on each node of its element.
+    slots: Vec<Vector3<f64>>,
+    /// p·a(t) of each load at the evaluation's time.
+    scale: Vec<f64>,
+    node_ptr: Vec<usize>,
+    node_slots: Vec<u32>,
+}
+
+/// Slots (and nodes) per task of the pressure pass: a slot costs a cross
+/// product, so pieces this long are worth a task.
+const PRESSURE_PIECE: usize = 2048;
+
+impl PressurePass {
+    pub fn new(model: &Model) -> Self {
+        let mut elements = Vec::new();
+        let mut owners: Vec<(u32, u32)> = Vec::new();
+        for (l, p) in model.pressure.iter().enumerate() {
+            for e in 0..p.len() {
+                let slot = elements.len() as u32;
+                elements.push((l as u32, e as u32));
+                owners.extend(p.element(e).iter().map(|&n| (n, slot)));
+            }
+        }
+        if elements.is_empty() {
+            return Self::default();
+        }
+        // Counting sort by node keeps each node's slots ascending.
+        let n = model.node_count();
+        let mut node_ptr = vec![0usize; n + 1];
+        for &(node, _) in &owners {
+            node_ptr[node as usize + 1] += 1;
+        }
+        for i in 0..n {
+            node_ptr[i + 1] += node_ptr[i];
+        }
+        let mut fill = node_ptr.clone();
+        let mut node_slots = vec![0u32; owners.len()];
+        for &(node, slot) in &owners {
+            node_slots[fill[node as usize]] = slot;
+            fill[node as usize] += 1;
+        }
+        Self {
+            slots: vec![Vector3::zeros(); elements.len()],
+            elements,
+            scale: vec![0.0; model.pressure.len()],
+            node_ptr,
+            node_slots,
+        }
+    }
+
+    /// Whether the model has no pressure (the pass adds nothing).
+    pub fn is_empty(&self) -> bool {
+        self.elements.is_empty()
+    }
+
+    /// Adds the pressures' nodal forces at positions `x` and time `t` to
+    /// `f_ext`.
+    pub fn add_into(
+        &mut self,
+        model: &Model,
+        x: &[Vector3<f64>],
+        t: f64,
+        f_ext: &mut [Vector3<f64>],
+    ) {
+        use rayon::prelude::*;
+        if self.is_empty() {
+            return;
+        }
+        for (s, p) in self.scale.iter_mut().zip(&model.pressure) {
+            *s = p.value * p.amplitude.value(t);
+        }
+        let (elements, scale) = (&self.elements, &self.scale);
+        self.slots
+            .par_iter_mut()
+            .with_min_len(PRESSURE_PIECE)
+            .zip(elements.par_iter())
+            .for_each(|(f, &(l, e))| {
+                let load = &model.pressure[l as usize];
+                let nodes = load.element(e as usize);
+                *f = drape_model::pressure::vector_area(nodes, x)
+                    * (scale[l as usize] / nodes.len() as f64);
+            });
+        let (slots, ptr, list) = (&self.slots, &self.node_ptr, &self.node_slots);
+        f_ext
+            .par_iter_mut()
+            .with_min_len(PRESSURE_PIECE)
+            .enumerate()
+            .for_each(|(i, f)| {
+                let mut sum = Vector3::zeros();
+                for &s in &list[ptr[i]..ptr[i + 1]] {
+                    sum += slots[s as usize];
+                }
+                *f += sum;
+            });
     }
 }
 

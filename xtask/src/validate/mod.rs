@@ -29,6 +29,7 @@ mod implicit;
 mod kinematics;
 mod locking;
 mod paper;
+mod pressure;
 mod scenes;
 mod wrinkling;
 
@@ -46,6 +47,7 @@ pub fn registry() -> Vec<Case> {
         locking::CASES,
         wrinkling::CASES,
         paper::CASES,
+        pressure::CASES,
     ]
     .concat()
 }

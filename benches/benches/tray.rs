@@ -137,7 +137,14 @@ fn obj(profile: &[Segment], rings: usize, sectors: usize) -> (String, usize) {
     for p in &points[1..] {
         for j in 0..sectors {
             let a = std::f64::consts::TAU * j as f64 / sectors as f64;
-            writeln!(text, "v {:.15} {:.15} {:.15}", p[0] * a.cos(), p[0] * a.sin(), p[1]).unwrap();
+            writeln!(
+                text,
+                "v {:.15} {:.15} {:.15}",
+                p[0] * a.cos(),
+                p[0] * a.sin(),
+                p[1]
+            )
+            .unwrap();
         }
     }
     // OBJ indices from 1: the centre is 1, ring i ≥ 1 sector j is

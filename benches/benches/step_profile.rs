@@ -13,6 +13,12 @@
 //! 2. ms per step on 1 and on 2 threads for every shipped scene
 //!    (scenes/*.toml), and their ratio, from a state a few hundred steps
 //!    into the run.
+//! 3. A triangle-mesh mould against the same mould as an analytic surface
+//!    (`tray.rs`: a round, open-rimmed tray of ≈ 7 000 triangles and the
+//!    surface of revolution of its profile, a 40 × 40 blank pressed in by a
+//!    punch): the per-pass profile of each near the end of the stroke, then
+//!    ms per step of each on one thread, alternating, best of three, and the
+//!    mesh/analytic ratio.
 //!
 //! Wall-clock figures mean something only on a quiet machine: the load
 //! average is printed next to them. With `DRAPE_BENCH_CLOCK=thread-cpu` the
@@ -32,6 +38,8 @@
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
+
+mod tray;
 
 use drape_benches::{Clock, Stopwatch};
 use drape_io::scene::Scene;
@@ -128,6 +136,10 @@ fn main() {
         print_profiles(name, &scene, window, clock, &threads);
     }
 
+    if "tray mould".contains(&filter) {
+        tray_ratio(&root, quick, clock, &threads);
+    }
+
     println!(
         "\n== ms per step, 1 vs 2 threads (wall clock), shipped scenes (load {})",
         load_average()
@@ -189,9 +201,68 @@ fn main() {
     }
 }
 
+/// The tray mould as a triangle mesh and as a surface of revolution: their
+/// per-pass profiles and the ratio of their steps on one thread.
+fn tray_ratio(root: &Path, quick: bool, clock: Clock, threads: &[usize]) {
+    // Runs of 5 000 (quick: 2 500) steps, measured from 90 % of the stroke:
+    // the blank is in the cavity, most nodes touch the mould or the punch.
+    let end_time = if quick { 0.05 } else { 0.1 };
+    let steps = (end_time / 2e-5_f64).round() as u64;
+    let window = Window {
+        warm_steps: steps * 9 / 10,
+        steps: if quick { 100 } else { 400 },
+    };
+    let (meshed, analytic, triangles) =
+        tray::write_scenes(&root.join("target/bench/tray"), end_time);
+    let mesh_scene = load(&meshed, &[]);
+    let revolution_scene = load(&analytic, &[]);
+    println!(
+        "\n== tray mould: a {triangles}-triangle open mesh against its surface of revolution (load {})",
+        load_average()
+    );
+    let warm = [
+        advance(&mesh_scene, window.warm_steps),
+        advance(&revolution_scene, window.warm_steps),
+    ];
+    let names = ["tray mould, mesh", "tray mould, revolution"];
+    let scenes = [&mesh_scene, &revolution_scene];
+    for k in 0..2 {
+        print_profiles_from(names[k], scenes[k], &warm[k], window, clock, threads);
+    }
+    let mut best = [f64::INFINITY; 2];
+    for _ in 0..3 {
+        for k in 0..2 {
+            let t = in_pool(1, || time_steps(scenes[k], &warm[k], window.steps, clock));
+            best[k] = best[k].min(t.as_secs_f64() * 1e3 / window.steps as f64);
+        }
+    }
+    println!(
+        "  ms per step on 1 thread (best of 3, steps {}..{}): mesh {:.3}, revolution {:.3}; \
+         mesh/analytic ratio {:.2} (load {})",
+        window.warm_steps,
+        window.warm_steps + window.steps,
+        best[0],
+        best[1],
+        best[0] / best[1],
+        load_average()
+    );
+}
+
 /// The per-pass profile of `window` on 1 and on 2 threads.
 fn print_profiles(name: &str, scene: &Scene, window: Window, clock: Clock, threads: &[usize]) {
     let warm = advance(scene, window.warm_steps);
+    print_profiles_from(name, scene, &warm, window, clock, threads);
+}
+
+/// [`print_profiles`] from a state already advanced.
+fn print_profiles_from(
+    name: &str,
+    scene: &Scene,
+    warm: &Warm,
+    window: Window,
+    clock: Clock,
+    threads: &[usize],
+) {
     let m = &scene.model;
     println!(
         "\n== {name}: {} nodes, {} membranes, {} trusses, {} springs, {} tools; \
@@ -211,7 +282,7 @@ fn print_profiles(name: &str, scene: &Scene, window: Window, clock: Clock, threa
             _ => profile::wall_clock,
         };
         let p = in_pool(threads, || {
-            profile_steps(scene, &warm, window.steps, profile_clock)
+            profile_steps(scene, warm, window.steps, profile_clock)
         });
         println!(
             "-- {threads} thread(s): {:.3} ms/step",

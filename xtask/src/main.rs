@@ -10,8 +10,9 @@
 //!   shear-locking law fitted from a picture-frame curve, as a material
 //!   card (see [`fit`]);
 //! - `bench [--quick] [--profile-only] [ARGS…]`: the explicit step's per-pass
-//!   profile and 1- vs 2-thread table (`benches/benches/step_profile.rs`),
-//!   then the criterion benches, `cargo bench -p drape-benches ARGS…`;
+//!   profile, the mesh/analytic tray mould ratio and the 1- vs 2-thread
+//!   table (`benches/benches/step_profile.rs`), then the criterion benches,
+//!   `cargo bench -p drape-benches ARGS…`;
 //! - `bench work-precision [--quick] [--filter SUBSTR] [--fresh-reference]
 //!   [--timeout S] [--reference-cells N] [--time wall|cpu]`: run time against error for the hemisphere's ways to go
 //!   faster (see [`work_precision`]);
@@ -53,8 +54,10 @@ tasks:
       material with resin.shear_locking set.
   bench [--quick] [--profile-only] [ARGS...]
       print the explicit step's per-pass profile (hemisphere scene and a
-      200x200 blank, 1 and 2 threads) and the ms/step table of the shipped
-      scenes on 1 and 2 threads, then run the criterion benches:
+      200x200 blank, 1 and 2 threads), the step of a 7 104-triangle open tray
+      mould against its surface of revolution (the mesh/analytic ratio) and
+      the ms/step table of the shipped scenes on 1 and 2 threads, then run
+      the criterion benches:
       cargo bench -p drape-benches ARGS... (e.g. cargo xtask bench --
       --warm-up-time 1 --measurement-time 2). --quick profiles shorter
       windows and runs the criterion benches with short warm-up and

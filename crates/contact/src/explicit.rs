@@ -33,19 +33,28 @@ pub const TOUCHING: f64 = 1e-6;
 const PROJECTIONS_PER_TASK: usize = 512;
 
 /// A candidate's last projection on its tool: the gap (less nothing: the
-/// surface's own), the normal, and where the node and the tool were. On a
-/// closed tool the gap is 1-Lipschitz in the node's position and in the
-/// tool's displacement (`Surface::is_closed`), so while
-/// gap − |x − at| − |u − u_at|·|axis| stays beyond the contact reach the
-/// node cannot touch the tool and is not projected again: a far node costs
-/// a distance, not a closest-point query, and the constraints found are
-/// the same.
+/// surface's own), the normal, and where the node and the tool were. The
+/// gap's magnitude is 1-Lipschitz in the node's position and in the tool's
+/// displacement, and its sign can change only through the surface or, on
+/// an open tool, across the cut behind its rim, which a node nearer the
+/// surface than the rim cannot reach (`Surface::rim_clearance`, infinite on
+/// a closed tool). So with s = |x − at| + |u − u_at|·|axis|, while
+/// gap − s stays beyond the contact reach and gap + s below the rim's
+/// distance the node cannot touch the tool and is not projected again: a
+/// far node costs a distance, not a closest-point query, and the
+/// constraints found are the same.
 #[derive(Debug, Clone, Copy)]
 struct Projected {
     gap: f64,
     normal: Vector3<f64>,
     at: Vector3<f64>,
     u: f64,
+    /// A lower bound of the distance to the tool's rim at the projection
+    /// (0 when not taken: the node was within reach).
+    rim: f64,
+    /// The triangle a mesh tool's projection found (the next one starts
+    /// there, see `Surface::project_from`); `u32::MAX` for none.
+    hint: u32,
     /// Whether the gap and normal are this step's.
     fresh: bool,
 }
@@ -57,6 +66,8 @@ impl Projected {
         normal: Vector3::new(0.0, 0.0, 0.0),
         at: Vector3::new(0.0, 0.0, 0.0),
         u: 0.0,
+        rim: 0.0,
+        hint: u32::MAX,
         fresh: false,
     };
 }
@@ -542,8 +553,9 @@ impl ExplicitContact {
             // The projections are independent: in parallel, into a buffer
             // read in candidate order below (the same constraints in the
             // same order for any thread count).
-            // A node of a closed tool whose last gap, less the travel of
-            // the node and of the tool since, is beyond the reach is not
+            // A node whose last gap, less the travel of the node and of the
+            // tool since, is beyond the reach, and whose last gap plus that
+            // travel is below its last distance to the tool's rim, is not
             // projected ([`Projected`]); a margin of 2·touch covers the
             // round-off of the bound.
             let candidates = &self.candidates[t];
@@ -552,7 +564,6 @@ impl ExplicitContact {
             }
             let projected = &mut self.scratch.projected[t];
             projected.resize(candidates.len(), Projected::STALE);
-            let skip_far = tool.surface.is_closed();
             let axis = tool.motion.direction().norm();
             let reach = offset + 2.0 * touch;
             candidates
@@ -565,16 +576,26 @@ impl ExplicitContact {
                     if !movable[i as usize] {
                         return;
                     }
-                    if skip_far && out.gap - (xi - out.at).norm() - (u - out.u).abs() * axis > reach
-                    {
+                    let travel = (xi - out.at).norm() + (u - out.u).abs() * axis;
+                    if out.gap - travel > reach && out.gap + travel + 2.0 * touch < out.rim {
                         return;
                     }
-                    let p = tool.project(&xi, u);
+                    let mut hint = out.hint;
+                    let p = tool.project_from(&xi, u, &mut hint);
+                    // The rim's distance matters only to a node that may be
+                    // skipped next step; it costs a query of its own.
+                    let rim = if p.gap > reach {
+                        tool.rim_clearance(&xi, u)
+                    } else {
+                        0.0
+                    };
                     *out = Projected {
                         gap: p.gap,
                         normal: p.normal,
                         at: xi,
                         u,
+                        rim,
+                        hint,
                         fresh: true,
                     };
                 });
@@ -751,11 +772,18 @@ impl ExplicitContact {
         for (t, tool) in self.tools.iter().enumerate() {
             let u = self.tool_state[t].displacement;
             let moved = tool_shift[t] != 0.0;
-            for &i in &self.candidates[t] {
+            for (slot, &i) in self.candidates[t].iter().enumerate() {
                 let iu = i as usize;
                 if !movable[iu] || !(moved || s.head[iu] != NONE) {
                     continue;
                 }
+                // A mesh tool's search starts from the node's last triangle
+                // (the same answer, see `Surface::project_from`).
+                let mut hint = s
+                    .projected
+                    .get(t)
+                    .and_then(|p| p.get(slot))
+                    .map_or(u32::MAX, |p| p.hint);
                 let mut k = s.head[iu];
                 let mut present = false;
                 while k != NONE {
@@ -770,8 +798,13 @@ impl ExplicitContact {
                 } else {
                     x[iu]
                 };
-                if tool.project(&corrected, u + tool_shift[t]).gap - offset < -tol {
-                    let p = tool.project(&x[iu], u);
+                if tool
+                    .project_from(&corrected, u + tool_shift[t], &mut hint)
+                    .gap
+                    - offset
+                    < -tol
+                {
+                    let p = tool.project_from(&x[iu], u, &mut hint);
                     added.push(Constraint {
                         node: i,
                         tool: t as u32,
@@ -1098,6 +1131,148 @@ mod tests {
             .filter(|p| !p.fresh)
             .count();
         assert!(skipped > 0);
+    }
+
+    /// The remembering pass against one rebuilt every step (no skipped
+    /// node, no warm start) on a moving open mesh: nodes far, arriving,
+    /// pressed, sliding across the triangles' edges, beside and over the
+    /// open rim, at different speeds (one of them passes behind the rim, a
+    /// contact fault). Corrections, forces, statuses and faults must be the
+    /// same at every step, bit for bit.
+    #[test]
+    fn skipping_and_warm_starts_on_an_open_mesh_change_nothing() {
+        let sheet = || Tool {
+            name: "sheet".into(),
+            surface: crate::mesh_near::tests::bumpy_sheet(12, 5.0),
+            motion: ToolMotion::Displacement {
+                direction: Vector3::new(0.3, -0.2, 1.0).normalize(),
+                distance: 4.0,
+                amplitude: Amplitude::Ramp { duration: 2.0 },
+            },
+            friction: 0.2,
+        };
+        let height = |x: f64, y: f64| 3.0 * (x / 10.0).sin() * (y / 12.0).cos();
+        let margin = ContactSettings {
+            offset: 0.1,
+            margin: 50.0,
+            ..ContactSettings::default()
+        };
+        // A spiral of nodes over the sheet and out past its rim (at ±30),
+        // at heights from 0.3 to 12 mm, some far above (40 mm).
+        let n = 120;
+        let mut x: Vec<Vector3<f64>> = (0..n)
+            .map(|i| {
+                let a = i as f64 * 0.7;
+                let r = 1.0 + 0.3 * i as f64;
+                let (px, py) = (r * a.cos(), r * a.sin());
+                let h = if i % 5 == 0 {
+                    40.0
+                } else {
+                    0.3 + 0.1 * (i % 17) as f64 * (1.0 + (i % 3) as f64)
+                };
+                Vector3::new(
+                    px,
+                    py,
+                    height(px.clamp(-30.0, 30.0), py.clamp(-30.0, 30.0)) + h,
+                )
+            })
+            .collect();
+        // Falling at 0.01 … 0.07 mm per step, sliding sideways at up to
+        // 0.05 mm per step (a cell is 5 mm).
+        let step_of = |i: usize| {
+            Vector3::new(
+                0.05 * ((i % 11) as f64 / 5.0 - 1.0),
+                0.04 * ((i % 7) as f64 / 3.0 - 1.0),
+                -(0.01 + 0.01 * (i % 7) as f64),
+            )
+        };
+        let mass = vec![1e-6; n];
+        let movable = vec![true; n];
+        let mut remembering = ExplicitContact::new(vec![sheet()], n, margin);
+        let mut tool_state = ToolState::default();
+        let (mut in_contact, mut skipped, mut faults) = (0, 0, 0);
+        let dt = 0.01;
+        for k in 1..=300 {
+            let t_new = k as f64 * dt;
+            let mut v: Vec<Vector3<f64>> = (0..n).map(|i| step_of(i) / dt).collect();
+            let mut x_pred: Vec<Vector3<f64>> = x.iter().zip(&v).map(|(p, w)| p + w * dt).collect();
+            let (mut x_ref, mut v_ref) = (x_pred.clone(), v.clone());
+            let mut fresh = ExplicitContact::new(vec![sheet()], n, margin);
+            fresh.tool_state[0] = tool_state;
+            fresh.friction_dissipation = remembering.friction_dissipation;
+            let a = remembering.enforce(&mut x_pred, &mut v, &mass, &movable, t_new, dt);
+            let b = fresh.enforce(&mut x_ref, &mut v_ref, &mass, &movable, t_new, dt);
+            assert_eq!(a, b, "step {k}");
+            faults += usize::from(a.is_err());
+            assert_eq!(x_pred, x_ref, "positions at step {k}");
+            assert_eq!(v, v_ref, "velocities at step {k}");
+            assert_eq!(remembering.force, fresh.force, "forces at step {k}");
+            assert_eq!(remembering.status, fresh.status, "statuses at step {k}");
+            in_contact += remembering
+                .status
+                .iter()
+                .filter(|s| **s != ContactStatus::Open)
+                .count();
+            skipped += remembering.scratch.projected[0]
+                .iter()
+                .filter(|p| !p.fresh)
+                .count();
+            tool_state = remembering.tool_state[0];
+            x = x_pred;
+        }
+        // The nodes did arrive and slide, one crossed the cut behind the
+        // rim, and many projections were skipped.
+        assert!(faults >= 1, "{faults}");
+        assert!(in_contact > 5_000, "{in_contact}");
+        assert!(skipped > 5_000, "{skipped}");
+        let sliding = remembering
+            .status
+            .iter()
+            .filter(|s| **s == ContactStatus::Slip)
+            .count();
+        assert!(sliding > 10, "{sliding}");
+    }
+
+    /// A node going round an open mesh's rim, 5 mm from it (far beyond the
+    /// contact's reach), crosses the cut behind the rim: the pass that
+    /// skips far nodes must not skip it, and reports the same fault at the
+    /// same step as a pass that projects every node.
+    #[test]
+    fn a_far_node_rounding_an_open_rim_is_not_skipped() {
+        let sheet = || Tool {
+            name: "sheet".into(),
+            surface: crate::mesh_near::tests::bumpy_sheet(12, 5.0),
+            motion: ToolMotion::Fixed,
+            friction: 0.0,
+        };
+        let rim = Vector3::new(30.0, 2.5, 3.0 * 3f64.sin() * (2.5f64 / 12.0).cos());
+        let at = |deg: f64| {
+            let a = deg.to_radians();
+            rim + Vector3::new(a.cos(), 0.0, a.sin()) * 5.0
+        };
+        let mut remembering = ExplicitContact::new(vec![sheet()], 1, settings(0.1));
+        let dt = 1e-3;
+        let mut faulted = None;
+        for k in 1..=100 {
+            let deg = 60.0 - 2.0 * k as f64;
+            let mut x = vec![at(deg)];
+            let mut v = vec![(at(deg) - at(deg + 2.0)) / dt];
+            let (mut x_ref, mut v_ref) = (x.clone(), v.clone());
+            let mut fresh = ExplicitContact::new(vec![sheet()], 1, settings(0.1));
+            let t = k as f64 * dt;
+            let a = remembering.enforce(&mut x, &mut v, &[1e-6], &[true], t, dt);
+            let b = fresh.enforce(&mut x_ref, &mut v_ref, &[1e-6], &[true], t, dt);
+            assert_eq!(a, b, "step {k}");
+            if let Err(fault) = a {
+                assert!(matches!(fault.kind, FaultKind::GapJump { .. }), "{fault}");
+                faulted = Some(deg);
+                break;
+            }
+        }
+        // Behind the rim, where the sheet's back normal points (106° below
+        // the outward horizontal).
+        let deg = faulted.expect("a fault");
+        assert!((-110.0..-100.0).contains(&deg), "{deg}");
     }
 
     #[test]

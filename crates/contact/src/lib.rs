@@ -49,6 +49,7 @@ mod explicit;
 mod implicit;
 mod mesh;
 mod mesh_file;
+mod mesh_near;
 mod mesh_repair;
 mod phases;
 mod surface;

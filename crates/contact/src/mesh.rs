@@ -8,8 +8,9 @@ use std::sync::Arc;
 use nalgebra::Vector3;
 use parry3d_f64::math::Vector as DVec3;
 use parry3d_f64::query::PointQueryWithLocation;
-use parry3d_f64::shape::{TopologyError, TriMesh, TriMeshFlags, TrianglePointLocation};
+use parry3d_f64::shape::{Polyline, TopologyError, TriMesh, TriMeshFlags, TrianglePointLocation};
 
+use crate::mesh_near::{Closest, Near, rim_distance, rim_polyline};
 use crate::surface::{Aabb, Projection};
 
 /// Why a triangle mesh was rejected.
@@ -135,6 +136,11 @@ pub struct MeshSurface {
     /// Below this distance a query point is on the surface (relative to the
     /// mesh's size): the direction to it is then rounding noise.
     on_surface: f64,
+    /// The triangles' neighbourhoods, for projections that start from the
+    /// triangle a point found last ([`Self::project_from`]).
+    pub(crate) near: Arc<Near>,
+    /// The open edges (none for a closed mesh), for [`Self::rim_distance`].
+    rim_lines: Option<Arc<Polyline>>,
 }
 
 /// The open edges and vertices of a mesh.
@@ -274,11 +280,15 @@ impl MeshSurface {
         };
         let aabb = mesh.local_aabb();
         let size = (aabb.maxs - aabb.mins).length();
+        let near = Arc::new(Near::of(&mesh));
+        let rim_lines = rim_polyline(&mesh).map(Arc::new);
         Ok(Self {
             mesh: Arc::new(mesh),
             closed,
             rim: Arc::new(rim),
             on_surface: ON_SURFACE * size,
+            near,
+            rim_lines,
         })
     }
 
@@ -300,11 +310,58 @@ impl MeshSurface {
     }
 
     /// The closest point, outward normal and signed gap of `x`.
+    ///
+    /// Of several triangles equally close (a point closest to an edge or a
+    /// vertex they share) the one of lowest index answers, so that
+    /// [`Self::project_from`] gives the same bits from any start.
     pub fn project(&self, x: &Vector3<f64>) -> Projection {
+        let mut hint = u32::MAX;
+        self.project_from(x, &mut hint)
+    }
+
+    /// [`Self::project`], searching first around the triangle `hint` (the
+    /// one this point found last, or `u32::MAX`), and setting `hint` to the
+    /// triangle found. The answer is the same, bit for bit, as without the
+    /// hint: a point that stays near its triangle costs a few triangle
+    /// tests instead of a descent of the tree (see [`Near`]).
+    pub fn project_from(&self, x: &Vector3<f64>, hint: &mut u32) -> Projection {
         let q = to_glam(x);
+        let (tri, proj, location) = self.closest(q, *hint);
+        *hint = tri;
+        self.finish(q, tri, proj, location)
+    }
+
+    /// The closest triangle of `q`, from around `hint` when that is
+    /// conclusive, else by parry's query, whose answer is then settled
+    /// among the triangles equally close as from any hint.
+    fn closest(&self, q: DVec3, hint: u32) -> Closest {
+        if let Some(found) = self.near.search(&self.mesh, q, hint) {
+            return found;
+        }
         // `solid = false`: the closest point on the boundary even from
-        // inside; the side comes from the pseudo-normals below.
+        // inside; the side comes from the pseudo-normals in `finish`.
         let (proj, (tri, location)) = self.mesh.project_local_point_and_get_location(q, false);
+        self.near
+            .search(&self.mesh, q, tri)
+            .unwrap_or((tri, proj, location))
+    }
+
+    /// A lower bound of the distance from `x` to the rim (the open edges),
+    /// infinite for a closed mesh.
+    pub fn rim_distance(&self, x: &Vector3<f64>) -> f64 {
+        self.rim_lines
+            .as_ref()
+            .map_or(f64::INFINITY, |rim| rim_distance(rim, to_glam(x)))
+    }
+
+    /// The projection of `q` from its closest point on triangle `tri`.
+    fn finish(
+        &self,
+        q: DVec3,
+        tri: u32,
+        proj: parry3d_f64::query::PointProjection,
+        location: TrianglePointLocation,
+    ) -> Projection {
         let p = proj.point;
         let d = q - p;
         // Non-degenerate triangles were checked at construction.

@@ -630,6 +630,52 @@ impl Surface {
         }
     }
 
+    /// [`Self::project`] with a hint for a triangle mesh: the triangle the
+    /// point found last, updated to the one it finds now (see
+    /// [`MeshSurface::project_from`]); the same answer, bit for bit. Other
+    /// surfaces leave the hint alone.
+    pub fn project_from(&self, x: &Vector3<f64>, hint: &mut u32) -> Projection {
+        match self {
+            Self::Mesh(mesh) => mesh.project_from(x, hint),
+            _ => self.project(x),
+        }
+    }
+
+    /// A lower bound of the distance from `x` to the surface's rim (its
+    /// free ends or open edges, where the gap can jump), infinite for a
+    /// closed surface.
+    ///
+    /// While a point stays nearer the surface than the rim, its closest
+    /// point is never on the rim, so its gap cannot cross the cut behind
+    /// the rim: it changes sign only through the surface. With the gap's
+    /// magnitude 1-Lipschitz, a point at gap g > 0 and rim distance ρ that
+    /// moves by s relative to the surface, with g − s > 0 and g + s < ρ,
+    /// is still outside, at a gap ≥ g − s. The explicit contact pass skips
+    /// far nodes of open tools by that bound.
+    pub fn rim_clearance(&self, x: &Vector3<f64>) -> f64 {
+        match self {
+            Self::Plane { .. } | Self::Sphere { .. } => f64::INFINITY,
+            Self::Revolution {
+                origin,
+                profile,
+                free_ends,
+            } => {
+                let d = x - origin;
+                let q = Vector2::new(d.x.hypot(d.y), d.z);
+                let ends = [profile[0].start(), profile[profile.len() - 1].end()];
+                ends.iter()
+                    .zip(free_ends)
+                    .filter(|(_, free)| **free)
+                    // The end's circle: its nearest point is in x's
+                    // half-plane, at the end's |r| (a profile may run at
+                    // r < 0).
+                    .map(|(e, _)| (q - Vector2::new(e.x.abs(), e.y)).norm())
+                    .fold(f64::INFINITY, f64::min)
+            }
+            Self::Mesh(mesh) => mesh.rim_distance(x),
+        }
+    }
+
     /// A box around the surface (infinite for a plane).
     pub fn aabb(&self) -> Aabb {
         match self {

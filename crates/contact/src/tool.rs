@@ -226,6 +226,21 @@ impl Tool {
         p.point += shift;
         p
     }
+
+    /// [`Self::project`] with the hint of [`Surface::project_from`].
+    pub fn project_from(&self, x: &Vector3<f64>, displacement: f64, hint: &mut u32) -> Projection {
+        let shift = self.motion.direction() * displacement;
+        let mut p = self.surface.project_from(&(x - shift), hint);
+        p.point += shift;
+        p
+    }
+
+    /// [`Surface::rim_clearance`] of the world point `x` with the tool
+    /// displaced by `displacement`.
+    pub fn rim_clearance(&self, x: &Vector3<f64>, displacement: f64) -> f64 {
+        self.surface
+            .rim_clearance(&(x - self.motion.direction() * displacement))
+    }
 }
 
 #[cfg(test)]

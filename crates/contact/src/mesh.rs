@@ -125,22 +125,30 @@ pub enum MeshError {
 pub struct MeshSurface {
     /// Shared: a rigid tool's mesh never changes, and tools are cloned
     /// (scenes, sweeps); this also keeps [`Surface`](crate::Surface) small.
-    mesh: Arc<TriMesh>,
+    pub(crate) mesh: Arc<TriMesh>,
     /// Every edge has two triangles.
     closed: bool,
     /// The rim of an open mesh: per triangle, whether its edges (in parry's
     /// numbering: ab, bc, ac) have no neighbour; per vertex, whether it is on
     /// such an edge. Empty for a closed mesh.
-    rim: Arc<Rim>,
+    pub(crate) rim: Arc<Rim>,
     /// Below this distance a query point is on the surface (relative to the
     /// mesh's size): the direction to it is then rounding noise.
     on_surface: f64,
+    /// The triangles that are the user's (the first ones); those after them
+    /// extend the user's open rims (see [`MeshSurface::with_rim_extension`]).
+    pub(crate) own_triangles: usize,
+    /// The user's own open rim, as segments, kept through a rim extension
+    /// (messages say how far from it a node is). Empty for a closed mesh.
+    pub(crate) own_rim: Arc<Vec<[Vector3<f64>; 2]>>,
+    /// The width of the rim extension (mm; 0 without).
+    pub(crate) extension: f64,
 }
 
 /// The open edges and vertices of a mesh.
 #[derive(Debug, Default)]
-struct Rim {
-    edges: Vec<[bool; 3]>,
+pub(crate) struct Rim {
+    pub(crate) edges: Vec<[bool; 3]>,
     vertices: Vec<bool>,
 }
 
@@ -170,6 +178,23 @@ impl Rim {
             .collect();
         Self { edges, vertices }
     }
+
+    /// The open edges of `mesh`, each once.
+    fn segments(&self, mesh: &TriMesh) -> Vec<[Vector3<f64>; 2]> {
+        let v = mesh.vertices();
+        let mut out = Vec::new();
+        for (t, open) in mesh.indices().iter().zip(&self.edges) {
+            for (k, (a, b)) in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])]
+                .into_iter()
+                .enumerate()
+            {
+                if open[k] {
+                    out.push([to_na(v[a as usize]), to_na(v[b as usize])]);
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Relative area below which a triangle counts as degenerate: the sine of
@@ -185,7 +210,7 @@ fn to_glam(v: &Vector3<f64>) -> DVec3 {
     DVec3::new(v.x, v.y, v.z)
 }
 
-fn to_na(v: DVec3) -> Vector3<f64> {
+pub(crate) fn to_na(v: DVec3) -> Vector3<f64> {
     Vector3::new(v.x, v.y, v.z)
 }
 
@@ -274,11 +299,15 @@ impl MeshSurface {
         };
         let aabb = mesh.local_aabb();
         let size = (aabb.maxs - aabb.mins).length();
+        let own_rim = rim.segments(&mesh);
         Ok(Self {
+            own_triangles: mesh.indices().len(),
             mesh: Arc::new(mesh),
             closed,
             rim: Arc::new(rim),
             on_surface: ON_SURFACE * size,
+            own_rim: Arc::new(own_rim),
+            extension: 0.0,
         })
     }
 
@@ -301,6 +330,13 @@ impl MeshSurface {
 
     /// The closest point, outward normal and signed gap of `x`.
     pub fn project(&self, x: &Vector3<f64>) -> Projection {
+        self.locate(x).0
+    }
+
+    /// [`Self::project`], the index of the triangle of the closest point,
+    /// and whether that point is on the rim (an open edge or a vertex of
+    /// one), where the gap is the distance to the rim from every side.
+    pub(crate) fn locate(&self, x: &Vector3<f64>) -> (Projection, u32, bool) {
         let q = to_glam(x);
         // `solid = false`: the closest point on the boundary even from
         // inside; the side comes from the pseudo-normals below.
@@ -322,6 +358,7 @@ impl MeshSurface {
                 }
                 TrianglePointLocation::OnFace(..) | TrianglePointLocation::OnSolid => face,
             });
+        let mut rim = false;
         let (normal, gap) = match location {
             TrianglePointLocation::OnFace(..) | TrianglePointLocation::OnSolid => {
                 // Exact along the face normal, already signed.
@@ -340,6 +377,7 @@ impl MeshSurface {
                         }
                         _ => false,
                     };
+                rim = on_rim;
                 // A rim is outside from every side; elsewhere strictly
                 // behind the pseudo-normal is inside.
                 let sign = if !on_rim && d.dot(pseudo) < 0.0 {
@@ -357,11 +395,12 @@ impl MeshSurface {
                 }
             }
         };
-        Projection {
+        let projection = Projection {
             point: to_na(p),
             normal: to_na(normal),
             gap,
-        }
+        };
+        (projection, tri, rim)
     }
 
     /// The box around the mesh's triangles.

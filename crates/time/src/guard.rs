@@ -778,3 +778,57 @@ fn ahead_of(
             && s3 >= low[2] - margin
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use drape_contact::{Surface, Tool};
+
+    /// An open 100 × 100 mm plate at z = 0, fabric above.
+    fn plate(name: &str, z: f64) -> Tool {
+        let v = vec![
+            Vector3::new(0.0, 0.0, z),
+            Vector3::new(100.0, 0.0, z),
+            Vector3::new(100.0, 100.0, z),
+            Vector3::new(0.0, 100.0, z),
+        ];
+        Tool {
+            name: name.into(),
+            surface: Surface::triangle_mesh(v, vec![[0, 1, 2], [0, 2, 3]]).unwrap(),
+            motion: ToolMotion::Fixed,
+            friction: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_runaway_node_names_the_nearest_tool_and_its_rim() {
+        let tools = [plate("far", 40.0), plate("mould", 0.0)];
+        let x = vec![Vector3::zeros(), Vector3::new(97.0, 50.0, 0.5)];
+        let speed = Instability::Speed {
+            node: 1,
+            position: x[1].into(),
+            near: None,
+            speed: 4e6,
+            scale: 100.0,
+            factor: 100.0,
+        }
+        .near_tools(&tools, &[0.0, 0.0], &x);
+        let text = speed.to_string();
+        for part in [
+            "node 1 at (97.00, 50.00, 0.50) mm moves at 4.000e6 mm/s",
+            "nearest tool: tool `mould` at (97.00, 50.00, 0.00) mm (gap 5.000e-1 mm), 3.00 mm from its open rim",
+        ] {
+            assert!(text.contains(part), "{part}: {text}");
+        }
+        // Without tools, nothing is added.
+        let alone = Instability::Outside {
+            node: 0,
+            near: None,
+            position: [0.0; 3],
+            beyond: 1.0,
+            reach: 2.0,
+        }
+        .near_tools(&[], &[], &x);
+        assert!(!alone.to_string().contains("nearest tool"));
+    }
+}

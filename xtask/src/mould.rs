@@ -206,7 +206,7 @@ fn coordinates(half: f64, opening: f64, n: usize) -> Vec<f64> {
     }
     xs[0] = -half;
     xs[n] = half;
-    if n % 2 == 0 {
+    if n.is_multiple_of(2) {
         xs[n / 2] = 0.0;
     }
     xs

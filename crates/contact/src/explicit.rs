@@ -160,15 +160,15 @@ pub struct ContactFault {
     pub tool_travel: f64,
     /// What was wrong.
     pub kind: FaultKind,
-    /// Where the node is at the end of the step (mm).
-    pub position: Vector3<f64>,
-    /// Where on the tool: its closest point, and how far from an open rim.
-    pub place: crate::ToolPlace,
+    /// Where the node is at the end of the step (`place.from`) and where
+    /// on the tool: its closest point, and how far from an open rim (boxed:
+    /// a step's result stays small).
+    pub place: Box<crate::ToolPlace>,
 }
 
 impl std::fmt::Display for ContactFault {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let x = self.position;
+        let x = self.place.from;
         write!(
             f,
             "node {} at ({:.2}, {:.2}, {:.2}) mm is {:.4e} mm inside tool `{}` (gap {:.4e} mm) after a step in which the node moved {:.3e} mm and the tool {:.3e} mm",
@@ -610,8 +610,7 @@ impl ExplicitContact {
                         node_travel,
                         tool_travel,
                         kind,
-                        position: x[i as usize],
-                        place: crate::ToolPlace::of(tool, &x[i as usize], u),
+                        place: Box::new(crate::ToolPlace::of(tool, &x[i as usize], u)),
                     };
                     if travel > max_travel {
                         return Err(fault(FaultKind::Overrun { limit: max_travel }));

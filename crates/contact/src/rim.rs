@@ -227,6 +227,8 @@ fn segment_distance(x: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64
 pub struct ToolPlace {
     /// The tool's name.
     pub tool: String,
+    /// The point whose place this is (mm, world frame).
+    pub from: Vector3<f64>,
     /// The closest point on the tool (mm, world frame).
     pub point: Vector3<f64>,
     /// The point's signed gap to the tool (mm, the surface's own).
@@ -279,6 +281,7 @@ impl ToolPlace {
         };
         Self {
             tool: tool.name.clone(),
+            from: *x,
             point: p.point + shift,
             gap: p.gap,
             rim_distance,

@@ -141,7 +141,7 @@ pub enum Instability {
         /// Where it is (mm).
         position: [f64; 3],
         /// The nearest tool and the place on it (see [`Instability::near_tools`]).
-        near: Option<drape_contact::ToolPlace>,
+        near: Option<Box<drape_contact::ToolPlace>>,
         /// Its speed (mm/s).
         speed: f64,
         /// The scene's speed (mm/s).
@@ -159,7 +159,7 @@ pub enum Instability {
         /// The node.
         node: usize,
         /// The nearest tool and the place on it (see [`Instability::near_tools`]).
-        near: Option<drape_contact::ToolPlace>,
+        near: Option<Box<drape_contact::ToolPlace>>,
         /// Where it is (mm).
         position: [f64; 3],
         /// How far outside the reachable box (mm).
@@ -218,7 +218,7 @@ pub enum Instability {
 }
 
 /// The nearest tool, as a message ends with it.
-fn near_text(near: &Option<drape_contact::ToolPlace>) -> String {
+fn near_text(near: &Option<Box<drape_contact::ToolPlace>>) -> String {
     near.as_ref()
         .map_or_else(String::new, |p| format!("; nearest tool: {p}"))
 }
@@ -235,7 +235,7 @@ impl Instability {
     ) -> Self {
         if let Self::Speed { node, near, .. } | Self::Outside { node, near, .. } = &mut self {
             if let Some(p) = x.get(*node) {
-                *near = drape_contact::ToolPlace::nearest(tools, displacement, p);
+                *near = drape_contact::ToolPlace::nearest(tools, displacement, p).map(Box::new);
             }
         }
         self

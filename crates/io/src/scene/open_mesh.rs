@@ -143,10 +143,10 @@ pub(super) fn place(
     let pierced = |extended: &MeshSurface| {
         let before = mesh.sides(&model.x0, tolerance);
         let after = extended.sides(&model.x0, tolerance);
-        (after.back > before.back).then(|| after.first_back)
+        (after.back > before.back).then_some(after.first_back)
     };
     let extended = match open.rim_extension {
-        Some(l) if l == 0.0 => mesh,
+        Some(0.0) => mesh,
         Some(l) => {
             if !(l.is_finite() && l > 0.0) {
                 return Err(at.error(

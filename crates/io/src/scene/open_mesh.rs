@@ -138,12 +138,18 @@ pub(super) fn place(
             )
         })
     };
-    // Whether an extension would put blank nodes behind the tool that the
-    // surface alone had in front (a wall's rim extended through the blank).
+    // Whether an extension puts the blank on both of its sides where the
+    // surface alone had it on one (a wall's rim extended through the
+    // blank): the first node on the side the rest is not.
     let pierced = |extended: &MeshSurface| {
         let before = mesh.sides(&model.x0, tolerance);
         let after = extended.sides(&model.x0, tolerance);
-        (after.back > before.back).then_some(after.first_back)
+        let straddles = |s: &drape_contact::Sides| s.front > 0 && s.back > 0;
+        (straddles(&after) && !straddles(&before)).then_some(if before.back > 0 {
+            after.first_front
+        } else {
+            after.first_back
+        })
     };
     let extended = match open.rim_extension {
         Some(0.0) => mesh,
@@ -161,8 +167,8 @@ pub(super) fn place(
                 return Err(at.error(
                     &key,
                     format!(
-                        "`{name}`: the rim extended by {l} mm passes through the blank ({} is behind it): give a \
-                         shorter rim_extension, or 0",
+                        "`{name}`: the rim extended by {l} mm passes through the blank ({} is on its other side): \
+                         give a shorter rim_extension, or 0",
                         at_node(model, node)
                     ),
                 ));

@@ -16,6 +16,9 @@
 //! - `bench work-precision [--quick] [--filter SUBSTR] [--fresh-reference]
 //!   [--timeout S] [--reference-cells N] [--time wall|cpu]`: run time against error for the hemisphere's ways to go
 //!   faster (see [`work_precision`]);
+//! - `mould OUT [--triangles N] [--punch FILE] [--offset MM]`: a generated
+//!   open female tray mould (and its matched punch) as STL or OBJ (see
+//!   [`mould`]);
 //! - `ci`: what CI runs, the script `.ci/run`.
 //!
 //! Only std and the workspace's own dependencies: an xtask that needs a
@@ -26,6 +29,7 @@ use std::process::{Command, ExitCode};
 
 mod fit;
 mod holding;
+mod mould;
 mod stress;
 mod validate;
 mod work_precision;
@@ -71,6 +75,12 @@ tasks:
       target/bench/work-precision.{csv,png,md} (a full run without
       --filter also updates the README's section). --quick is the coarse
       version CI can afford.
+  mould OUT.stl|OUT.obj [--triangles N] [--punch PUNCH.stl|.obj] [--offset MM]
+      write a generated open female mould: a double-curved 600 x 400 mm tray,
+      80 mm deep, open at its flange's outer rim, normals pointing away from
+      the cavity, about N triangles (default 3000); --punch also writes the
+      matched punch, the same surface moved MM (default 0.57, the glass
+      ply's thickness) along its normals.
   ci
       run what CI runs (.ci/run): the test suite, the quick validation,
       the quick stress suite and the quick work-precision bench";
@@ -95,6 +105,10 @@ fn main() -> ExitCode {
             Err(message) => usage_error(&message),
         },
         "bench" => bench(rest),
+        "mould" => match mould::Options::parse(rest) {
+            Ok(options) => mould::main(&options),
+            Err(message) => usage_error(&message),
+        },
         "ci" if rest.is_empty() => run(Command::new("bash")
             .arg(workspace_root().join(".ci/run"))
             .current_dir(workspace_root())),

@@ -171,14 +171,27 @@ pub struct ContactFault {
     pub tool_travel: f64,
     /// What was wrong.
     pub kind: FaultKind,
+    /// Where the node is at the end of the step (`place.from`) and where
+    /// on the tool: its closest point, and how far from an open rim (boxed:
+    /// a step's result stays small).
+    pub place: Box<crate::ToolPlace>,
 }
 
 impl std::fmt::Display for ContactFault {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.place.from;
         write!(
             f,
-            "node {} is {:.4e} mm inside tool `{}` (gap {:.4e} mm) after a step in which the node moved {:.3e} mm and the tool {:.3e} mm",
-            self.node, -self.gap, self.tool_name, self.gap, self.node_travel, self.tool_travel
+            "node {} at ({:.2}, {:.2}, {:.2}) mm is {:.4e} mm inside tool `{}` (gap {:.4e} mm) after a step in which the node moved {:.3e} mm and the tool {:.3e} mm",
+            self.node,
+            x.x,
+            x.y,
+            x.z,
+            -self.gap,
+            self.tool_name,
+            self.gap,
+            self.node_travel,
+            self.tool_travel
         )?;
         match self.kind {
             FaultKind::GapJump { previous_gap } => write!(
@@ -194,7 +207,8 @@ impl std::fmt::Display for ContactFault {
                  so it is not pushed out; a shorter step (less mass scaling) or a slower tool keeps each \
                  step's travel within it"
             ),
-        }
+        }?;
+        write!(f, "; closest point on {}", self.place)
     }
 }
 
@@ -617,6 +631,7 @@ impl ExplicitContact {
                         node_travel,
                         tool_travel,
                         kind,
+                        place: Box::new(crate::ToolPlace::of(tool, &x[i as usize], u)),
                     };
                     if travel > max_travel {
                         return Err(fault(FaultKind::Overrun { limit: max_travel }));

@@ -126,27 +126,36 @@ pub enum MeshError {
 pub struct MeshSurface {
     /// Shared: a rigid tool's mesh never changes, and tools are cloned
     /// (scenes, sweeps); this also keeps [`Surface`](crate::Surface) small.
-    mesh: Arc<TriMesh>,
+    pub(crate) mesh: Arc<TriMesh>,
     /// Every edge has two triangles.
     closed: bool,
     /// The rim of an open mesh: per triangle, whether its edges (in parry's
     /// numbering: ab, bc, ac) have no neighbour; per vertex, whether it is on
     /// such an edge. Empty for a closed mesh.
-    rim: Arc<Rim>,
+    pub(crate) rim: Arc<Rim>,
     /// Below this distance a query point is on the surface (relative to the
     /// mesh's size): the direction to it is then rounding noise.
     on_surface: f64,
     /// The triangles' neighbourhoods, for projections that start from the
     /// triangle a point found last ([`Self::project_from`]).
     pub(crate) near: Arc<Near>,
-    /// The open edges (none for a closed mesh), for [`Self::rim_distance`].
+    /// The open edges (none for a closed mesh; a rim extension's outer
+    /// edges when it has one), for [`Self::rim_distance`].
     rim_lines: Option<Arc<Polyline>>,
+    /// The triangles that are the user's (the first ones); those after them
+    /// extend the user's open rims (see [`MeshSurface::with_rim_extension`]).
+    pub(crate) own_triangles: usize,
+    /// The user's own open rim, as segments, kept through a rim extension
+    /// (messages say how far from it a node is). Empty for a closed mesh.
+    pub(crate) own_rim: Arc<Vec<[Vector3<f64>; 2]>>,
+    /// The width of the rim extension (mm; 0 without).
+    pub(crate) extension: f64,
 }
 
 /// The open edges and vertices of a mesh.
 #[derive(Debug, Default)]
-struct Rim {
-    edges: Vec<[bool; 3]>,
+pub(crate) struct Rim {
+    pub(crate) edges: Vec<[bool; 3]>,
     vertices: Vec<bool>,
 }
 
@@ -176,6 +185,23 @@ impl Rim {
             .collect();
         Self { edges, vertices }
     }
+
+    /// The open edges of `mesh`, each once.
+    fn segments(&self, mesh: &TriMesh) -> Vec<[Vector3<f64>; 2]> {
+        let v = mesh.vertices();
+        let mut out = Vec::new();
+        for (t, open) in mesh.indices().iter().zip(&self.edges) {
+            for (k, (a, b)) in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])]
+                .into_iter()
+                .enumerate()
+            {
+                if open[k] {
+                    out.push([to_na(v[a as usize]), to_na(v[b as usize])]);
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Relative area below which a triangle counts as degenerate: the sine of
@@ -191,7 +217,7 @@ fn to_glam(v: &Vector3<f64>) -> DVec3 {
     DVec3::new(v.x, v.y, v.z)
 }
 
-fn to_na(v: DVec3) -> Vector3<f64> {
+pub(crate) fn to_na(v: DVec3) -> Vector3<f64> {
     Vector3::new(v.x, v.y, v.z)
 }
 
@@ -282,13 +308,17 @@ impl MeshSurface {
         let size = (aabb.maxs - aabb.mins).length();
         let near = Arc::new(Near::of(&mesh));
         let rim_lines = rim_polyline(&mesh).map(Arc::new);
+        let own_rim = rim.segments(&mesh);
         Ok(Self {
+            own_triangles: mesh.indices().len(),
             mesh: Arc::new(mesh),
             closed,
             rim: Arc::new(rim),
             on_surface: ON_SURFACE * size,
             near,
             rim_lines,
+            own_rim: Arc::new(own_rim),
+            extension: 0.0,
         })
     }
 
@@ -319,6 +349,16 @@ impl MeshSurface {
         self.project_from(x, &mut hint)
     }
 
+    /// [`Self::project`], the index of the triangle of the closest point,
+    /// and whether that point is on the rim (an open edge or a vertex of
+    /// one), where the gap is the distance to the rim from every side.
+    pub(crate) fn locate(&self, x: &Vector3<f64>) -> (Projection, u32, bool) {
+        let q = to_glam(x);
+        let (tri, proj, location) = self.closest(q, u32::MAX);
+        let (projection, on_rim) = self.finish(q, tri, proj, location);
+        (projection, tri, on_rim)
+    }
+
     /// [`Self::project`], searching first around the triangle `hint` (the
     /// one this point found last, or `u32::MAX`), and setting `hint` to the
     /// triangle found. The answer is the same, bit for bit, as without the
@@ -328,7 +368,7 @@ impl MeshSurface {
         let q = to_glam(x);
         let (tri, proj, location) = self.closest(q, *hint);
         *hint = tri;
-        self.finish(q, tri, proj, location)
+        self.finish(q, tri, proj, location).0
     }
 
     /// The closest triangle of `q`, from around `hint` when that is
@@ -354,14 +394,15 @@ impl MeshSurface {
             .map_or(f64::INFINITY, |rim| rim_distance(rim, to_glam(x)))
     }
 
-    /// The projection of `q` from its closest point on triangle `tri`.
+    /// The projection of `q` from its closest point on triangle `tri`, and
+    /// whether that point is on the rim.
     fn finish(
         &self,
         q: DVec3,
         tri: u32,
         proj: parry3d_f64::query::PointProjection,
         location: TrianglePointLocation,
-    ) -> Projection {
+    ) -> (Projection, bool) {
         let p = proj.point;
         let d = q - p;
         // Non-degenerate triangles were checked at construction.
@@ -379,6 +420,7 @@ impl MeshSurface {
                 }
                 TrianglePointLocation::OnFace(..) | TrianglePointLocation::OnSolid => face,
             });
+        let mut rim = false;
         let (normal, gap) = match location {
             TrianglePointLocation::OnFace(..) | TrianglePointLocation::OnSolid => {
                 // Exact along the face normal, already signed.
@@ -397,6 +439,7 @@ impl MeshSurface {
                         }
                         _ => false,
                     };
+                rim = on_rim;
                 // A rim is outside from every side; elsewhere strictly
                 // behind the pseudo-normal is inside.
                 let sign = if !on_rim && d.dot(pseudo) < 0.0 {
@@ -414,11 +457,12 @@ impl MeshSurface {
                 }
             }
         };
-        Projection {
+        let projection = Projection {
             point: to_na(p),
             normal: to_na(normal),
             gap,
-        }
+        };
+        (projection, rim)
     }
 
     /// The box around the mesh's triangles.

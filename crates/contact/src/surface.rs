@@ -378,6 +378,29 @@ impl Surface {
         })
     }
 
+    /// The distance from `point` (on the surface) to the nearest free end
+    /// of a profile, measured in its (r, z) half-plane: how far from the
+    /// rim circle. None for a surface without free ends (meshes: see
+    /// [`crate::ToolPlace`]).
+    pub(crate) fn free_end_distance(&self, point: &Vector3<f64>) -> Option<f64> {
+        let Self::Revolution {
+            origin,
+            profile,
+            free_ends,
+        } = self
+        else {
+            return None;
+        };
+        let d = point - origin;
+        let q = Vector2::new(d.xy().norm(), d.z);
+        let ends = [profile[0].start(), profile[profile.len() - 1].end()];
+        ends.iter()
+            .zip(free_ends)
+            .filter(|(_, free)| **free)
+            .map(|(e, _)| (q - e).norm())
+            .reduce(f64::min)
+    }
+
     /// Whether the surface bounds a solid (no free end, no open edge): its
     /// gap is then continuous and 1-Lipschitz everywhere.
     pub fn is_closed(&self) -> bool {

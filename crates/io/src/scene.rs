@@ -41,6 +41,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 mod locate;
+mod open_mesh;
 mod placement;
 
 use locate::{Locator, Override, field_at, line_at, plain};
@@ -404,6 +405,15 @@ pub enum GeometrySpec {
         /// without instances), when the file holds several tools.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         instance: Option<String>,
+        /// For an open mesh: whether the fabric is behind the file's
+        /// normals (true) or in front (false); detected from the blank's
+        /// start position when absent.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        flip_normals: Option<bool>,
+        /// For an open mesh: how far its open rims are extended
+        /// tangentially (mm; 0: not at all; default in `open_mesh`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rim_extension: Option<f64>,
     },
 }
 
@@ -1657,13 +1667,21 @@ fn build(
                 reorient,
                 drop_degenerate,
                 instance,
+                flip_normals,
+                rim_extension,
             } => {
                 let placement = Placement::new(at, &g, *units, *scale, *rotate, Some(*offset))?;
                 let options = drape_contact::RepairOptions {
                     drop_degenerate: *drop_degenerate,
                     reorient: *reorient,
                 };
-                placement::tool_mesh(at, &g, file, &placement, options, instance.as_deref())?
+                let surface =
+                    placement::tool_mesh(at, &g, file, &placement, options, instance.as_deref())?;
+                let open = open_mesh::OpenMesh {
+                    flip_normals: *flip_normals,
+                    rim_extension: *rim_extension,
+                };
+                open_mesh::place(at, &g, &t.name, surface, &open, &model, &material)?
             }
         };
         let m = format!("{here}.motion");

@@ -171,11 +171,12 @@ fn floor_obj(dir: &Path, second: &str, extra: &str) {
 fn a_tool_mesh_is_placed_and_repaired_on_request() {
     let dir = temp("tool");
     // Placement: cm to mm, then turned 180° about x (the floor faces
-    // down, at z = +10), then moved 5 mm down.
+    // down, at z = +10), then moved 5 mm down; its open rim not extended,
+    // so its box is the file's.
     floor_obj(&dir, "1 3 4", "");
     let scene = scene_with_tool(
         &dir,
-        r#"{ kind = "mesh", file = "floor.obj", units = "cm", rotate = [180, 0, 0], offset = [0, 0, -5] }"#,
+        r#"{ kind = "mesh", file = "floor.obj", units = "cm", rotate = [180, 0, 0], offset = [0, 0, -5], rim_extension = 0 }"#,
     )
     .unwrap();
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
@@ -232,6 +233,66 @@ fn a_tool_mesh_is_placed_and_repaired_on_request() {
     for p in [Vector3::new(1.0, -1.0, 0.0), Vector3::new(-1.0, 1.0, 0.0)] {
         let q = surface.project(&p);
         assert!((q.gap - 1.0).abs() < 1e-9, "{p}: {q:?}");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn an_open_tool_mesh_takes_the_blanks_side_or_says_why_it_cannot() {
+    let dir = temp("sides");
+    // The 4 × 4 mm floor 1 mm under the blank, wound down: its normals
+    // point away from the blank, so they are turned, with a warning.
+    let down = "v -2 -2 -1\nv 2 -2 -1\nv 2 2 -1\nv -2 2 -1\nf 1 3 2\nf 1 4 3\n";
+    std::fs::write(dir.join("floor.obj"), down).unwrap();
+    let scene = scene_with_tool(&dir, r#"{ kind = "mesh", file = "floor.obj" }"#).unwrap();
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    assert!(
+        scene.warnings[0].contains("normals point away from the blank")
+            && scene.warnings[0].contains("flip_normals = false"),
+        "{:?}",
+        scene.warnings
+    );
+    let surface = &scene.model.tools[0].surface;
+    assert!((surface.project(&Vector3::new(0.5, 0.5, 0.0)).gap - 1.0).abs() < 1e-12);
+    // The default rim extension: three of the blank's 5 mm elements.
+    assert!(
+        (surface.aabb().min.x + 17.0).abs() < 1e-9,
+        "{:?}",
+        surface.aabb()
+    );
+    // `flip_normals = false` keeps the file's side: the blank is behind.
+    let scene = scene_with_tool(
+        &dir,
+        r#"{ kind = "mesh", file = "floor.obj", flip_normals = false }"#,
+    )
+    .unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let surface = &scene.model.tools[0].surface;
+    assert!((surface.project(&Vector3::new(0.5, 0.5, 0.0)).gap + 1.0).abs() < 1e-12);
+    let e = scene_with_tool(
+        &dir,
+        r#"{ kind = "mesh", file = "floor.obj", rim_extension = -1 }"#,
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("rim_extension") && e.contains("expected a length ≥ 0"),
+        "{e}"
+    );
+    // A 40 × 40 mm floor tilted 20° through the blank's centre line: the
+    // blank's nodes at y = −5 are above it, those at y = 5 under it.
+    floor_obj(&dir, "1 3 4", "");
+    let e = scene_with_tool(
+        &dir,
+        r#"{ kind = "mesh", file = "floor.obj", units = "cm", rotate = [20, 0, 0], offset = [0, 0, 10.6418] }"#,
+    )
+    .unwrap_err();
+    for part in [
+        "both sides of the open mesh `floor`",
+        "3 nodes in front",
+        "3 behind",
+        "flip_normals",
+    ] {
+        assert!(e.contains(part), "{part}: {e}");
     }
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -766,7 +766,15 @@ impl<'m> Explicit<'m> {
             };
             self.guard
                 .nodes(&state.x, &state.v, &self.constraints.movable)
-                .map_err(unstable)?;
+                .map_err(|what| {
+                    unstable(match &self.contact {
+                        Some(c) => {
+                            let u: Vec<f64> = c.tool_state.iter().map(|t| t.displacement).collect();
+                            what.near_tools(&c.tools, &u, &state.x)
+                        }
+                        None => what,
+                    })
+                })?;
             if let Some(contact) = &self.contact {
                 let travel = contact.tool_state.iter().map(|t| t.displacement);
                 self.guard.tools(model, travel).map_err(unstable)?;

@@ -131,12 +131,17 @@ pub const MIN_ENERGY_CHECKS: usize = 20;
 pub enum Instability {
     /// A node moves absurdly fast for the scene.
     #[error(
-        "node {node} moves at {speed:.3e} mm/s, more than {factor}× the scene's speed {scale:.3e} mm/s \
-         (its fastest prescribed motion, free fall, or blank size per run time)"
+        "node {node} at ({:.2}, {:.2}, {:.2}) mm moves at {speed:.3e} mm/s, more than {factor}× the scene's speed {scale:.3e} mm/s \
+         (its fastest prescribed motion, free fall, or blank size per run time){}",
+        position[0], position[1], position[2], near_text(near)
     )]
     Speed {
         /// The node.
         node: usize,
+        /// Where it is (mm).
+        position: [f64; 3],
+        /// The nearest tool and the place on it (see [`Instability::near_tools`]).
+        near: Option<Box<drape_contact::ToolPlace>>,
         /// Its speed (mm/s).
         speed: f64,
         /// The scene's speed (mm/s).
@@ -147,12 +152,14 @@ pub enum Instability {
     /// A node has left everything the scene can reach.
     #[error(
         "node {node} is at ({:.1}, {:.1}, {:.1}) mm, {beyond:.3e} mm outside everything the scene reaches \
-         (the blank grown by {reach:.1} mm: its size, the tools' travel, prescribed displacements, free fall)",
-        position[0], position[1], position[2]
+         (the blank grown by {reach:.1} mm: its size, the tools' travel, prescribed displacements, free fall){}",
+        position[0], position[1], position[2], near_text(near)
     )]
     Outside {
         /// The node.
         node: usize,
+        /// The nearest tool and the place on it (see [`Instability::near_tools`]).
+        near: Option<Box<drape_contact::ToolPlace>>,
         /// Where it is (mm).
         position: [f64; 3],
         /// How far outside the reachable box (mm).
@@ -208,6 +215,31 @@ pub enum Instability {
         /// The bound.
         bound: f64,
     },
+}
+
+/// The nearest tool, as a message ends with it.
+fn near_text(near: &Option<Box<drape_contact::ToolPlace>>) -> String {
+    near.as_ref()
+        .map_or_else(String::new, |p| format!("; nearest tool: {p}"))
+}
+
+impl Instability {
+    /// The same finding with the nearest of `tools` (each at its
+    /// displacement) to the node it names, at `x`: a node that runs away
+    /// next to a tool, at its open rim above all, says where.
+    pub fn near_tools(
+        mut self,
+        tools: &[drape_contact::Tool],
+        displacement: &[f64],
+        x: &[Vector3<f64>],
+    ) -> Self {
+        if let Self::Speed { node, near, .. } | Self::Outside { node, near, .. } = &mut self {
+            if let Some(p) = x.get(*node) {
+                *near = drape_contact::ToolPlace::nearest(tools, displacement, p).map(Box::new);
+            }
+        }
+        self
+    }
 }
 
 /// The largest |a(t)| of an amplitude.
@@ -489,6 +521,7 @@ impl Guard {
         if beyond > 0.0 {
             Err(Instability::Outside {
                 node: i,
+                near: None,
                 position: p.into(),
                 beyond,
                 reach: self.reach,
@@ -496,6 +529,8 @@ impl Guard {
         } else {
             Err(Instability::Speed {
                 node: i,
+                position: p.into(),
+                near: None,
                 speed: v[i].norm(),
                 scale: self.speed_scale,
                 factor: self.settings.speed_factor,
@@ -749,4 +784,58 @@ fn ahead_of(
             && s2 <= high[1] + margin
             && s3 >= low[2] - margin
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use drape_contact::{Surface, Tool};
+
+    /// An open 100 × 100 mm plate at z = 0, fabric above.
+    fn plate(name: &str, z: f64) -> Tool {
+        let v = vec![
+            Vector3::new(0.0, 0.0, z),
+            Vector3::new(100.0, 0.0, z),
+            Vector3::new(100.0, 100.0, z),
+            Vector3::new(0.0, 100.0, z),
+        ];
+        Tool {
+            name: name.into(),
+            surface: Surface::triangle_mesh(v, vec![[0, 1, 2], [0, 2, 3]]).unwrap(),
+            motion: ToolMotion::Fixed,
+            friction: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_runaway_node_names_the_nearest_tool_and_its_rim() {
+        let tools = [plate("far", 40.0), plate("mould", 0.0)];
+        let x = vec![Vector3::zeros(), Vector3::new(97.0, 50.0, 0.5)];
+        let speed = Instability::Speed {
+            node: 1,
+            position: x[1].into(),
+            near: None,
+            speed: 4e6,
+            scale: 100.0,
+            factor: 100.0,
+        }
+        .near_tools(&tools, &[0.0, 0.0], &x);
+        let text = speed.to_string();
+        for part in [
+            "node 1 at (97.00, 50.00, 0.50) mm moves at 4.000e6 mm/s",
+            "nearest tool: tool `mould` at (97.00, 50.00, 0.00) mm (gap 5.000e-1 mm), 3.00 mm from its open rim",
+        ] {
+            assert!(text.contains(part), "{part}: {text}");
+        }
+        // Without tools, nothing is added.
+        let alone = Instability::Outside {
+            node: 0,
+            near: None,
+            position: [0.0; 3],
+            beyond: 1.0,
+            reach: 2.0,
+        }
+        .near_tools(&[], &[], &x);
+        assert!(!alone.to_string().contains("nearest tool"));
+    }
 }

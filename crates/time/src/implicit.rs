@@ -808,7 +808,15 @@ impl<'m> Implicit<'m> {
             };
             self.guard
                 .nodes(&state.x, &state.v, &self.constraints.movable)
-                .map_err(unstable)?;
+                .map_err(|what| {
+                    unstable(match &self.contact {
+                        Some(c) => {
+                            let u: Vec<f64> = c.tool_state.iter().map(|t| t.displacement).collect();
+                            what.near_tools(&c.tools, &u, &state.x)
+                        }
+                        None => what,
+                    })
+                })?;
             if let Some(contact) = &self.contact {
                 for (touched, f) in self.tool_touched.iter_mut().zip(&contact.tool_force) {
                     *touched |= *f != 0.0;

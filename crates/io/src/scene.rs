@@ -40,9 +40,11 @@ use drape_time::{ExplicitSettings, GuardSettings, ImplicitSettings};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+mod bending;
 mod locate;
 mod placement;
 
+use bending::yarn_bending;
 use locate::{Locator, Override, field_at, line_at, plain};
 pub use placement::LengthUnit;
 use placement::Placement;
@@ -302,9 +304,12 @@ pub struct FabricSpec {
     /// The blank.
     pub blank: BlankSpec,
     /// Yarn bending (beyond the paper): a discrete elastica along the
-    /// mesh's yarn lines with the material's `bending_rigidity`.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub bending: bool,
+    /// mesh's yarn lines with the material's `bending_rigidity`. Unset, it
+    /// is on wherever it can be (the material has a rigidity and the mesh
+    /// lines follow the yarns), with a note where it cannot; `true` insists
+    /// (an error where it cannot), `false` turns it off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bending: Option<bool>,
 }
 
 /// A tool's shape.
@@ -1720,14 +1725,7 @@ fn build(
         model.gravity = finite3(at, "gravity", g)?;
     }
     // After the boundary conditions: lines are clamped at the fixed nodes.
-    if fabric.bending {
-        let rigidity = material.bending_rigidity.ok_or_else(|| {
-            at.error(
-                "fabric.bending",
-                "yarn bending needs the material's `bending_rigidity = [warp, weft]` (N·mm); \
-                 this material has none",
-            )
-        })?;
+    if let Some(rigidity) = yarn_bending(fabric, &material, &model, at)? {
         let theta = fabric.orientation_deg.to_radians();
         let warp = Vector3::new(theta.cos(), theta.sin(), 0.0);
         model

@@ -168,6 +168,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         },
         max_waviness_deg: m.max_waviness_deg,
         wrinkle_area_mm2: m.wrinkle_area,
+        fold: None,
         energy: EnergySummary::default(),
         setup: None,
         run: RunInfo {

@@ -699,6 +699,13 @@ pub fn run_in(
     let setup = run_setup(scene);
     let floor = drape_time::guard::energy_floor(model);
     let internal = energy.internal_work.abs();
+    // Every run's end state, a failed one's last good frame included: a
+    // ply folded over itself must not read as a formed one.
+    let fold = fields.as_ref().map(|f| model.fold_check(&state, f));
+    warnings.extend(
+        fold.as_ref()
+            .and_then(|f| f.warning(model.features().bending)),
+    );
     if status == "completed" {
         recorder
             .reached
@@ -742,6 +749,7 @@ pub fn run_in(
         peak: recorder.peaks,
         max_waviness_deg: measures.max_waviness_deg,
         wrinkle_area_mm2: measures.wrinkle_area,
+        fold,
         energy: EnergySummary {
             balance_error: drape_time::guard::relative_balance_error(
                 &energy,

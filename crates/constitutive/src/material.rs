@@ -67,8 +67,9 @@ pub struct Material {
     pub density: f64,
     /// Bending rigidity of [warp, weft] (N·mm: bending moment per unit
     /// width per unit curvature, B = w·c³ from a cantilever test's bending
-    /// length c and areal weight w). Used only when a scene switches yarn
-    /// bending on; absent from a card that has no measured value.
+    /// length c and areal weight w). A scene bends the yarns with it by
+    /// default (where its mesh follows the yarns); without it a scene runs
+    /// a membrane that can fold at no cost, and says so.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bending_rigidity: Option<[f64; 2]>,
 }
@@ -97,16 +98,26 @@ impl Material {
     ///
     /// Both have no compression stiffness in the yarns.
     ///
-    /// Bending rigidities (used only when a scene switches bending on) are
-    /// **\[assumptions\]**, not measurements: the paper gives none, and no
-    /// published bending rigidity of these two fabrics, or of a comparable
-    /// woven glass fabric or uncured woven carbon prepreg, was found in
-    /// the sources searched while writing this (the textile and forming
-    /// literature reachable from the project; the papers found —
+    /// Bending rigidities (on by default in a scene, so they shape every
+    /// run that does not turn bending off) are **\[assumptions\]**, not
+    /// measurements: the paper gives none, and no published bending
+    /// rigidity of these two fabrics, or of a comparable woven glass
+    /// fabric or uncured woven carbon prepreg, was found in the sources
+    /// searched while writing this (the textile and forming literature
+    /// reachable from the project; the papers found —
     /// Lammens et al., Textile Res. J. 84(12), 2014, 1307–1314 on the
     /// accuracy of Peirce's test, Yu et al., Composites A 143, 2021,
     /// 106308 on bending and wrinkling — were available as abstracts
-    /// only, without their figures). Each is B = w·c³ (Peirce's cantilever
+    /// only, without their figures). Searched again when bending became the
+    /// default (cantilever and ASTM D1388 bending lengths of woven glass
+    /// and carbon twill prepreg, bending rigidity per unit width): the
+    /// sources reached were the ASTM D1388 scope, Lammens et al.'s values
+    /// for a polyimide foil only, and without usable figures Ghafour,
+    /// Colmars and Boisse, Front. Mater. 8, 2021, 728485 (inelastic
+    /// bending of textile preforms), Broberg et al., Composites B, 2023,
+    /// 110763 (moment–curvature from a cantilever) and Liang et al.,
+    /// hal-04670774 (curvature in the bending test of reinforcements); so
+    /// the values stay assumptions. Each is B = w·c³ (Peirce's cantilever
     /// relation) from the preset's own areal weight w = ρ·h·g and an
     /// assumed bending length c, the same for warp and weft (balanced
     /// weaves): c = 40 mm for the heavy glass serge (w = 7.27e-6 N/mm²,

@@ -319,6 +319,11 @@ pub struct Summary {
     /// Reference area of the elements wavier than 5° (mm²).
     #[serde(default)]
     pub wrinkle_area_mm2: f64,
+    /// The fold check of the end state (`drape_model::folds`); when it
+    /// finds a fold, `warnings` says where and what to change. Absent for
+    /// a kinematic drape, whose net reports its undraped cells instead.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fold: Option<drape_model::folds::FoldCheck>,
     /// Energy.
     pub energy: EnergySummary,
     /// What the run started with (absent for a kinematic drape).

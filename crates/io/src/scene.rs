@@ -40,10 +40,12 @@ use drape_time::{ExplicitSettings, GuardSettings, ImplicitSettings};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+mod bending;
 mod locate;
 mod open_mesh;
 mod placement;
 
+use bending::yarn_bending;
 use locate::{Locator, Override, field_at, line_at, plain};
 pub use placement::LengthUnit;
 use placement::Placement;
@@ -303,9 +305,12 @@ pub struct FabricSpec {
     /// The blank.
     pub blank: BlankSpec,
     /// Yarn bending (beyond the paper): a discrete elastica along the
-    /// mesh's yarn lines with the material's `bending_rigidity`.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub bending: bool,
+    /// mesh's yarn lines with the material's `bending_rigidity`. Unset, it
+    /// is on wherever it can be (the material has a rigidity and the mesh
+    /// lines follow the yarns), with a note where it cannot; `true` insists
+    /// (an error where it cannot), `false` turns it off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bending: Option<bool>,
 }
 
 /// A tool's shape.
@@ -1880,14 +1885,7 @@ fn build(
         model.pressure.push(load);
     }
     // After the boundary conditions: lines are clamped at the fixed nodes.
-    if fabric.bending {
-        let rigidity = material.bending_rigidity.ok_or_else(|| {
-            at.error(
-                "fabric.bending",
-                "yarn bending needs the material's `bending_rigidity = [warp, weft]` (N·mm); \
-                 this material has none",
-            )
-        })?;
+    if let Some(rigidity) = yarn_bending(fabric, &material, &model, at)? {
         let theta = fabric.orientation_deg.to_radians();
         let warp = Vector3::new(theta.cos(), theta.sin(), 0.0);
         model

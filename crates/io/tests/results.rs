@@ -430,6 +430,19 @@ fn writes_a_complete_results_directory() {
         },
         max_waviness_deg: measures.max_waviness_deg,
         wrinkle_area_mm2: measures.wrinkle_area,
+        fold: Some(drape_model::folds::FoldCheck {
+            folded: true,
+            turned_back_elements: 2,
+            turned_back_area_mm2: 12.5,
+            wavy_area_mm2: 40.0,
+            wavy_area_limit_mm2: 200.0,
+            worst: Some(drape_model::folds::FoldSite {
+                element: 7,
+                at: [1.0, -2.5, 3.0],
+                turn_deg: 170.0,
+                waviness_deg: 12.0,
+            }),
+        }),
         energy: EnergySummary {
             balance_error: 1e-4,
             kinetic_to_internal: 0.01,

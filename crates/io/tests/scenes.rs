@@ -450,8 +450,10 @@ fn guard_keys_reach_the_settings() {
 
 #[test]
 fn yarn_bending_is_an_option_of_the_fabric() {
-    let plain = Scene::parse(GOOD, Path::new("good.toml"), &[]).unwrap();
+    let off = [("fabric.bending".to_owned(), "false".to_owned())];
+    let plain = Scene::parse(GOOD, Path::new("good.toml"), &off).unwrap();
     assert!(plain.model.bending.is_empty() && !plain.model.features().bending);
+    assert!(plain.warnings.is_empty(), "{:?}", plain.warnings);
     let on = [("fabric.bending".to_owned(), "true".to_owned())];
     let scene = Scene::parse(GOOD, Path::new("good.toml"), &on).unwrap();
     // 4 × 4 cells: 5 lines of 3 interior nodes per family.
@@ -485,6 +487,89 @@ material = { name = "m", thickness = 0.5, fibre_volume_fraction = 0.5, density =
     );
     let text = error_of(&bad).to_string();
     assert!(text.contains("bending_rigidity[1]"), "{text}");
+}
+
+/// Unset, `fabric.bending` is on wherever the material has a rigidity and
+/// the mesh lines follow the yarns; where either is missing the scene
+/// loads without it and one warning says why, naming the field.
+#[test]
+fn yarn_bending_is_on_by_default_where_it_can_hold_the_blank() {
+    let default = Scene::parse(GOOD, Path::new("good.toml"), &[]).unwrap();
+    let explicit = Scene::parse(
+        GOOD,
+        Path::new("good.toml"),
+        &[("fabric.bending".to_owned(), "true".to_owned())],
+    )
+    .unwrap();
+    assert!(default.model.features().bending);
+    assert_eq!(default.model.bending[0].len(), 30);
+    assert_eq!(
+        default.model.bending[0].nodes,
+        explicit.model.bending[0].nodes
+    );
+    let glass = drape_constitutive::Material::preset("glass-serge-4x3").unwrap();
+    assert_eq!(
+        Some(default.model.bending[0].rigidity),
+        glass.bending_rigidity
+    );
+    assert!(default.warnings.is_empty(), "{:?}", default.warnings);
+    // The ±45 diamond mesh and embedded fibres at 0° on the grid follow
+    // the yarns too.
+    for set in [
+        vec![("fabric.orientation_deg", "45")],
+        vec![("fabric.fibres", "embedded")],
+        vec![
+            ("fabric.fibres", "embedded"),
+            ("fabric.orientation_deg", "90"),
+        ],
+    ] {
+        let set: Vec<(String, String)> = set
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        let scene = Scene::parse(GOOD, Path::new("good.toml"), &set).unwrap();
+        assert!(scene.model.features().bending, "{set:?}");
+        assert!(scene.warnings.is_empty(), "{set:?}: {:?}", scene.warnings);
+    }
+    // Embedded fibres at 30°: no line along the yarns; no error, no
+    // bending, one warning that says so.
+    let set = [
+        ("fabric.fibres".to_owned(), "embedded".to_owned()),
+        ("fabric.orientation_deg".to_owned(), "30".to_owned()),
+    ];
+    let angled = Scene::parse(GOOD, Path::new("good.toml"), &set).unwrap();
+    assert!(!angled.model.features().bending);
+    assert_eq!(angled.warnings.len(), 1, "{:?}", angled.warnings);
+    let text = &angled.warnings[0];
+    assert!(
+        text.contains("fabric.bending")
+            && text.contains("yarn bending is off")
+            && text.contains("0 of the blank's 9 interior nodes"),
+        "{text}"
+    );
+    // A material without a rigidity: off, with a warning naming the key
+    // it lacks.
+    let inline = GOOD.replace(
+        r#"material = "glass-serge-4x3""#,
+        r#"material = { name = "m", thickness = 0.5, fibre_volume_fraction = 0.5, density = 1e-9, fibre = { modulus = 1000.0, crimp_strain = 0.0 }, resin = { young = 10.0, poisson = 0.3 } }"#,
+    );
+    let bare = Scene::parse(&inline, Path::new("bare.toml"), &[]).unwrap();
+    assert!(!bare.model.features().bending && bare.model.bending.is_empty());
+    assert_eq!(bare.warnings.len(), 1, "{:?}", bare.warnings);
+    assert!(
+        bare.warnings[0].contains("fabric.bending")
+            && bare.warnings[0].contains("bending_rigidity"),
+        "{}",
+        bare.warnings[0]
+    );
+    // `false` says it is meant: no warning.
+    let quiet = Scene::parse(
+        &inline,
+        Path::new("bare.toml"),
+        &[("fabric.bending".to_owned(), "false".to_owned())],
+    )
+    .unwrap();
+    assert!(quiet.warnings.is_empty(), "{:?}", quiet.warnings);
 }
 
 /// `per_length`: springs and loads given per mm of the blank's edge reach

@@ -36,6 +36,7 @@
 //! ```
 
 pub mod blank;
+pub mod folds;
 pub mod measures;
 pub mod pressure;
 
@@ -211,6 +212,28 @@ pub struct Features {
     pub bending: bool,
     /// A follower pressure on the blank's surface.
     pub pressure: bool,
+}
+
+/// How far a mesh's lines follow the yarns ([`Model::yarn_coverage`]):
+/// yarn bending acts on a node only where a line of each family runs
+/// straight through it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct YarnCoverage {
+    /// Nodes of the membranes that are not on the blank's outline.
+    pub interior_nodes: usize,
+    /// Of those, the nodes a warp line and a weft line both run through.
+    pub covered_nodes: usize,
+    /// Bending triplets there would be (both families, outline included).
+    pub triplets: usize,
+}
+
+impl YarnCoverage {
+    /// Whether the lines run through every interior node in both
+    /// families: the mesh follows the yarns everywhere, so bending holds
+    /// the whole blank.
+    pub fn is_complete(&self) -> bool {
+        self.triplets > 0 && self.covered_nodes == self.interior_nodes
+    }
 }
 
 /// Where each element batch writes its nodal forces in the global slot
@@ -513,28 +536,15 @@ impl Model {
         rigidity: [f64; 2],
     ) -> Result<(), ModelError> {
         let n = self.node_count();
-        let mut edges = Vec::new();
         let mut area = vec![0.0; n];
         for b in &self.membranes {
             for e in 0..b.len() {
-                let nodes = b.element_nodes(e);
-                for (k, &a) in nodes.iter().enumerate() {
-                    edges.push([a, nodes[(k + 1) % nodes.len()]]);
-                }
-                for (&node, a) in nodes.iter().zip(b.nodal_areas(e)) {
+                for (&node, a) in b.element_nodes(e).iter().zip(b.nodal_areas(e)) {
                     area[node as usize] += a;
                 }
             }
         }
-        // An edge between two elements appears twice; once is enough.
-        for e in &mut edges {
-            e.sort_unstable();
-        }
-        edges.sort_unstable();
-        edges.dedup();
-        let warp = warp.normalize();
-        let weft = normal.cross(&warp).normalize();
-        let triplets = yarn_triplets(&self.x0, &edges, [warp, weft]);
+        let (triplets, _) = self.yarn_lines(warp, normal);
         if triplets.is_empty() {
             return Err(ModelError::NoYarnLines);
         }
@@ -556,6 +566,78 @@ impl Model {
         batch.clamp(&held);
         self.bending.push(batch);
         Ok(())
+    }
+
+    /// How far the membranes' mesh lines follow the yarns (see
+    /// [`YarnCoverage`]), for a warp `warp` in a blank of normal `normal`:
+    /// what [`Self::add_yarn_bending`] would bend.
+    pub fn yarn_coverage(&self, warp: Vector3<f64>, normal: Vector3<f64>) -> YarnCoverage {
+        let (triplets, edges) = self.yarn_lines(warp, normal);
+        let n = self.node_count();
+        // A node on an edge that only one element owns is on the blank's
+        // outline, where a line ends and no triplet can sit.
+        let mut on_outline = vec![false; n];
+        for (k, &[a, b]) in edges.iter().enumerate() {
+            let shared = (k > 0 && edges[k - 1] == [a, b])
+                || edges.get(k + 1).is_some_and(|&next| next == [a, b]);
+            if !shared {
+                on_outline[a as usize] = true;
+                on_outline[b as usize] = true;
+            }
+        }
+        let mut family = vec![[false; 2]; n];
+        for t in &triplets {
+            family[t.nodes[1] as usize][t.family as usize] = true;
+        }
+        let used = self.node_use();
+        let inner = (0..n).filter(|&j| used[j] && !on_outline[j]);
+        YarnCoverage {
+            interior_nodes: inner.clone().count(),
+            covered_nodes: inner.filter(|&j| family[j] == [true; 2]).count(),
+            triplets: triplets.len(),
+        }
+    }
+
+    /// Which nodes some membrane uses.
+    fn node_use(&self) -> Vec<bool> {
+        let mut used = vec![false; self.node_count()];
+        for b in &self.membranes {
+            for e in 0..b.len() {
+                for &node in b.element_nodes(e) {
+                    used[node as usize] = true;
+                }
+            }
+        }
+        used
+    }
+
+    /// The yarn-line triplets of the membranes' edges (see
+    /// `drape_elements::yarn_triplets`), and those edges, each as its
+    /// sorted node pair once per element that has it, sorted.
+    fn yarn_lines(
+        &self,
+        warp: Vector3<f64>,
+        normal: Vector3<f64>,
+    ) -> (Vec<drape_elements::YarnTriplet>, Vec<[u32; 2]>) {
+        let mut edges = Vec::new();
+        for b in &self.membranes {
+            for e in 0..b.len() {
+                let nodes = b.element_nodes(e);
+                for (k, &a) in nodes.iter().enumerate() {
+                    let mut edge = [a, nodes[(k + 1) % nodes.len()]];
+                    edge.sort_unstable();
+                    edges.push(edge);
+                }
+            }
+        }
+        edges.sort_unstable();
+        // An edge between two elements appears twice; once is enough for
+        // the lines.
+        let mut unique = edges.clone();
+        unique.dedup();
+        let warp = warp.normalize();
+        let weft = normal.cross(&warp).normalize();
+        (yarn_triplets(&self.x0, &unique, [warp, weft]), edges)
     }
 
     /// Total yarn bending energy at positions `x`.
@@ -781,6 +863,23 @@ impl Model {
             .flat_map(|b| (0..b.len()).map(move |e| b.element_nodes(e)))
             .collect();
         measures::waviness(&elements, x)
+    }
+
+    /// The fold check of `state` (see [`folds::fold_check`]), from its
+    /// element fields.
+    pub fn fold_check(&self, state: &State, fields: &ElementFields) -> folds::FoldCheck {
+        let elements: Vec<&[u32]> = self
+            .membranes
+            .iter()
+            .flat_map(|b| (0..b.len()).map(move |e| b.element_nodes(e)))
+            .collect();
+        folds::fold_check(
+            &elements,
+            &state.x,
+            &fields.waviness,
+            &fields.area,
+            &fields.centroid,
+        )
     }
 
     /// The largest truss tension (N) at positions `x`.

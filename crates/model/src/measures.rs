@@ -179,6 +179,17 @@ pub fn area_above(shear_rad: &[f64], areas: &[f64], locking_rad: f64) -> f64 {
 /// curvature κ leaves (≈ (κh)² rad).
 pub const WRINKLE_THRESHOLD_DEG: f64 = 5.0;
 
+/// The unit normal of an element with `nodes` at positions `x` (a quad's:
+/// the cross product of its diagonals), zero for a degenerate element.
+pub fn element_normal(nodes: &[u32], x: &[Vector3<f64>]) -> Vector3<f64> {
+    let p = |k: usize| x[nodes[k] as usize];
+    let n = match nodes.len() {
+        3 => (p(1) - p(0)).cross(&(p(2) - p(0))),
+        _ => (p(2) - p(0)).cross(&(p(3) - p(1))),
+    };
+    n.try_normalize(0.0).unwrap_or_else(Vector3::zeros)
+}
+
 /// The waviness of each element (degrees): the angle between its normal and
 /// the mean of its edge neighbours' normals (a quad: of each pair of
 /// opposite neighbours, the larger; a triangle: of its three), a measure of
@@ -192,15 +203,7 @@ pub const WRINKLE_THRESHOLD_DEG: f64 = 5.0;
 /// `elements` are the node lists of every membrane element, consistently
 /// oriented (a quad's normal is the cross product of its diagonals).
 pub fn waviness(elements: &[&[u32]], x: &[Vector3<f64>]) -> Vec<f64> {
-    let normal = |nodes: &[u32]| -> Vector3<f64> {
-        let p = |k: usize| x[nodes[k] as usize];
-        let n = match nodes.len() {
-            3 => (p(1) - p(0)).cross(&(p(2) - p(0))),
-            _ => (p(2) - p(0)).cross(&(p(3) - p(1))),
-        };
-        n.try_normalize(0.0).unwrap_or_else(Vector3::zeros)
-    };
-    let normals: Vec<Vector3<f64>> = elements.iter().map(|e| normal(e)).collect();
+    let normals: Vec<Vector3<f64>> = elements.iter().map(|e| element_normal(e, x)).collect();
     let mut by_edge: std::collections::HashMap<(u32, u32), Vec<usize>> =
         std::collections::HashMap::new();
     for (e, nodes) in elements.iter().enumerate() {

@@ -200,6 +200,26 @@ impl MeshSurface {
         self.own_triangles
     }
 
+    /// How far beyond the open rim `points` reach: the largest distance
+    /// to the surface of a point whose closest point is on the rim (0 when
+    /// none is, and for a closed mesh). A blank cut larger than the mould's
+    /// trimmed surface overhangs its rim by about this much.
+    pub fn overhang(&self, points: &[Vector3<f64>]) -> f64 {
+        points
+            .iter()
+            .map(|x| self.locate(x))
+            .filter(|(_, _, on_rim)| *on_rim)
+            .map(|(p, _, _)| p.gap.abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// Whether the closest point of `x` lies on the rim extension rather
+    /// than on the user's own triangles (false without an extension): the
+    /// part of a tool that is drape's, not the user's mould.
+    pub fn on_rim_extension(&self, x: &Vector3<f64>) -> bool {
+        self.locate(x).1 as usize >= self.own_triangles
+    }
+
     /// Where `x` is on this surface: the projection, the distance of the
     /// closest point from the user's own open rim (none for a closed mesh)
     /// and whether the closest point is on the rim extension.

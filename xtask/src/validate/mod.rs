@@ -31,6 +31,7 @@ mod locking;
 mod paper;
 mod pressure;
 mod scenes;
+mod tray;
 mod wrinkling;
 
 /// Every case of every crate, in the order they run and are reported.
@@ -43,6 +44,7 @@ pub fn registry() -> Vec<Case> {
         fishnet::CASES,
         implicit::CASES,
         scenes::CASES,
+        tray::CASES,
         bending::CASES,
         locking::CASES,
         wrinkling::CASES,

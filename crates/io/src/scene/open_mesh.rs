@@ -14,10 +14,14 @@ use super::SceneError;
 use super::locate::Locator;
 
 /// The default rim extension, in the blank's elements (the square root of
-/// its mean element area): a node that reaches a rim has its neighbours
-/// within an element behind it, so three elements keep the gap continuous
-/// for the node and the rows that follow it, while an extension much wider
-/// than that holds the ply's overhang as if the tool had a flange there.
+/// its mean element area), beyond the blank's overhang: a node that reaches
+/// a rim has its neighbours within an element behind it, so three elements
+/// keep the gap continuous for the node and the rows that follow it. A
+/// blank cut larger than the mould's trimmed surface (as plies are: the
+/// mould's flange goes on beyond the part's trim line) overhangs the rim
+/// from the start; the extension then reaches that far and three elements
+/// more, standing in for the flange, so the overhang neither hangs round
+/// the rim to the surface's back nor meets the rim as the blank draws in.
 pub const RIM_EXTENSION_ELEMENTS: f64 = 3.0;
 
 /// Halvings of the default extension tried before giving up on it, when it
@@ -179,7 +183,8 @@ pub(super) fn place(
             let Some(cell) = element_size(model) else {
                 return Ok(Surface::Mesh(mesh));
             };
-            let mut length = RIM_EXTENSION_ELEMENTS * cell;
+            let full = RIM_EXTENSION_ELEMENTS * cell + mesh.overhang(&model.x0);
+            let mut length = full;
             let mut found = None;
             for k in 0..=SHORTER_TRIES {
                 if k > 0 {
@@ -193,15 +198,14 @@ pub(super) fn place(
             }
             match found {
                 Some(e) => {
-                    if length < RIM_EXTENSION_ELEMENTS * cell {
+                    if length < full {
                         at.warn(
                             &key,
                             format!(
-                                "`{name}`: its open rim is extended by {length:.3} mm only: the default {:.3} mm \
-                                 (three of the blank's elements) passes through the blank at its start; a node that \
-                                 goes past the shorter extension meets the open rim again (give `rim_extension` to \
-                                 choose, and place the blank clear of it)",
-                                RIM_EXTENSION_ELEMENTS * cell,
+                                "`{name}`: its open rim is extended by {length:.3} mm only: the default {full:.3} mm \
+                                 (the blank's overhang and three of its elements) passes through the blank at its \
+                                 start; a node that goes past the shorter extension meets the open rim again (give \
+                                 `rim_extension` to choose, and place the blank clear of it)",
                             ),
                         );
                     }
@@ -211,9 +215,9 @@ pub(super) fn place(
                     at.warn(
                         &key,
                         format!(
-                            "`{name}`: its open rim is not extended: any extension from {:.3} mm down to {length:.3} \
-                             mm passes through the blank (give `rim_extension` to choose, 0 to silence this)",
-                            RIM_EXTENSION_ELEMENTS * cell,
+                            "`{name}`: its open rim is not extended: any extension from {full:.3} mm down to \
+                             {length:.3} mm passes through the blank (give `rim_extension` to choose, 0 to silence \
+                             this)",
                         ),
                     );
                     mesh

@@ -333,9 +333,14 @@ fn the_same_surface_from_inp_and_stl_gives_identical_gaps() {
 
     let from_inp = scene_with_tool(
         &dir,
-        r#"{ kind = "mesh", file = "dish.inp", units = "cm" }"#,
+        r#"{ kind = "mesh", file = "dish.inp", units = "cm", flip_normals = false }"#,
     );
-    let from_stl = scene_with_tool(&dir, r#"{ kind = "mesh", file = "dish.stl" }"#);
+    // The side as the files have it (the blank is behind the dish's
+    // normals, which would be turned with a warning otherwise).
+    let from_stl = scene_with_tool(
+        &dir,
+        r#"{ kind = "mesh", file = "dish.stl", flip_normals = false }"#,
+    );
     assert!(from_inp.warnings.is_empty(), "{:?}", from_inp.warnings);
     let (a, b) = (&from_inp.model.tools[0], &from_stl.model.tools[0]);
     let mut probes = 0;
@@ -363,11 +368,12 @@ fn the_same_surface_from_inp_and_stl_gives_identical_gaps() {
 #[test]
 fn a_tool_mesh_in_the_wrong_unit_warns_naming_units() {
     let dir = temp("units");
-    // The same 10 mm square read as metres (10 km) and as 10 µm.
+    // The same 10 mm square read as metres (10 km) and as 10 µm; its side
+    // and rim given, since in the wrong unit no node lies over it.
     std::fs::write(dir.join("mould.inp"), cae("R3D4", "R3D3")).unwrap();
     let big = scene_with_tool(
         &dir,
-        r#"{ kind = "mesh", file = "mould.inp", units = "m" }"#,
+        r#"{ kind = "mesh", file = "mould.inp", units = "m", flip_normals = false, rim_extension = 0 }"#,
     );
     assert_eq!(big.warnings.len(), 1, "{:?}", big.warnings);
     let w = &big.warnings[0];
@@ -379,10 +385,13 @@ fn a_tool_mesh_in_the_wrong_unit_warns_naming_units() {
     );
     let small = scene_with_tool(
         &dir,
-        r#"{ kind = "mesh", file = "mould.inp", scale = 0.0001 }"#,
+        r#"{ kind = "mesh", file = "mould.inp", scale = 0.0001, flip_normals = false, rim_extension = 0 }"#,
     );
     assert_eq!(small.warnings.len(), 1, "{:?}", small.warnings);
-    let fine = scene_with_tool(&dir, r#"{ kind = "mesh", file = "mould.inp" }"#);
+    let fine = scene_with_tool(
+        &dir,
+        r#"{ kind = "mesh", file = "mould.inp", flip_normals = false, rim_extension = 0 }"#,
+    );
     assert!(fine.warnings.is_empty(), "{:?}", fine.warnings);
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -547,8 +556,9 @@ fn one_instance_of_a_file_is_picked_as_a_tool() {
     std::fs::write(dir.join("tools.inp"), &text).unwrap();
     let scene = scene_with_tool(
         &dir,
-        r#"{ kind = "mesh", file = "tools.inp", instance = "Mould-1" }"#,
+        r#"{ kind = "mesh", file = "tools.inp", instance = "Mould-1", rim_extension = 0 }"#,
     );
+    // (No rim extension: the box is the instance's own.)
     let b = scene.model.tools[0].surface.aabb();
     assert_eq!((b.min, b.max), (mould_nodes()[0], mould_nodes()[2]));
     std::fs::write(dir.join("t.stl"), "solid t\nendsolid t\n").unwrap();

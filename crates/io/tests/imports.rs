@@ -254,9 +254,11 @@ fn an_open_tool_mesh_takes_the_blanks_side_or_says_why_it_cannot() {
     );
     let surface = &scene.model.tools[0].surface;
     assert!((surface.project(&Vector3::new(0.5, 0.5, 0.0)).gap - 1.0).abs() < 1e-12);
-    // The default rim extension: three of the blank's 5 mm elements.
+    // The default rim extension: the blank's overhang (its corner (5, 5, 0)
+    // is √19 mm from the floor's corner (2, 2, −1)) and three of its 5 mm
+    // elements.
     assert!(
-        (surface.aabb().min.x + 17.0).abs() < 1e-9,
+        (surface.aabb().min.x + 17.0 + 19f64.sqrt()).abs() < 1e-9,
         "{:?}",
         surface.aabb()
     );

@@ -96,10 +96,12 @@ pub(super) fn place(
                     return Err(at.error(
                         g,
                         format!(
-                            "`{name}` is an open mesh and no node of the blank lies over it (every node's closest \
-                             point is on its rim, or within half the fabric's thickness of it), so the side the \
-                             fabric comes from cannot be found: give `flip_normals = false` (the fabric on the side \
-                             the file's normals point to) or `true` (the other side)"
+                            "`{name}` is an open mesh ({:.4} mm across) and no node of the blank lies over it \
+                             (every node's closest point is on its rim, or within half the fabric's thickness of \
+                             it), so the side the fabric comes from cannot be found: check the mesh's `units` and \
+                             where it lies, or give `flip_normals = false` (the fabric on the side the file's \
+                             normals point to) or `true` (the other side)",
+                            { let b = mesh.aabb(); (b.max - b.min).norm() }
                         ),
                     ));
                 }

@@ -117,13 +117,8 @@ impl Net {
         m.area_above_locking =
             measures::area_above(&fields.shear, &fields.area, locking_deg.to_radians());
         // The wrinkle indicator as a forming run's (`Model::measures`).
-        m.max_waviness_deg = fields.waviness.iter().fold(0.0, |a: f64, &w| a.max(w));
-        m.wrinkle_area = fields
-            .waviness
-            .iter()
-            .zip(&fields.area)
-            .filter(|(w, _)| **w > measures::WRINKLE_THRESHOLD_DEG)
-            .fold(0.0, |total, (_, a)| total + a);
+        (m.max_waviness_deg, m.wrinkle_area) =
+            measures::wrinkle_indicator(&fields.waviness, &fields.area);
         let band = 0.5 * flat_area.sqrt();
         let profile =
             |line| measures::shear_profile(&frame, &fields.centroid0, &fields.shear, line, band);

@@ -910,13 +910,8 @@ impl Model {
         m.area_above_locking =
             measures::area_above(&fields.shear, &fields.area, locking_deg.to_radians());
         m.max_fibre_tension_n = self.max_truss_tension(&state.x)?;
-        m.max_waviness_deg = fields.waviness.iter().fold(0.0, |a: f64, &w| a.max(w));
-        m.wrinkle_area = fields
-            .waviness
-            .iter()
-            .zip(&fields.area)
-            .filter(|(w, _)| **w > measures::WRINKLE_THRESHOLD_DEG)
-            .fold(0.0, |total, (_, a)| total + a);
+        (m.max_waviness_deg, m.wrinkle_area) =
+            measures::wrinkle_indicator(&fields.waviness, &fields.area);
         if let Some(info) = &self.blank {
             m.draw_in = Some(measures::draw_in(
                 &info.frame,

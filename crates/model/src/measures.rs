@@ -179,6 +179,19 @@ pub fn area_above(shear_rad: &[f64], areas: &[f64], locking_rad: f64) -> f64 {
 /// curvature κ leaves (≈ (κh)² rad).
 pub const WRINKLE_THRESHOLD_DEG: f64 = 5.0;
 
+/// The wrinkle indicator of elements of `waviness` (degrees) and reference
+/// `area` (mm²): the largest waviness, and the area of the elements wavier
+/// than [`WRINKLE_THRESHOLD_DEG`].
+pub fn wrinkle_indicator(waviness: &[f64], area: &[f64]) -> (f64, f64) {
+    let largest = waviness.iter().fold(0.0, |a: f64, &w| a.max(w));
+    let wavy = waviness
+        .iter()
+        .zip(area)
+        .filter(|(w, _)| **w > WRINKLE_THRESHOLD_DEG)
+        .fold(0.0, |total, (_, a)| total + a);
+    (largest, wavy)
+}
+
 /// The unit normal of an element with `nodes` at positions `x` (a quad's:
 /// the cross product of its diagonals), zero for a degenerate element.
 pub fn element_normal(nodes: &[u32], x: &[Vector3<f64>]) -> Vector3<f64> {

@@ -18,6 +18,15 @@
 //!   the fabric lies on the mould both describe the same surface, and what
 //!   is left is friction and the yarns' bending and stretch, which the
 //!   pin-jointed net does not have.
+//!
+//! The last check fails today (2026-11-28: 8.40° rms over 816 elements; the
+//! median profile agrees to 0.26°, the diagonals differ by 9.2°, and μ = 0
+//! gives 8.53°): in the tray's corners the run's yarns end up to 18 %
+//! shorter (truss stretch 0.82), since the glass preset's yarns buckle at
+//! no cost (`compression_factor = 0`). The ply lies on the mould by
+//! gathering material there, below the mesh's scale, where a pin-jointed
+//! net (and a real fabric) must shear or wrinkle. It is left failing: the
+//! issue is the model's, not the check's.
 
 use std::path::Path;
 use std::time::Instant;

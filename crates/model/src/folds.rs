@@ -49,6 +49,57 @@ pub const FOLD_WAVINESS_DEG: f64 = 45.0;
 /// fold along a line of elements does (a 40 × 40 blank: 16 elements).
 pub const WAVY_AREA_SHARE: f64 = 0.01;
 
+/// Yarn stretch below which a truss counts as gathered (shortened)
+/// **\[choice\]**: 0.95. Yarns that buckle at no cost (`compression_factor
+/// = 0`) let a ply lie on a double-curved mould by shortening instead of
+/// shearing, gathering material below the mesh's scale where a real fabric
+/// wrinkles; waviness cannot see it. The shipped hemisphere's yarns end no
+/// shorter than 0.969 (0.7 % of them below 0.98); the open tray formed by
+/// a punch has 20 % of its yarns below 0.95, down to 0.82, in the corners
+/// where a pin-jointed net shears 45° and the run 22°.
+pub const GATHERED_STRETCH: f64 = 0.95;
+
+/// Share of the yarns' reference length that may be gathered
+/// ([`GATHERED_STRETCH`]) before the check warns **\[choice\]**: 1 %, as
+/// for the creased area.
+pub const GATHERED_SHARE: f64 = 0.01;
+
+/// Yarns shortened beyond [`GATHERED_STRETCH`]: material gathered below
+/// the mesh's scale.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct Gathering {
+    /// Share of the yarns' reference length shortened beyond the limit.
+    pub share: f64,
+    /// The shortest yarn's stretch l/L₀.
+    pub shortest_stretch: f64,
+    /// Where that yarn is (its midpoint, mm).
+    pub at: [f64; 3],
+}
+
+impl Gathering {
+    /// The gathering of yarns given as (stretch, reference length, current
+    /// midpoint); `None` when no yarn is shorter than the limit.
+    pub fn of(yarns: impl Iterator<Item = (f64, f64, Vector3<f64>)>) -> Option<Self> {
+        let (mut total, mut short) = (0.0, 0.0);
+        let mut shortest: Option<(f64, Vector3<f64>)> = None;
+        for (stretch, length, mid) in yarns {
+            total += length;
+            if stretch < GATHERED_STRETCH {
+                short += length;
+            }
+            if shortest.is_none_or(|(s, _)| stretch < s) {
+                shortest = Some((stretch, mid));
+            }
+        }
+        let (stretch, at) = shortest?;
+        (short > 0.0).then(|| Self {
+            share: short / total,
+            shortest_stretch: stretch,
+            at: at.into(),
+        })
+    }
+}
+
 /// One element the check points at.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct FoldSite {
@@ -80,6 +131,10 @@ pub struct FoldCheck {
     /// a ply without either.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub worst: Option<FoldSite>,
+    /// Yarns shortened beyond [`GATHERED_STRETCH`] (trusses only; `None`
+    /// when none is).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gathered: Option<Gathering>,
 }
 
 /// The fold check of a state: `elements` are the node lists of every
@@ -161,12 +216,39 @@ pub fn fold_check(
 }
 
 impl FoldCheck {
+    /// Adds the yarns' gathering to the check: past [`GATHERED_SHARE`] the
+    /// ply counts as folded.
+    pub fn with_gathering(mut self, gathered: Option<Gathering>) -> Self {
+        self.gathered = gathered;
+        self.folded |= gathered.is_some_and(|g| g.share > GATHERED_SHARE);
+        self
+    }
+
+    /// Whether the yarns' gathering is past its limit.
+    fn gathers(&self) -> bool {
+        self.gathered.is_some_and(|g| g.share > GATHERED_SHARE)
+    }
+
     /// The warning a run ends with when the ply folds (`None` when it does
     /// not): what, where, and what to change; `bending` says whether the
     /// run had yarn bending.
     pub fn warning(&self, bending: bool) -> Option<String> {
         if !self.folded {
             return None;
+        }
+        if self.turned_back_elements == 0
+            && self.wavy_area_mm2 <= self.wavy_area_limit_mm2
+            && let Some(g) = self.gathered.filter(|_| self.gathers())
+        {
+            return Some(format!(
+                "the ply gathers: {:.1} % of its yarns' length is shorter than {:.0} % of its start                  (the shortest at {:.3} of its length, at ({:.1}, {:.1}, {:.1}) mm): the yarns buckle                  there below the mesh's scale, so the ply lies on the tool by gathering material where                  a fabric shears or wrinkles. Shear there is not that of a formed ply (see stretch in                  trusses.pvd): hold the blank so that it shears instead (holder force, springs), or                  give the yarns a compressive stiffness (fibre.compression_factor)",
+                100.0 * g.share,
+                100.0 * GATHERED_STRETCH,
+                g.shortest_stretch,
+                g.at[0],
+                g.at[1],
+                g.at[2],
+            ));
         }
         let mut text = String::from("the ply folds: ");
         if self.turned_back_elements > 0 {
@@ -207,6 +289,52 @@ impl FoldCheck {
              N·mm), or hold the blank more (holder force, springs) and refine the mesh"
         });
         Some(text)
+    }
+}
+
+#[cfg(test)]
+mod gathering_tests {
+    use super::*;
+
+    #[test]
+    fn yarns_shortened_past_the_limit_over_their_share_fold_the_ply() {
+        let mid = |i: f64| Vector3::new(i, 0.0, 0.0);
+        // 100 yarns of 1 mm: one at 0.9, the rest taut: 1 % gathered, at
+        // the limit, not past it.
+        let one =
+            Gathering::of((0..100).map(|i| (if i == 7 { 0.9 } else { 1.0 }, 1.0, mid(i as f64))))
+                .expect("one yarn is short");
+        assert_eq!(one.share, 0.01);
+        assert_eq!((one.shortest_stretch, one.at), (0.9, [7.0, 0.0, 0.0]));
+        let check = FoldCheck::default().with_gathering(Some(one));
+        assert!(!check.folded && check.warning(true).is_none());
+        // Two of them (one at exactly the limit does not count): past it.
+        let two = Gathering::of((0..100).map(|i| {
+            let s = match i {
+                3 => 0.94,
+                7 => 0.9,
+                9 => GATHERED_STRETCH,
+                _ => 1.0,
+            };
+            (s, 1.0, mid(i as f64))
+        }))
+        .unwrap();
+        assert_eq!(two.share, 0.02);
+        let check = FoldCheck::default().with_gathering(Some(two));
+        let text = check.warning(true).expect("past the share, it warns");
+        assert!(
+            check.folded && text.starts_with("the ply gathers: 2.0 %"),
+            "{text}"
+        );
+        assert!(
+            text.contains("(7.0, 0.0, 0.0)") && text.contains("compression_factor"),
+            "{text}"
+        );
+        // Taut yarns: nothing.
+        assert_eq!(
+            Gathering::of((0..10).map(|i| (1.001, 1.0, mid(i as f64)))),
+            None
+        );
     }
 }
 

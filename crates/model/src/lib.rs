@@ -873,6 +873,13 @@ impl Model {
             .iter()
             .flat_map(|b| (0..b.len()).map(move |e| b.element_nodes(e)))
             .collect();
+        let yarns = self.trusses.iter().flat_map(|b| {
+            (0..b.len()).filter_map(move |e| {
+                let [i, j] = b.nodes[e].map(|n| state.x[n as usize]);
+                let out = b.element_output(e, &state.x).ok()?;
+                Some((out.stretch, b.length[e], 0.5 * (i + j)))
+            })
+        });
         folds::fold_check(
             &elements,
             &state.x,
@@ -880,6 +887,7 @@ impl Model {
             &fields.area,
             &fields.centroid,
         )
+        .with_gathering(folds::Gathering::of(yarns))
     }
 
     /// The largest truss tension (N) at positions `x`.

@@ -442,6 +442,11 @@ fn writes_a_complete_results_directory() {
                 turn_deg: 170.0,
                 waviness_deg: 12.0,
             }),
+            gathered: Some(drape_model::folds::Gathering {
+                share: 0.03,
+                shortest_stretch: 0.875,
+                at: [-59.5, -56.25, -4.0],
+            }),
         }),
         energy: EnergySummary {
             balance_error: 1e-4,

@@ -96,7 +96,7 @@ impl LoadTiming {
             )
         };
         format!(
-            "mass scaling makes the blank {r:.1}× as heavy while {loads} acts on the physical \
+            "mass scaling makes the blank {r:.1}× as heavy while {loads} {verb} on the physical \
              mass: free motion under {loads} is √{r:.1} = {s:.2}× slower (in the run's {t:.3} s \
              a free ply moves {scaled:.2} mm instead of {free:.2} mm). Quasi-static forming under \
              this load (the scaled inertia of a smooth-step motion over the {d:.1} mm the ply may \
@@ -104,6 +104,11 @@ impl LoadTiming {
              {needed:.3} s: {verdict}",
             r = self.ratio,
             loads = self.loads,
+            verb = if self.loads.contains(" and ") {
+                "act"
+            } else {
+                "acts"
+            },
             s = self.ratio.sqrt(),
             t = self.end_time,
             scaled = free / self.ratio,

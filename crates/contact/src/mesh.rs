@@ -363,7 +363,8 @@ impl MeshSurface {
     /// one this point found last, or `u32::MAX`), and setting `hint` to the
     /// triangle found. The answer is the same, bit for bit, as without the
     /// hint: a point that stays near its triangle costs a few triangle
-    /// tests instead of a descent of the tree (see [`Near`]).
+    /// tests instead of a descent of the tree (each triangle keeps a list of
+    /// its near neighbours, built with the mesh).
     pub fn project_from(&self, x: &Vector3<f64>, hint: &mut u32) -> Projection {
         let q = to_glam(x);
         let (tri, proj, location) = self.closest(q, *hint);

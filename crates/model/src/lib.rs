@@ -255,6 +255,32 @@ pub struct SlotLayout {
     node_slots: Vec<u32>,
 }
 
+/// Each node's slots from the (node, slot) pairs `owners` of a force pass
+/// that writes every element's share into slots of its own: `ptr` (one
+/// more than `node_count`) indexes `slots`, which lists node i's slots in
+/// `slots[ptr[i]..ptr[i + 1]]`. A counting sort by node keeps each node's
+/// slots in the order of `owners`, so a gather that sums them in that
+/// order does not depend on how the slots were filled.
+pub fn node_slots(
+    node_count: usize,
+    owners: impl Iterator<Item = (u32, u32)> + Clone,
+) -> (Vec<usize>, Vec<u32>) {
+    let mut ptr = vec![0usize; node_count + 1];
+    for (node, _) in owners.clone() {
+        ptr[node as usize + 1] += 1;
+    }
+    for i in 0..node_count {
+        ptr[i + 1] += ptr[i];
+    }
+    let mut fill = ptr.clone();
+    let mut slots = vec![0u32; ptr[node_count]];
+    for (node, slot) in owners {
+        slots[fill[node as usize]] = slot;
+        fill[node as usize] += 1;
+    }
+    (ptr, slots)
+}
+
 impl SlotLayout {
     /// fₙ = Σ of node n's slots, in ascending slot order: the same sums in
     /// the same order whatever the number of threads.
@@ -744,23 +770,10 @@ impl Model {
             owners.extend(b.nodes.iter().flatten());
         }
         layout.len = owners.len();
-        // Counting sort by node keeps each node's slots in ascending order.
-        let n = self.node_count();
-        let mut ptr = vec![0usize; n + 1];
-        for &o in &owners {
-            ptr[o as usize + 1] += 1;
-        }
-        for i in 0..n {
-            ptr[i + 1] += ptr[i];
-        }
-        let mut fill = ptr.clone();
-        let mut slots = vec![0u32; owners.len()];
-        for (s, &o) in owners.iter().enumerate() {
-            slots[fill[o as usize]] = s as u32;
-            fill[o as usize] += 1;
-        }
-        layout.node_ptr = ptr;
-        layout.node_slots = slots;
+        (layout.node_ptr, layout.node_slots) = node_slots(
+            self.node_count(),
+            owners.iter().enumerate().map(|(s, &o)| (o, s as u32)),
+        );
         layout
     }
 

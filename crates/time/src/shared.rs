@@ -449,21 +449,9 @@ impl PressurePass {
         if elements.is_empty() {
             return Self::default();
         }
-        // Counting sort by node keeps each node's slots ascending.
-        let n = model.node_count();
-        let mut node_ptr = vec![0usize; n + 1];
-        for &(node, _) in &owners {
-            node_ptr[node as usize + 1] += 1;
-        }
-        for i in 0..n {
-            node_ptr[i + 1] += node_ptr[i];
-        }
-        let mut fill = node_ptr.clone();
-        let mut node_slots = vec![0u32; owners.len()];
-        for &(node, slot) in &owners {
-            node_slots[fill[node as usize]] = slot;
-            fill[node as usize] += 1;
-        }
+        // Slots are pushed in ascending order, so each node's are too.
+        let (node_ptr, node_slots) =
+            drape_model::node_slots(model.node_count(), owners.iter().copied());
         Self {
             slots: vec![Vector3::zeros(); elements.len()],
             elements,

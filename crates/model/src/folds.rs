@@ -241,7 +241,12 @@ impl FoldCheck {
             && let Some(g) = self.gathered.filter(|_| self.gathers())
         {
             return Some(format!(
-                "the ply gathers: {:.1} % of its yarns' length is shorter than {:.0} % of its start                  (the shortest at {:.3} of its length, at ({:.1}, {:.1}, {:.1}) mm): the yarns buckle                  there below the mesh's scale, so the ply lies on the tool by gathering material where                  a fabric shears or wrinkles. Shear there is not that of a formed ply (see stretch in                  trusses.pvd): hold the blank so that it shears instead (holder force, springs), or                  give the yarns a compressive stiffness (fibre.compression_factor)",
+                "the ply gathers: {:.1} % of its yarns' length is shorter than {:.0} % of its start \
+                 (the shortest at {:.3} of its length, at ({:.1}, {:.1}, {:.1}) mm): the yarns buckle \
+                 there below the mesh's scale, so the ply lies on the tool by gathering material where \
+                 a fabric shears or wrinkles. Shear there is not that of a formed ply (see stretch in \
+                 trusses.pvd): hold the blank so that it shears instead (holder force, springs), or \
+                 give the yarns a compressive stiffness (fibre.compression_factor)",
                 100.0 * g.share,
                 100.0 * GATHERED_STRETCH,
                 g.shortest_stretch,

@@ -549,9 +549,9 @@ fn print_summary(s: &Summary, out: &Path) {
         );
     }
     println!(
-        "yarn tension      {:.4} N/mm at the end, {:.4} N/mm largest (t = {:.6} s){}",
-        s.max_fibre_tension_n_per_mm,
-        p.max_fibre_tension_n_per_mm,
+        "yarn tension      {} at the end, {} largest (t = {:.6} s){}",
+        drape::limits::or_na(s.max_fibre_tension_n_per_mm, 4, "N/mm"),
+        drape::limits::or_na(p.max_fibre_tension_n_per_mm, 4, "N/mm"),
         p.max_fibre_tension_time_s,
         if s.max_fibre_tension_n.is_finite() {
             format!("; largest truss force {:.4} N", s.max_fibre_tension_n)
@@ -766,6 +766,14 @@ fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
             Checkpoint::path(dir).display()
         ))
     })?;
+    // What cannot run is refused before the folder is touched, as for a
+    // new run: the stopped run's summary and checkpoint stay as they were.
+    drape::check_scene(&scene).map_err(|reason| {
+        bad(format!(
+            "{}: cannot resume: {reason}",
+            Checkpoint::path(dir).display()
+        ))
+    })?;
     let file = checkpoint.scene_file.display();
     match checkpoint.scene_file_matches() {
         Some(true) => {}
@@ -868,11 +876,22 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
             })
             .collect();
     }
-    // Every combination must load before anything runs or is written.
+    // Every combination must load, and pass the checks of `drape run`,
+    // before anything runs or is written.
     let scenes: Vec<Scene> = combos
         .iter()
         .map(|c| load(scene_path, c))
         .collect::<Result<_>>()?;
+    for (scene, combo) in scenes.iter().zip(&combos) {
+        drape::check_scene(scene).map_err(|reason| {
+            let set: Vec<String> = combo.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            bad(format!(
+                "{} with {}: {reason}",
+                scene_path.display(),
+                set.join(" ")
+            ))
+        })?;
+    }
     let out = out.unwrap_or_else(|| default_out(scene_path, "-sweep"));
     // One sweep per folder, as one run per folder; each run's own folder
     // is locked by the run.
@@ -914,20 +933,33 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
         match report {
             Ok(s) => {
                 failed |= s.status == "failed";
+                // A value a run has not (an imported blank's draw-in,
+                // embedded fibres' truss force) is left empty, not NaN.
+                let cell = |v: f64, digits: usize| {
+                    if v.is_finite() {
+                        format!("{v:.digits$}")
+                    } else {
+                        String::new()
+                    }
+                };
+                let balance = if s.energy.balance_error.is_finite() {
+                    format!("{:.3e}", s.energy.balance_error)
+                } else {
+                    String::new()
+                };
                 table.push_str(&format!(
-                    ",{},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3e},{},{:.2},{:.4},{:.6},{:.5}\n",
+                    ",{},{},{},{},{},{},{balance},{},{},{},{},{}\n",
                     s.status,
-                    s.max_shear_deg,
-                    s.draw_in_mm.dx,
-                    s.draw_in_mm.dy,
-                    s.draw_in_mm.dd,
-                    s.max_fibre_tension_n,
-                    s.energy.balance_error,
+                    cell(s.max_shear_deg, 4),
+                    cell(s.draw_in_mm.dx, 4),
+                    cell(s.draw_in_mm.dy, 4),
+                    cell(s.draw_in_mm.dd, 4),
+                    cell(s.max_fibre_tension_n, 3),
                     s.run.steps,
-                    s.run.wall_s,
-                    s.peak.max_shear_deg,
-                    s.peak.max_shear_time_s,
-                    s.max_fibre_tension_n_per_mm
+                    cell(s.run.wall_s, 2),
+                    cell(s.peak.max_shear_deg, 4),
+                    cell(s.peak.max_shear_time_s, 6),
+                    cell(s.max_fibre_tension_n_per_mm, 5)
                 ));
             }
             Err(e) => {
@@ -1002,11 +1034,14 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
     let path = dir.join("summary.json");
     let text = std::fs::read_to_string(&path).map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {
-            bad(format!(
-                "{}: no summary.json (nor a sweep's sweep.csv): no run has finished writing here \
-                 (one may still be running, or was killed)",
-                dir.display()
-            ))
+            match drape::reserve::unfinished(dir) {
+                Some(why) => anyhow!("{}: no summary.json: {why}", dir.display()),
+                None => bad(format!(
+                    "{}: no summary.json (nor a sweep's sweep.csv): no run has finished writing \
+                     here (one may still be running, or was killed)",
+                    dir.display()
+                )),
+            }
         } else {
             bad(format!("{}: {e}", path.display()))
         }
@@ -1037,11 +1072,27 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// How many run_NNN folders `dir` holds.
+fn run_folders(dir: &Path) -> usize {
+    std::fs::read_dir(dir).map_or(0, |entries| {
+        entries
+            .filter_map(|e| e.ok())
+            .filter(|e| {
+                e.file_name().to_str().is_some_and(|n| {
+                    n.strip_prefix("run_")
+                        .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+                }) && e.path().is_dir()
+            })
+            .count()
+    })
+}
+
 /// A sweep's table, aligned in columns, and where its runs are.
 fn inspect_sweep(dir: &Path, table: &Path) -> Result<ExitCode> {
     let text =
         std::fs::read_to_string(table).map_err(|e| bad(format!("{}: {e}", table.display())))?;
-    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+    let rows = drape::sweep_table::check(&text, run_folders(dir))
+        .map_err(|why| anyhow!("{}: {why}", table.display()))?;
     let columns = rows.iter().map(Vec::len).max().unwrap_or(0);
     let width: Vec<usize> = (0..columns)
         .map(|c| {

@@ -129,6 +129,81 @@ pub fn check_explicit(scene: &Scene, driver: &Explicit<'_>) -> Result<(), String
     Ok(())
 }
 
+/// Bytes a frame takes at least per blank node (`frame_NNNNN.vtu`: the
+/// 221-node draped test scene's is 80.9 kB, 366 B a node) and per truss
+/// (`trusses_NNNNN.vtu`: 88 B a truss there). Tools' frames come on top:
+/// the estimate is a lower bound, so a run it refuses would not fit.
+const FRAME_BYTES_PER_NODE: f64 = 300.0;
+const FRAME_BYTES_PER_TRUSS: f64 = 80.0;
+
+/// The frames a run of `scene` writes and their bytes at least: none
+/// without `output.vtu`; otherwise the initial frame and `frames` more,
+/// at most one a step.
+pub fn frame_bytes(scene: &Scene) -> (f64, f64) {
+    if !scene.spec.output.vtu {
+        return (0.0, 0.0);
+    }
+    let model = &scene.model;
+    let steps = Explicit::new(model, scene.settings.clone())
+        .map(|d| scene.settings.end_time / d.stable_time_step(&model.x0))
+        .unwrap_or(f64::INFINITY);
+    let frames = 1.0 + (scene.spec.simulation.frames as f64).min(steps.ceil());
+    let trusses: usize = model.trusses.iter().map(|b| b.len()).sum();
+    let per_frame =
+        FRAME_BYTES_PER_NODE * model.node_count() as f64 + FRAME_BYTES_PER_TRUSS * trusses as f64;
+    (frames, frames * per_frame)
+}
+
+/// The bytes free to an unprivileged writer on the file system of `path`
+/// (or of its nearest existing ancestor: the folder may not exist yet);
+/// None where that cannot be asked.
+pub fn free_bytes(path: &std::path::Path) -> Option<f64> {
+    let existing = path.ancestors().find(|a| a.exists())?;
+    #[cfg(unix)]
+    {
+        let s = rustix::fs::statvfs(existing).ok()?;
+        Some(s.f_bavail as f64 * s.f_frsize as f64)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = existing;
+        None
+    }
+}
+
+/// Checks that the frames of `runs` (scenes writing into `out`) fit the
+/// free space there, from [`frame_bytes`]'s lower bound; the error names
+/// `simulation.frames` and `output.vtu`.
+pub fn check_output(runs: &[&Scene], out: &std::path::Path) -> Result<(), String> {
+    let (frames, bytes) = runs.iter().fold((0.0, 0.0), |(f, b), scene| {
+        let (fs, bs) = frame_bytes(scene);
+        (f + fs, b + bs)
+    });
+    let Some(free) = free_bytes(out) else {
+        return Ok(());
+    };
+    if bytes > free {
+        let first = &runs[0].spec.simulation;
+        return Err(format!(
+            "simulation.frames = {}: {frames:.0} frames of the blank need at least {} and {} has \
+             {} free; lower simulation.frames, set output.vtu = false, or free space",
+            first.frames,
+            megabytes(bytes),
+            out.display(),
+            megabytes(free)
+        ));
+    }
+    Ok(())
+}
+
+fn megabytes(bytes: f64) -> String {
+    if bytes >= 1e9 {
+        format!("{:.1} GB", bytes / 1e9)
+    } else {
+        format!("{:.1} MB", bytes / 1e6)
+    }
+}
+
 /// The completion check of a run that ended without an error: why it is
 /// not "completed" (no step taken, the end time not reached, energies that
 /// are not numbers), or None when it is. `end_time` is the run's.

@@ -705,6 +705,8 @@ fn run(
         eprintln!("warning: {w}");
     }
     let out = out.unwrap_or_else(|| default_out(scene_path, ""));
+    drape::limits::check_output(&[&scene], &out)
+        .map_err(|reason| bad(format!("{}: {reason}", scene_path.display())))?;
     let options = RunOptions {
         checkpoint_every: checked_interval(checkpoint_every)?,
         overrides,
@@ -749,7 +751,14 @@ fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
             );
             return Ok(ExitCode::SUCCESS);
         }
-        Some(s) if s.status == "failed" => {
+        // A run stopped by a full disk continues once there is room.
+        Some(s)
+            if s.status == "failed"
+                && !s
+                    .reason
+                    .as_deref()
+                    .is_some_and(|r| r.starts_with("disk full")) =>
+        {
             return Err(bad(format!(
                 "{}: the run failed ({}): resuming it would repeat the failure with the same \
                  scene; change the scene and start a new run",
@@ -893,6 +902,9 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
         })?;
     }
     let out = out.unwrap_or_else(|| default_out(scene_path, "-sweep"));
+    let all: Vec<&Scene> = scenes.iter().collect();
+    drape::limits::check_output(&all, &out)
+        .map_err(|reason| bad(format!("{}: {reason}", scene_path.display())))?;
     // One sweep per folder, as one run per folder; each run's own folder
     // is locked by the run.
     let _lock = OutputLock::acquire(&out).map_err(|e| unusable_output(&out, &e))?;

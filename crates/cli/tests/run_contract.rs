@@ -295,7 +295,8 @@ fn a_full_disk_still_gets_a_summary_and_inspect_tells_it_from_killed() {
     std::fs::write(dir.join("draped.toml"), DRAPED).unwrap();
     let disk = dir.join("disk");
     // 400 KiB: the reserve (64 KiB) and the first frame (blank, trusses
-    // and tool: 265 kB), not the second. Before issue 29 this run left no
+    // and tool: 265 kB), not the second; the estimate of two frames (at
+    // least 98 kB each) fits. Before issue 29 this run left no
     // summary.json, and inspect said it "was killed".
     let Some(_mounted) = Tmpfs::mount(&disk, "400k") else {
         eprintln!(
@@ -304,12 +305,26 @@ fn a_full_disk_still_gets_a_summary_and_inspect_tells_it_from_killed() {
         return;
     };
     let out = disk.join("out");
-    let o = within_a_minute(&[
-        "run".into(),
-        dir.join("draped.toml").display().to_string(),
-        "--out".into(),
-        out.display().to_string(),
-    ]);
+    let run = |frames: &str| {
+        within_a_minute(&[
+            "run".into(),
+            dir.join("draped.toml").display().to_string(),
+            "--out".into(),
+            out.display().to_string(),
+            "--set".into(),
+            format!("simulation.frames={frames}"),
+        ])
+    };
+    // 101 frames do not fit by the estimate: refused, nothing written.
+    let o = run("100");
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("simulation.frames = 100") && text(&o).contains("output.vtu = false"),
+        "{}",
+        text(&o)
+    );
+    assert!(!out.exists());
+    let o = run("1");
     let said = text(&o);
     assert_eq!(o.status.code(), Some(1), "{said}");
     let summary = json(&out.join("summary.json"));

@@ -158,7 +158,17 @@ pub fn frame_bytes(scene: &Scene) -> (f64, f64) {
 /// (or of its nearest existing ancestor: the folder may not exist yet);
 /// None where that cannot be asked.
 pub fn free_bytes(path: &std::path::Path) -> Option<f64> {
-    let existing = path.ancestors().find(|a| a.exists())?;
+    // (A relative path's last ancestor is "", the current folder.)
+    let existing = path
+        .ancestors()
+        .map(|a| {
+            if a.as_os_str().is_empty() {
+                std::path::Path::new(".")
+            } else {
+                a
+            }
+        })
+        .find(|a| a.exists())?;
     #[cfg(unix)]
     {
         let s = rustix::fs::statvfs(existing).ok()?;
@@ -271,6 +281,15 @@ pub fn or_na(value: f64, decimals: usize, unit: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn free_space_is_asked_of_the_nearest_existing_folder() {
+        // A relative folder that does not exist yet: the current one's disk.
+        let free = free_bytes(std::path::Path::new("no-such-folder/below/it"));
+        if cfg!(unix) {
+            assert!(free.is_some_and(|b| b >= 0.0), "{free:?}");
+        }
+    }
 
     #[test]
     fn values_read_as_written() {

@@ -1103,8 +1103,8 @@ fn run_folders(dir: &Path) -> usize {
 fn inspect_sweep(dir: &Path, table: &Path) -> Result<ExitCode> {
     let text =
         std::fs::read_to_string(table).map_err(|e| bad(format!("{}: {e}", table.display())))?;
-    let rows = drape::sweep_table::check(&text, run_folders(dir))
-        .map_err(|why| anyhow!("{}: {why}", table.display()))?;
+    let rows =
+        drape::sweep_table::check(&text).map_err(|why| anyhow!("{}: {why}", table.display()))?;
     let columns = rows.iter().map(Vec::len).max().unwrap_or(0);
     let width: Vec<usize> = (0..columns)
         .map(|c| {
@@ -1132,6 +1132,9 @@ fn inspect_sweep(dir: &Path, table: &Path) -> Result<ExitCode> {
         println!("picture           {}", dir.join("sweep.png").display());
     }
     println!("each run's folder {}", dir.join("run_NNN").display());
+    if let Some(note) = drape::sweep_table::note(rows.len() - 1, run_folders(dir)) {
+        println!("note              {note}");
+    }
     Ok(ExitCode::SUCCESS)
 }
 

@@ -12,11 +12,12 @@ pub const LAST_COLUMN: &str = "max_fibre_tension_n_per_mm";
 /// Checks the text of a `sweep.csv` and returns its rows (the header
 /// first), or why it is not a whole table: no header, a header without
 /// the columns `drape sweep` writes, a last line without its end, a row
-/// with another number of fields than the header, or rows not numbered
-/// run_000, run_001, … in order. `run_folders` is how many `run_NNN`
-/// folders lie beside it: more folders than rows is a table cut at a line
-/// end.
-pub fn check(text: &str, run_folders: usize) -> Result<Vec<Vec<&str>>, String> {
+/// with another number of fields than the header, rows not numbered
+/// run_000, run_001, … in order, or no run row at all (a sweep runs at
+/// least one). A table cut exactly at the end of a row cannot be told
+/// from a smaller sweep by its text: [`note`] compares it with the run
+/// folders beside it.
+pub fn check(text: &str) -> Result<Vec<Vec<&str>>, String> {
     let Some(header) = text.lines().next() else {
         return Err("empty: no header, no runs".to_owned());
     };
@@ -50,12 +51,23 @@ pub fn check(text: &str, run_folders: usize) -> Result<Vec<Vec<&str>>, String> {
             ));
         }
     }
-    if run_folders > whole {
-        return Err(format!(
-            "cut short: {whole} run rows, but {run_folders} run folders (run_NNN) beside it"
-        ));
+    if whole == 0 {
+        return Err("cut short: a header and no run row (a sweep runs at least one)".to_owned());
     }
     Ok(rows)
+}
+
+/// A note when the folder holds more run folders (`run_folders`) than the
+/// table has rows (`rows`, without the header): the table may be cut at a
+/// row's end, or an earlier, larger sweep left them.
+pub fn note(rows: usize, run_folders: usize) -> Option<String> {
+    (run_folders > rows).then(|| {
+        format!(
+            "the folder holds {run_folders} run folders (run_NNN) and the table {rows} rows: \
+             run_{rows:03} on are not in it (an earlier, larger sweep's, or the table is cut \
+             short)"
+        )
+    })
 }
 
 #[cfg(test)]
@@ -73,24 +85,33 @@ peak_time_s,max_fibre_tension_n_per_mm";
     #[test]
     fn a_whole_table_reads_and_every_cut_is_named() {
         let whole = format!("{HEADER}\n{}\n{}\n", row(0), row(1));
-        assert_eq!(check(&whole, 2).unwrap().len(), 3);
+        assert_eq!(check(&whole).unwrap().len(), 3);
         // Cut inside the second row.
         let cut = &whole[..whole.len() - 10];
-        let why = check(cut, 2).unwrap_err();
+        let why = check(cut).unwrap_err();
         assert!(
             why.contains("cut short") && why.contains("1 whole run rows"),
             "{why}"
         );
         // Cut inside the header: no runs is not "0 runs".
-        let why = check(&HEADER[..40], 0).unwrap_err();
+        let why = check(&HEADER[..40]).unwrap_err();
         assert!(why.contains("not a sweep table"), "{why}");
-        // Cut at a line end: the folders tell.
+        // Cut after the header.
+        let why = check(&format!("{HEADER}\n")).unwrap_err();
+        assert!(why.contains("no run row"), "{why}");
+        // Cut at a row's end: the text is a smaller sweep's; the folders
+        // tell.
         let at_line = format!("{HEADER}\n{}\n", row(0));
-        let why = check(&at_line, 2).unwrap_err();
-        assert!(why.contains("1 run rows, but 2 run folders"), "{why}");
-        assert!(check("", 0).unwrap_err().contains("empty"));
+        assert_eq!(check(&at_line).unwrap().len(), 2);
+        let said = note(1, 2).unwrap();
+        assert!(
+            said.contains("2 run folders") && said.contains("run_001 on"),
+            "{said}"
+        );
+        assert_eq!(note(2, 2), None);
+        assert!(check("").unwrap_err().contains("empty"));
         // A row short of fields.
         let short = format!("{HEADER}\nrun_000,0.1,completed\n");
-        assert!(check(&short, 1).unwrap_err().contains("line 2"));
+        assert!(check(&short).unwrap_err().contains("line 2"));
     }
 }

@@ -249,15 +249,12 @@ max_fibre_tension_n_per_mm";
     let o = inspect();
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("(2 runs)"), "{}", text(&o));
-    // Cut inside the header (what read as "0 runs"), inside a row, and
-    // at a line end.
+    // Cut inside the header (what read as "0 runs"), after it, and inside
+    // a row.
     for (cut, says) in [
         (60, "not a sweep table"),
+        (header.len() + 1, "no run row"),
         (whole.len() - 9, "cut short"),
-        (
-            header.len() + row(0).len() + 2,
-            "1 run rows, but 2 run folders",
-        ),
     ] {
         std::fs::write(dir.join("sweep.csv"), &whole[..cut]).unwrap();
         let o = inspect();
@@ -265,6 +262,20 @@ max_fibre_tension_n_per_mm";
         assert_eq!(o.status.code(), Some(1), "{said}");
         assert!(said.contains(says) && !said.contains("runs)"), "{said}");
     }
+    // Cut at a row's end: the table reads, and the run folders it lacks
+    // are named.
+    std::fs::write(
+        dir.join("sweep.csv"),
+        &whole[..header.len() + row(0).len() + 2],
+    )
+    .unwrap();
+    let o = inspect();
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("(1 runs)") && text(&o).contains("run_001 on are not in it"),
+        "{}",
+        text(&o)
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -413,6 +413,40 @@ fn point_file(scene_path: &Path, point: &Point, scene: &Scene) -> Result<String>
     Ok(text)
 }
 
+/// The options as they go into `#SBATCH` lines: one word each (a space or
+/// a line break would end the line early or start another), and
+/// `--sbatch-arg` an option.
+pub fn check_options(args: &SlurmArgs) -> Result<()> {
+    let words = [
+        ("--partition", &args.partition),
+        ("--time", &args.time),
+        ("--account", &args.account),
+    ];
+    for (name, value) in words {
+        if let Some(v) = value {
+            if v.is_empty() || v.contains(char::is_whitespace) {
+                return Err(bad(format!(
+                    "{name} `{v}`: expected one word (an #SBATCH line of the batch script)"
+                )));
+            }
+        }
+    }
+    for a in &args.sbatch_args {
+        if !a.starts_with('-') || a.contains(['\n', '\r']) {
+            return Err(bad(format!(
+                "--sbatch-arg `{a}`: expected one sbatch option on one line, as \
+                 --sbatch-arg=--mem=4G"
+            )));
+        }
+    }
+    match args.cpus_per_task {
+        Some(0) => Err(bad("--cpus-per-task must be at least 1")),
+        _ if args.array_limit == Some(0) => Err(bad("--array-limit must be at least 1")),
+        _ if args.checkpoint_every == Some(0) => Err(bad("--checkpoint-every must be at least 1")),
+        _ => Ok(()),
+    }
+}
+
 /// `drape sweep SCENE --set … --slurm`.
 pub fn submit(
     scene_path: &Path,
@@ -420,6 +454,7 @@ pub fn submit(
     set: &[String],
     args: &SlurmArgs,
 ) -> Result<ExitCode> {
+    check_options(args)?;
     let (axes, combos) = sweep_table::points(set)?;
     // Every point must load and be runnable before anything is written or
     // submitted: a cluster queue is a slow place to find a typo.
@@ -431,14 +466,6 @@ pub fn submit(
         scenes.push(scene);
     }
     let sbatch = if args.dry_run { None } else { Some(sbatch()?) };
-    match args.cpus_per_task {
-        Some(0) => return Err(bad("--cpus-per-task must be at least 1")),
-        _ if args.array_limit == Some(0) => return Err(bad("--array-limit must be at least 1")),
-        _ if args.checkpoint_every == Some(0) => {
-            return Err(bad("--checkpoint-every must be at least 1"));
-        }
-        _ => {}
-    }
     let out = out.unwrap_or_else(|| default_out(scene_path, "-sweep"));
     let out = std::path::absolute(&out).unwrap_or(out);
     if is_slurm_sweep(&out) {
@@ -930,6 +957,38 @@ mod tests {
         .unwrap();
         assert!(run().contains("completed already"));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn options_that_would_break_the_script_are_refused() {
+        let err = |args: SlurmArgs| check_options(&args).unwrap_err().to_string();
+        let e = err(SlurmArgs {
+            partition: Some("short\n#SBATCH --x".into()),
+            ..Default::default()
+        });
+        assert!(e.starts_with("--partition `short"), "{e}");
+        assert!(e.contains("expected one word"), "{e}");
+        let e = err(SlurmArgs {
+            sbatch_args: vec!["mem=4G".into()],
+            ..Default::default()
+        });
+        assert!(
+            e.contains("--sbatch-arg `mem=4G`: expected one sbatch option"),
+            "{e}"
+        );
+        let e = err(SlurmArgs {
+            array_limit: Some(0),
+            ..Default::default()
+        });
+        assert_eq!(e, "--array-limit must be at least 1");
+        assert!(
+            check_options(&SlurmArgs {
+                time: Some("1-00:00:00".into()),
+                sbatch_args: vec!["--mem=4G".into(), "--constraint=a&b".into()],
+                ..Default::default()
+            })
+            .is_ok()
+        );
     }
 
     #[test]

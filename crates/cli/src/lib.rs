@@ -23,7 +23,7 @@ pub mod limits;
 mod orientations;
 pub mod reserve;
 mod setup;
-pub mod sweep_table;
+pub mod sweep_check;
 pub use compare::{CompareError, MeasureRow, RunComparison, RunComparisonSummary, compare_runs};
 pub use kinematic::{
     Comparison, ComparisonReport, ComparisonSummary, KinematicError, KinematicReport,

@@ -16,12 +16,13 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow};
 use clap::{Parser, Subcommand};
 use drape::{Checkpoint, RunControl, RunOptions, RunProgress, open_output, run_in, run_scene};
-use drape_io::results::{
-    OutputLock, ResultsError, Summary, SweepAxis, SweepRun, write_sweep_picture,
-};
+use drape_io::results::{OutputLock, ResultsError, Summary};
 use drape_io::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
+
+mod slurm;
+mod sweep_table;
 
 #[derive(Parser)]
 #[command(
@@ -76,9 +77,14 @@ enum Command {
     /// Run every combination of values and write one table of results.
     Sweep {
         /// The scene file (TOML).
-        scene: PathBuf,
+        #[arg(required_unless_present = "collect")]
+        scene: Option<PathBuf>,
         /// A key and its values: --set tools.0.friction=0,0.1,0.2 (repeatable).
-        #[arg(long = "set", value_name = "KEY=V1,V2,…", required = true)]
+        #[arg(
+            long = "set",
+            value_name = "KEY=V1,V2,…",
+            required_unless_present = "collect"
+        )]
         set: Vec<String>,
         /// Output directory (default: results/<scene name>-sweep).
         #[arg(long)]
@@ -87,6 +93,9 @@ enum Command {
         /// at once is brought down to that).
         #[arg(long)]
         threads: Option<usize>,
+        /// On a Slurm cluster: --slurm and its options, --collect, --retry.
+        #[command(flatten)]
+        slurm: slurm::SlurmArgs,
     },
     /// Print the summary of a run's output directory.
     Inspect {
@@ -286,7 +295,19 @@ fn main() -> ExitCode {
             set,
             out,
             threads,
-        } => with_threads(threads, || sweep(&scene, out, &set)),
+            slurm,
+        } => match (&slurm.collect, scene) {
+            (Some(dir), _) => slurm::collect(dir, slurm.retry),
+            (None, Some(scene)) if slurm.slurm => match threads {
+                Some(_) => Err(bad(
+                    "--threads is for a sweep run here; each Slurm task runs with \
+                     --cpus-per-task threads",
+                )),
+                None => slurm::submit(&scene, out, &set, &slurm),
+            },
+            (None, Some(scene)) => with_threads(threads, || sweep(&scene, out, &set)),
+            (None, None) => Err(bad("give a scene file, or --collect DIR")),
+        },
         Command::Inspect { dir } => inspect(&dir),
         Command::Kinematic { scene, out, set } => kinematic(&scene, out, &set),
         Command::Compare {
@@ -868,23 +889,7 @@ fn new(template: Option<&str>, path: Option<PathBuf>) -> Result<ExitCode> {
 }
 
 fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
-    let axes: Vec<(String, Vec<String>)> = parse_sets(set)?
-        .into_iter()
-        .map(|(k, v)| (k, v.split(',').map(|s| s.trim().to_owned()).collect()))
-        .collect();
-    let mut combos: Vec<Vec<(String, String)>> = vec![Vec::new()];
-    for (key, values) in &axes {
-        combos = combos
-            .into_iter()
-            .flat_map(|c| {
-                values.iter().map(move |v| {
-                    let mut c = c.clone();
-                    c.push((key.clone(), v.clone()));
-                    c
-                })
-            })
-            .collect();
-    }
+    let (axes, combos) = sweep_table::points(set)?;
     // Every combination must load, and pass the checks of `drape run`,
     // before anything runs or is written.
     let scenes: Vec<Scene> = combos
@@ -909,7 +914,7 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
     // is locked by the run.
     let _lock = OutputLock::acquire(&out).map_err(|e| unusable_output(&out, &e))?;
     eprintln!("sweep: {} runs into {}", scenes.len(), out.display());
-    let reports: Vec<Result<Summary>> = scenes
+    let reports: Vec<Result<Summary, String>> = scenes
         .par_iter()
         .enumerate()
         .map(|(i, scene)| {
@@ -921,7 +926,8 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
                     RunControl::Continue
                 }
             })
-            .with_context(|| format!("writing {}", dir.display()))?;
+            .with_context(|| format!("writing {}", dir.display()))
+            .map_err(|e| describe(&e))?;
             eprintln!(
                 "  run_{i:03} {} max shear {:.2}°",
                 report.summary.status, report.summary.max_shear_deg
@@ -929,94 +935,7 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
             Ok(report.summary)
         })
         .collect();
-    let mut table = String::from("run");
-    for (key, _) in &axes {
-        table.push(',');
-        table.push_str(key);
-    }
-    table.push_str(",status,max_shear_deg,draw_in_dx_mm,draw_in_dy_mm,draw_in_dd_mm,max_fibre_tension_n,balance_error,steps,wall_s,peak_max_shear_deg,peak_time_s,max_fibre_tension_n_per_mm\n");
-    let mut failed = false;
-    for (i, (combo, report)) in combos.iter().zip(&reports).enumerate() {
-        table.push_str(&format!("run_{i:03}"));
-        for (_, v) in combo {
-            table.push(',');
-            table.push_str(v);
-        }
-        match report {
-            Ok(s) => {
-                failed |= s.status == "failed";
-                // A value a run has not (an imported blank's draw-in,
-                // embedded fibres' truss force) is left empty, not NaN.
-                let cell = |v: f64, digits: usize| {
-                    if v.is_finite() {
-                        format!("{v:.digits$}")
-                    } else {
-                        String::new()
-                    }
-                };
-                let balance = if s.energy.balance_error.is_finite() {
-                    format!("{:.3e}", s.energy.balance_error)
-                } else {
-                    String::new()
-                };
-                table.push_str(&format!(
-                    ",{},{},{},{},{},{},{balance},{},{},{},{},{}\n",
-                    s.status,
-                    cell(s.max_shear_deg, 4),
-                    cell(s.draw_in_mm.dx, 4),
-                    cell(s.draw_in_mm.dy, 4),
-                    cell(s.draw_in_mm.dd, 4),
-                    cell(s.max_fibre_tension_n, 3),
-                    s.run.steps,
-                    cell(s.run.wall_s, 2),
-                    cell(s.peak.max_shear_deg, 4),
-                    cell(s.peak.max_shear_time_s, 6),
-                    cell(s.max_fibre_tension_n_per_mm, 5)
-                ));
-            }
-            Err(e) => {
-                failed = true;
-                table.push_str(&format!(
-                    ",error: {},,,,,,,,,,,\n",
-                    describe(e).replace(',', ";")
-                ));
-            }
-        }
-    }
-    let path = out.join("sweep.csv");
-    drape_io::atomic::write(&path, table.as_bytes())
-        .with_context(|| format!("writing {}", path.display()))?;
-    // A key given one value is a setting, not a swept parameter: the
-    // picture has a column per key with more than one value (the first key
-    // when none has).
-    let mut drawn: Vec<usize> = (0..axes.len()).filter(|&k| axes[k].1.len() > 1).collect();
-    if drawn.is_empty() {
-        drawn.push(0);
-    }
-    let sweep_axes: Vec<SweepAxis> = drawn
-        .iter()
-        .map(|&k| SweepAxis {
-            key: axes[k].0.clone(),
-            values: axes[k].1.clone(),
-        })
-        .collect();
-    let runs: Vec<SweepRun> = combos
-        .iter()
-        .zip(&reports)
-        .map(|(combo, report)| {
-            let s = report.as_ref().ok();
-            let value = |f: fn(&Summary) -> f64| s.map_or(f64::NAN, f);
-            SweepRun {
-                values: drawn.iter().map(|&k| combo[k].1.clone()).collect(),
-                max_shear_deg: value(|s| s.max_shear_deg),
-                draw_in_dx_mm: value(|s| s.draw_in_mm.dx),
-                draw_in_dd_mm: value(|s| s.draw_in_mm.dd),
-            }
-        })
-        .collect();
-    let picture = out.join("sweep.png");
-    write_sweep_picture(&picture, &sweep_axes, &runs)
-        .with_context(|| format!("writing {}", picture.display()))?;
+    let (table, failed) = sweep_table::write(&out, &axes, &combos, &reports)?;
     print!("{table}");
     Ok(if failed {
         ExitCode::from(1)
@@ -1038,6 +957,9 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
                 "no such folder"
             }
         )));
+    }
+    if slurm::is_slurm_sweep(dir) {
+        return slurm::inspect(dir);
     }
     let sweep = dir.join("sweep.csv");
     if sweep.is_file() && !dir.join("summary.json").exists() {
@@ -1104,7 +1026,7 @@ fn inspect_sweep(dir: &Path, table: &Path) -> Result<ExitCode> {
     let text =
         std::fs::read_to_string(table).map_err(|e| bad(format!("{}: {e}", table.display())))?;
     let rows =
-        drape::sweep_table::check(&text).map_err(|why| anyhow!("{}: {why}", table.display()))?;
+        drape::sweep_check::check(&text).map_err(|why| anyhow!("{}: {why}", table.display()))?;
     let columns = rows.iter().map(Vec::len).max().unwrap_or(0);
     let width: Vec<usize> = (0..columns)
         .map(|c| {
@@ -1132,7 +1054,7 @@ fn inspect_sweep(dir: &Path, table: &Path) -> Result<ExitCode> {
         println!("picture           {}", dir.join("sweep.png").display());
     }
     println!("each run's folder {}", dir.join("run_NNN").display());
-    if let Some(note) = drape::sweep_table::note(rows.len() - 1, run_folders(dir)) {
+    if let Some(note) = drape::sweep_check::note(rows.len() - 1, run_folders(dir)) {
         println!("note              {note}");
     }
     Ok(ExitCode::SUCCESS)

@@ -21,7 +21,7 @@ pub type Point = Vec<(String, String)>;
 pub fn points(set: &[String]) -> Result<(Vec<Axis>, Vec<Point>)> {
     let axes: Vec<Axis> = parse_sets(set)?
         .into_iter()
-        .map(|(k, v)| (k, v.split(',').map(|s| s.trim().to_owned()).collect()))
+        .map(|(k, v)| (k, values(&v)))
         .collect();
     let mut combos: Vec<Point> = vec![Vec::new()];
     for (key, values) in &axes {
@@ -37,6 +37,28 @@ pub fn points(set: &[String]) -> Result<(Vec<Axis>, Vec<Point>)> {
             .collect();
     }
     Ok((axes, combos))
+}
+
+/// The values of one `--set` list: split at the commas outside brackets
+/// and quotes, so that a vector key takes vectors
+/// (`fabric.blank.cells=[10,10],[20,20]` is two values).
+fn values(list: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let (mut depth, mut quoted, mut start) = (0_i32, false, 0);
+    for (i, c) in list.char_indices() {
+        match c {
+            '"' => quoted = !quoted,
+            '[' if !quoted => depth += 1,
+            ']' if !quoted => depth -= 1,
+            ',' if !quoted && depth == 0 => {
+                out.push(list[start..i].trim().to_owned());
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    out.push(list[start..].trim().to_owned());
+    out
 }
 
 /// The name of point `i`'s run folder.
@@ -63,8 +85,10 @@ pub fn write(
     for (i, (combo, report)) in combos.iter().zip(reports).enumerate() {
         table.push_str(&run_name(i));
         for (_, v) in combo {
+            // A vector value's commas would shift the columns: `;` in
+            // the table ([10;10]), the value itself in the point's scene.
             table.push(',');
-            table.push_str(v);
+            table.push_str(&v.replace(',', ";"));
         }
         match report {
             Ok(s) => {
@@ -142,4 +166,17 @@ pub fn write(
     write_sweep_picture(&picture, &sweep_axes, &runs)
         .with_context(|| format!("writing {}", picture.display()))?;
     Ok((table, failed))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::values;
+
+    #[test]
+    fn vectors_and_quoted_commas_are_one_value() {
+        assert_eq!(values("0, 0.1,0.2"), ["0", "0.1", "0.2"]);
+        assert_eq!(values("[10,10],[20, 20]"), ["[10,10]", "[20, 20]"]);
+        assert_eq!(values("[[1,2],[3,4]]"), ["[[1,2],[3,4]]"]);
+        assert_eq!(values("\"a,b\",c"), ["\"a,b\"", "c"]);
+    }
 }

@@ -39,6 +39,7 @@ mod locate;
 mod open_mesh;
 mod placement;
 mod set_path;
+mod shape;
 mod spec;
 
 use build::{build, finite3, positive, unit};
@@ -147,7 +148,13 @@ impl Scene {
         let spec: SceneFile = toml::from_str(&document).map_err(|e| {
             let start = e.span().map(|s| s.start);
             let message = plain(e.message());
-            match start.and_then(|s| field_at(&document, s)) {
+            let found = start.and_then(|s| field_at(&document, s)).map(|field| {
+                toml::from_str(&document)
+                    .ok()
+                    .and_then(|d| shape::refine_length_error(&d, &field, e.message()))
+                    .unwrap_or(field)
+            });
+            match found {
                 Some(field) if overrides.is_empty() => {
                     at.error_with_line(&field, start.map(|s| line_at(text, s)), message)
                 }
@@ -156,6 +163,7 @@ impl Scene {
                 None => at.error("scene", message),
             }
         })?;
+        shape::check(&document, &spec, &at)?;
         Self::assemble(spec, path, &at)
     }
 

@@ -28,7 +28,9 @@
 use std::path::{Path, PathBuf};
 
 mod kinematic;
+mod limits;
 pub use kinematic::{KinematicSetup, KinematicSpec};
+pub use limits::{MAX_COORDINATE_MM, MIN_MESH_SIZE_MM};
 
 use drape_model::Model;
 use drape_time::{ExplicitSettings, ImplicitSettings};

@@ -13,6 +13,7 @@ use drape_time::{ExplicitSettings, GuardSettings, ImplicitSettings};
 use nalgebra::Vector3;
 
 use super::bending::yarn_bending;
+use super::limits;
 use super::locate::Locator;
 use super::placement::{self, Placement};
 use super::{
@@ -48,13 +49,7 @@ pub(super) fn finite3(
 }
 
 pub(super) fn unit(at: &Locator<'_>, field: &str, v: [f64; 3]) -> Result<Vector3<f64>, SceneError> {
-    let d = finite3(at, field, v)?;
-    let n = d.norm();
-    if n > 0.0 {
-        Ok(d / n)
-    } else {
-        Err(at.error(field, "a direction must not be zero"))
-    }
+    limits::direction(at, field, v)
 }
 
 fn amplitude(at: &Locator<'_>, field: &str, a: &Amplitude) -> Result<Amplitude, SceneError> {
@@ -311,7 +306,7 @@ fn rectangle_blank(
     let blank = RectangleBlank {
         width,
         height,
-        center: finite3(at, "fabric.blank.center", b.center.unwrap_or_default())?,
+        center: limits::position(at, "fabric.blank.center", b.center.unwrap_or_default())?,
         orientation_deg: fabric.orientation_deg,
         element: b.element.unwrap_or(ElementKind::Quad),
         meshing,
@@ -392,6 +387,7 @@ fn mesh_blank(
             ),
         );
     }
+    placement.check(at, "fabric.blank", "mesh", &mesh.x0)?;
     for x in &mut mesh.x0 {
         *x = placement.apply(x);
     }
@@ -563,14 +559,17 @@ pub(super) fn build(
         let surface_err = |e: drape_contact::SurfaceError| at.error(&g, e.to_string());
         let surface = match &t.geometry {
             GeometrySpec::Plane { point, normal } => Surface::plane(
-                finite3(at, &format!("{g}.point"), *point)?,
+                limits::position(at, &format!("{g}.point"), *point)?,
                 unit(at, &format!("{g}.normal"), *normal)?,
             )
             .map_err(surface_err)?,
             GeometrySpec::Sphere { center, radius } => {
-                positive(at, &format!("{g}.radius"), *radius)?;
-                Surface::sphere(finite3(at, &format!("{g}.center"), *center)?, *radius)
-                    .map_err(surface_err)?
+                limits::length(at, &format!("{g}.radius"), *radius)?;
+                Surface::sphere(
+                    limits::position(at, &format!("{g}.center"), *center)?,
+                    *radius,
+                )
+                .map_err(surface_err)?
             }
             GeometrySpec::HemisphericalPunch {
                 pole,
@@ -578,9 +577,9 @@ pub(super) fn build(
                 shank,
                 pointing,
             } => {
-                positive(at, &format!("{g}.radius"), *radius)?;
-                positive(at, &format!("{g}.shank"), *shank)?;
-                let pole = finite3(at, &format!("{g}.pole"), *pole)?;
+                limits::length(at, &format!("{g}.radius"), *radius)?;
+                limits::length(at, &format!("{g}.shank"), *shank)?;
+                let pole = limits::position(at, &format!("{g}.pole"), *pole)?;
                 match pointing {
                     Pointing::Up => Surface::hemispherical_punch(pole, *radius, *shank),
                     Pointing::Down => Surface::hemispherical_punch_down(pole, *radius, *shank),
@@ -595,18 +594,19 @@ pub(super) fn build(
                 outer_radius,
             } => {
                 let (a, f) = (
-                    positive(at, &format!("{g}.opening_radius"), *opening_radius)?,
-                    positive(at, &format!("{g}.fillet_radius"), *fillet_radius)?,
+                    limits::length(at, &format!("{g}.opening_radius"), *opening_radius)?,
+                    limits::length(at, &format!("{g}.fillet_radius"), *fillet_radius)?,
                 );
-                positive(at, &format!("{g}.depth"), *depth)?;
+                limits::length(at, &format!("{g}.depth"), *depth)?;
                 if outer_radius.is_nan() || *outer_radius <= a + f {
                     return Err(at.error(
                         &format!("{g}.outer_radius"),
                         format!("{outer_radius} is not allowed: expected more than opening + fillet radius ({})", a + f),
                     ));
                 }
+                limits::length(at, &format!("{g}.outer_radius"), *outer_radius)?;
                 Surface::die(
-                    finite3(at, &format!("{g}.center"), *center)?,
+                    limits::position(at, &format!("{g}.center"), *center)?,
                     a,
                     f,
                     *depth,
@@ -621,7 +621,7 @@ pub(super) fn build(
                 edge_radius,
                 thickness,
             } => {
-                positive(at, &format!("{g}.inner_radius"), *inner_radius)?;
+                limits::length(at, &format!("{g}.inner_radius"), *inner_radius)?;
                 if !(edge_radius.is_finite() && *edge_radius >= 0.0) {
                     return Err(at.error(
                         &format!("{g}.edge_radius"),
@@ -639,6 +639,7 @@ pub(super) fn build(
                         ),
                     ));
                 }
+                limits::length(at, &format!("{g}.outer_radius"), *outer_radius)?;
                 let thickness = match thickness {
                     Some(t) => {
                         if !(t.is_finite() && *t > 0.0 && t >= edge_radius) {
@@ -652,7 +653,7 @@ pub(super) fn build(
                     None => f64::max(10.0, 2.0 * edge_radius),
                 };
                 Surface::ring(
-                    finite3(at, &format!("{g}.center"), *center)?,
+                    limits::position(at, &format!("{g}.center"), *center)?,
                     *inner_radius,
                     *outer_radius,
                     *edge_radius,
@@ -661,7 +662,7 @@ pub(super) fn build(
                 .map_err(surface_err)?
             }
             GeometrySpec::Revolution { origin, profile } => Surface::revolution(
-                finite3(at, &format!("{g}.origin"), *origin)?,
+                limits::position(at, &format!("{g}.origin"), *origin)?,
                 profile.clone(),
             )
             .map_err(surface_err)?,
@@ -755,7 +756,7 @@ pub(super) fn build(
         if !(s.rest_length.is_finite() && s.rest_length >= 0.0) {
             return Err(at.error(&format!("{here}.rest_length"), "expected a length ≥ 0"));
         }
-        let offset = finite3(at, &format!("{here}.anchor_offset"), s.anchor_offset)?;
+        let offset = limits::position(at, &format!("{here}.anchor_offset"), s.anchor_offset)?;
         // Anchored at its node, a spring starts at zero length: a force
         // there pulls in no direction, and near the anchor its transverse
         // stiffness F/l has no bound (no time step is stable).
@@ -842,7 +843,7 @@ pub(super) fn build(
                     ));
                 }
                 let pin = match pin {
-                    Some(p) => finite3(at, &format!("{here}.motion.pin"), *p)?,
+                    Some(p) => limits::position(at, &format!("{here}.motion.pin"), *p)?,
                     None => default_pin,
                 };
                 let a = amplitude(at, &format!("{here}.motion.amplitude"), a)?;

@@ -30,7 +30,10 @@ use std::path::{Path, PathBuf};
 mod kinematic;
 mod limits;
 pub use kinematic::{KinematicSetup, KinematicSpec};
-pub use limits::{MAX_COORDINATE_MM, MIN_MESH_SIZE_MM};
+pub use limits::{
+    BLANK_BYTES_PER_ELEMENT, MAX_BLANK_ELEMENTS, MAX_COORDINATE_MM, MIN_MESH_SIZE_MM,
+    TOOL_BYTES_PER_TRIANGLE,
+};
 
 use drape_model::Model;
 use drape_time::{ExplicitSettings, ImplicitSettings};

@@ -388,6 +388,14 @@ fn mesh_blank(
         );
     }
     placement.check(at, "fabric.blank", "mesh", &mesh.x0)?;
+    limits::mesh_size(
+        at,
+        "fabric.blank.mesh",
+        mesh.quad_labels.len() + mesh.triangle_labels.len(),
+        "element",
+        limits::BLANK_BYTES_PER_ELEMENT,
+        Some(limits::MAX_BLANK_ELEMENTS),
+    )?;
     for x in &mut mesh.x0 {
         *x = placement.apply(x);
     }

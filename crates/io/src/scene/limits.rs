@@ -80,3 +80,137 @@ pub(super) fn direction(
     let d = d / largest;
     Ok(d / d.norm())
 }
+
+/// Bytes a blank element read from a mesh file takes to read the scene
+/// and run (model, state, the driver's buffers; measured at its peak by
+/// `crates/cli/tests/mesh_memory.rs`).
+pub const BLANK_BYTES_PER_ELEMENT: usize = 3000;
+
+/// Bytes a tool mesh's triangle takes to read, repair and search
+/// (vertices, topology, bounding-volume tree; measured likewise).
+pub const TOOL_BYTES_PER_TRIANGLE: usize = 3200;
+
+/// The most elements a blank read from a mesh file may have: the same as
+/// a rectangle's ([`drape_model::blank::MAX_ELEMENTS`]).
+pub const MAX_BLANK_ELEMENTS: usize = drape_model::blank::MAX_ELEMENTS;
+
+/// The machine's memory (bytes), where the system says (Linux).
+fn machine_memory() -> Option<usize> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let kib: usize = info
+        .lines()
+        .find_map(|l| l.strip_prefix("MemTotal:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kib * 1024)
+}
+
+/// Refuses a mesh of `count` `what`s (of `bytes_each`) at `field` whose
+/// estimate is past `cap` items or past the machine's memory, with the
+/// estimate.
+pub(super) fn mesh_size(
+    at: &Locator<'_>,
+    field: &str,
+    count: usize,
+    what: &str,
+    bytes_each: usize,
+    cap: Option<usize>,
+) -> Result<(), SceneError> {
+    let need = count as f64 * bytes_each as f64;
+    let estimate = format!(
+        "{count} {what}s need about {:.1} GB to read and run ({bytes_each} B each)",
+        need / 1e9
+    );
+    if let Some(cap) = cap.filter(|&cap| count > cap) {
+        return Err(at.error(
+            field,
+            format!("{estimate}: drape takes at most {cap} {what}s (a unit mistake or an unmeshed export?)"),
+        ));
+    }
+    if let Some(memory) = machine_memory().filter(|&m| need > m as f64) {
+        return Err(at.error(
+            field,
+            format!(
+                "{estimate}, more than this machine's {:.1} GB of memory: coarsen the mesh",
+                memory as f64 / 1e9
+            ),
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn locator() -> Locator<'static> {
+        Locator {
+            file: std::path::Path::new("s.toml"),
+            text: None,
+            overrides: &[],
+            warnings: Default::default(),
+        }
+    }
+
+    #[test]
+    fn a_mesh_past_the_cap_or_the_memory_is_refused_with_the_estimate() {
+        let at = locator();
+        let cap = Some(MAX_BLANK_ELEMENTS);
+        mesh_size(
+            &at,
+            "fabric.blank.mesh",
+            MAX_BLANK_ELEMENTS,
+            "element",
+            3000,
+            cap,
+        )
+        .unwrap();
+        let e = mesh_size(
+            &at,
+            "fabric.blank.mesh",
+            MAX_BLANK_ELEMENTS + 1,
+            "element",
+            3000,
+            cap,
+        )
+        .unwrap_err();
+        assert_eq!(e.field, "fabric.blank.mesh");
+        assert!(
+            e.message.contains("4000001 elements need about 12.0 GB"),
+            "{e}"
+        );
+        assert!(e.message.contains("at most 4000000 elements"), "{e}");
+        if let Some(memory) = machine_memory() {
+            let count = memory / 3200 + 1;
+            let e = mesh_size(&at, "tools[0].geometry.file", count, "triangle", 3200, None)
+                .unwrap_err();
+            assert_eq!(e.field, "tools[0].geometry.file");
+            assert!(e.message.contains("more than this machine's"), "{e}");
+            mesh_size(
+                &at,
+                "tools[0].geometry.file",
+                count / 2,
+                "triangle",
+                3200,
+                None,
+            )
+            .unwrap();
+        }
+    }
+
+    #[test]
+    fn directions_are_scaled_before_they_are_normalised() {
+        let at = locator();
+        let d = direction(&at, "d", [1e300, 0.0, -1e300]).unwrap();
+        assert!((d - Vector3::new(1.0, 0.0, -1.0) / 2f64.sqrt()).norm() <= 1e-15);
+        assert_eq!(
+            direction(&at, "d", [0.0, -5e-324, 0.0]).unwrap(),
+            -Vector3::y()
+        );
+        assert!(direction(&at, "d", [0.0; 3]).is_err());
+        assert!(direction(&at, "d", [f64::INFINITY, 0.0, 0.0]).is_err());
+    }
+}

@@ -226,6 +226,14 @@ pub(super) fn tool_mesh(
     };
     let (vertices, triangles) = read.map_err(|e| at.error(&format!("{g}.file"), e))?;
     placement.check(at, g, "file", &vertices)?;
+    super::limits::mesh_size(
+        at,
+        &format!("{g}.file"),
+        triangles.len(),
+        "triangle",
+        super::limits::TOOL_BYTES_PER_TRIANGLE,
+        None,
+    )?;
     let vertices: Vec<Vector3<f64>> = vertices.iter().map(|v| placement.apply(v)).collect();
     // drape works in mm: a mould of less than a millimetre or more than ten
     // metres across is most likely a file in another unit (a mould in

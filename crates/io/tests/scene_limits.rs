@@ -154,3 +154,19 @@ fn a_direction_of_huge_or_tiny_components_is_that_direction() {
     );
     assert!(e.message.contains("must not be zero"), "{e}");
 }
+
+#[test]
+fn a_rectangle_past_the_range_names_its_size() {
+    for (key, value, field) in [
+        ("fabric.blank.width", "1e300", "fabric.blank.width"),
+        ("fabric.blank.height", "2e9", "fabric.blank.height"),
+        (
+            "fabric.blank.center",
+            "[0, -1e10, 0]",
+            "fabric.blank.center",
+        ),
+    ] {
+        let e = refused("picture-frame.toml", key, value, field);
+        assert!(!e.message.contains("non-finite"), "{e}");
+    }
+}

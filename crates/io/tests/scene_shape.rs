@@ -259,3 +259,33 @@ fn a_mesh_blanks_placement_lists_are_checked_too() {
     let sets = [("fabric.blank.offset".to_owned(), "[0, 0, 5]".to_owned())];
     Scene::from_file(&path, &sets).unwrap();
 }
+
+#[test]
+fn a_list_one_value_short_is_named_too() {
+    for (key, field, value) in [
+        ("gravity", "gravity", "[0, -9810]"),
+        (
+            "tools.0.motion.direction",
+            "tools[0].motion.direction",
+            "[0, 1]",
+        ),
+        (
+            "tools.0.geometry.point",
+            "tools[0].geometry.point",
+            "[0, 0]",
+        ),
+        (
+            "tools.1.geometry.profile.0.from",
+            "tools[1].geometry.profile[0].from",
+            "[0]",
+        ),
+        ("kinematic.seed", "kinematic.seed", "[0]"),
+    ] {
+        let e = match parse(ALL, &[(key, value)]) {
+            Ok(_) => panic!("--set {key}={value} was accepted"),
+            Err(e) => e,
+        };
+        assert_eq!(e.field, field, "--set {key}={value}: {e}");
+        assert!(e.message.contains("values is not allowed"), "{e}");
+    }
+}

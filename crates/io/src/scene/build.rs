@@ -293,9 +293,11 @@ fn rectangle_blank(
             ),
         ));
     };
+    limits::length(at, "fabric.blank.width", width)?;
+    limits::length(at, "fabric.blank.height", height)?;
     let meshing = match (b.cells, b.element_size) {
         (Some(c), None) => Meshing::Cells(c),
-        (None, Some(h)) => Meshing::Size(h),
+        (None, Some(h)) => Meshing::Size(limits::length(at, "fabric.blank.element_size", h)?),
         _ => {
             return Err(at.error(
                 "fabric.blank",

@@ -76,23 +76,27 @@ fn value(given: &Value, read: &Value, here: &str) -> Option<(String, usize, usiz
     }
 }
 
-/// serde's "invalid length N, expected M …" error inside an internally
+/// serde's "invalid length N, expected M …" error (too many or too few
+/// values) inside an internally
 /// tagged table (`tools[0].motion`, found at `field`) points at the table:
-/// the list to name is the list of N values in it that, cut to M values,
-/// leaves no error about a list's length.
+/// the list to name is the list of N values in it that, cut or padded to
+/// M values, leaves no error about a list's length.
 pub(super) fn refine_length_error(document: &Table, field: &str, message: &str) -> Option<String> {
     let (n, expected) = message
         .strip_prefix("invalid length ")?
         .split_once(", expected ")?;
     let n: usize = n.trim().parse().ok()?;
-    let m: usize = expected.split(' ').next()?.parse().ok()?;
+    // "3 elements in sequence" (too many) or "an array of length 3".
+    let m: usize = expected.split(' ').find_map(|w| w.parse().ok())?;
     let whole = Value::Table(document.clone());
     let mut found = Vec::new();
     lists_of_length(get(&whole, field)?, n, field, &mut found);
     found.into_iter().find(|list| {
         let mut cut = whole.clone();
         if let Some(Value::Array(a)) = get_mut(&mut cut, list) {
-            a.truncate(m);
+            // Padded with its own last value, a list of lists stays one.
+            let last = a.last().cloned().unwrap_or(Value::Float(0.0));
+            a.resize(m, last);
         }
         // A list that was right, cut, makes a length error of its own.
         match cut.try_into::<SceneFile>() {

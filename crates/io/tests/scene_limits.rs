@@ -170,3 +170,26 @@ fn a_rectangle_past_the_range_names_its_size() {
         assert!(!e.message.contains("non-finite"), "{e}");
     }
 }
+
+#[test]
+fn radii_rest_lengths_and_durations_are_named_at_their_key() {
+    refused(
+        "hemisphere-ring.toml",
+        "tools.2.geometry.edge_radius",
+        "1e300",
+        "tools[2].geometry.edge_radius",
+    );
+    refused(
+        "hemisphere-0-90.toml",
+        "springs.0.rest_length",
+        "1e300",
+        "springs[0].rest_length",
+    );
+    let e = refused(
+        "hemisphere-0-90.toml",
+        "tools.0.motion.amplitude.duration",
+        "0",
+        "tools[0].motion.amplitude.duration",
+    );
+    assert!(e.message.contains("must be positive"), "{e}");
+}

@@ -53,7 +53,15 @@ pub(super) fn unit(at: &Locator<'_>, field: &str, v: [f64; 3]) -> Result<Vector3
 }
 
 fn amplitude(at: &Locator<'_>, field: &str, a: &Amplitude) -> Result<Amplitude, SceneError> {
-    a.validate().map_err(|m| at.error(field, m))?;
+    a.validate().map_err(|m| {
+        // The key the message is about, when it is one of the table's.
+        let key = match a {
+            Amplitude::Ramp { .. } | Amplitude::SmoothStep { .. } => ".duration",
+            Amplitude::Table { .. } => ".points",
+            Amplitude::Constant => "",
+        };
+        at.error(&format!("{field}{key}"), m)
+    })?;
     Ok(a.clone())
 }
 
@@ -632,11 +640,16 @@ pub(super) fn build(
                 thickness,
             } => {
                 limits::length(at, &format!("{g}.inner_radius"), *inner_radius)?;
-                if !(edge_radius.is_finite() && *edge_radius >= 0.0) {
+                if !(edge_radius.is_finite()
+                    && *edge_radius >= 0.0
+                    && *edge_radius <= limits::MAX_COORDINATE_MM)
+                {
                     return Err(at.error(
                         &format!("{g}.edge_radius"),
                         format!(
-                            "{edge_radius} is not allowed: expected a radius ≥ 0 (0: a sharp edge)"
+                            "{edge_radius} is not allowed: expected a radius ≥ 0 (0: a sharp \
+                             edge), at most {:e} mm",
+                            limits::MAX_COORDINATE_MM
                         ),
                     ));
                 }
@@ -763,8 +776,18 @@ pub(super) fn build(
                 ));
             }
         };
-        if !(s.rest_length.is_finite() && s.rest_length >= 0.0) {
-            return Err(at.error(&format!("{here}.rest_length"), "expected a length ≥ 0"));
+        if !(s.rest_length.is_finite()
+            && s.rest_length >= 0.0
+            && s.rest_length <= limits::MAX_COORDINATE_MM)
+        {
+            return Err(at.error(
+                &format!("{here}.rest_length"),
+                format!(
+                    "{} is not allowed: expected a length ≥ 0, at most {:e} mm",
+                    s.rest_length,
+                    limits::MAX_COORDINATE_MM
+                ),
+            ));
         }
         let offset = limits::position(at, &format!("{here}.anchor_offset"), s.anchor_offset)?;
         // Anchored at its node, a spring starts at zero length: a force

@@ -193,3 +193,19 @@ fn radii_rest_lengths_and_durations_are_named_at_their_key() {
     );
     assert!(e.message.contains("must be positive"), "{e}");
 }
+
+#[test]
+fn a_spring_of_subnormal_length_names_its_anchor_offset() {
+    let e = refused(
+        "hemisphere-0-90.toml",
+        "springs.0.anchor_offset",
+        "[0, 0, 5e-324]",
+        "springs[0].anchor_offset",
+    );
+    assert!(e.message.contains("no usable direction"), "{e}");
+    scene(
+        "hemisphere-0-90.toml",
+        &[("springs.0.anchor_offset", "[0, 0, 1e-3]")],
+    )
+    .unwrap();
+}

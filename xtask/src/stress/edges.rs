@@ -305,8 +305,18 @@ fn check(dir: &Path, bases: &[(String, Table)], case: &Case) -> Option<String> {
             // The key in the form errors use; for a tool's key, the tool
             // (its path or its name: where it starts, how far a force
             // moves it, are the tool's, from several of its keys).
+            let (parent, leaf) = case
+                .key
+                .field
+                .rsplit_once('.')
+                .unwrap_or(("", &case.key.field));
             let named = reason.contains(&case.key.field)
                 || (case.set && reason.contains(&format!("--set {}", case.key.path)))
+                // The table, and the key among the keys it names
+                // (`springs[1]: … give an anchor_offset`).
+                || (!parent.is_empty()
+                    && reason.contains(&format!("{parent}: "))
+                    && reason.contains(leaf))
                 || tool_of(base, &case.key.field).is_some_and(|(path, name)| {
                     reason.contains(&path) || reason.contains(&format!("`{name}`"))
                 });

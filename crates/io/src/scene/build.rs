@@ -794,6 +794,19 @@ pub(super) fn build(
         // there pulls in no direction, and near the anchor its transverse
         // stiffness F/l has no bound (no time step is stable).
         let (start, _) = table.force_and_stiffness(offset.norm() - s.rest_length);
+        // As short as a subnormal, it is zero to the mechanics (its
+        // direction, F/l) but not to the test below.
+        if offset != Vector3::zeros() && offset.norm() < limits::MIN_MESH_SIZE_MM {
+            return Err(at.error(
+                &format!("{here}.anchor_offset"),
+                format!(
+                    "a spring {:e} mm long has no usable direction: give an anchor_offset of at \
+                     least {:e} mm, or [0, 0, 0] with no force at the start",
+                    offset.norm(),
+                    limits::MIN_MESH_SIZE_MM
+                ),
+            ));
+        }
         if offset == Vector3::zeros() && start != 0.0 {
             return Err(at.error(
                 &here,

@@ -363,16 +363,14 @@ fn broken_links(path: &Path) -> Vec<String> {
         } else {
             dir.join(file)
         };
-        let at = format!("{}:{line}: `{target}`", path.display());
+        let shown = path.strip_prefix(workspace()).unwrap_or(path);
+        let at = format!("{}:{line}: `{target}`", shown.display());
         if !resolved.exists() {
-            out.push(format!("{at}: no file {}", resolved.display()));
+            out.push(format!("{at}: no such file"));
         } else if !anchor.is_empty() && resolved.extension().is_some_and(|e| e == "md") {
             let headings = anchors(&std::fs::read_to_string(&resolved).unwrap());
             if !headings.iter().any(|a| a == anchor) {
-                out.push(format!(
-                    "{at}: no heading with the anchor #{anchor} in {}",
-                    resolved.display()
-                ));
+                out.push(format!("{at}: no heading there has the anchor #{anchor}"));
             }
         }
     }

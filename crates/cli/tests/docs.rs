@@ -93,7 +93,8 @@ fn commands(page: &str, markdown: &str) -> Vec<Shown> {
         let mut w = words(line);
         let skip = if w.first().is_some_and(|s| s == "drape") {
             1
-        } else if w.starts_with(&["cargo", "run", "--release", "-p", "drape", "--"].map(String::from))
+        } else if w
+            .starts_with(&["cargo", "run", "--release", "-p", "drape", "--"].map(String::from))
         {
             6
         } else {
@@ -170,7 +171,10 @@ fn check(shown: &Shown, dir: &Path) -> Result<(), String> {
         _ => false,
     };
     if runs_a_scene {
-        args.extend(["--set".into(), format!("simulation.end_time={TINY_END_TIME}")]);
+        args.extend([
+            "--set".into(),
+            format!("simulation.end_time={TINY_END_TIME}"),
+        ]);
     }
     let out = drape()
         .args(&args)
@@ -224,7 +228,10 @@ fn every_documented_command_works() {
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
-    assert!(count >= 10, "only {count} commands found: is the extraction broken?");
+    assert!(
+        count >= 10,
+        "only {count} commands found: is the extraction broken?"
+    );
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
 
@@ -253,7 +260,12 @@ drape run output shown, not run
     let results: Vec<Result<(), String>> = shown.iter().map(|s| check(s, &dir)).collect();
     let _ = std::fs::remove_dir_all(&dir);
     assert!(results[0].is_ok(), "{:?}", results[0]);
-    for (r, what) in results[1..].iter().zip(["no_such_key", "no-such-scene", "--no-such-flag", "frobnicate"]) {
+    for (r, what) in results[1..].iter().zip([
+        "no_such_key",
+        "no-such-scene",
+        "--no-such-flag",
+        "frobnicate",
+    ]) {
         let e = r.as_ref().expect_err(what);
         assert!(e.contains(what), "{e}");
     }
@@ -264,7 +276,13 @@ fn placeholders_are_told_from_arguments() {
     for p in ["SCENE", "RUN_A", "PART.inp", "N", "[--out", "DIR]…", "a|b"] {
         assert!(is_placeholder(p), "{p}");
     }
-    for a in ["scenes/tray.toml", "--set", "tools.0.friction=0,0.1", "results/tray", "m"] {
+    for a in [
+        "scenes/tray.toml",
+        "--set",
+        "tools.0.friction=0,0.1",
+        "results/tray",
+        "m",
+    ] {
         assert!(!is_placeholder(a), "{a}");
     }
     assert_eq!(words("a 'b c' \"d\"  e"), ["a", "b c", "d", "e"]);
@@ -427,6 +445,9 @@ fn a_broken_link_fails_the_check() {
         .collect();
     assert_eq!(found.len(), 4, "{broken:#?}");
     assert_eq!(broken.len(), 4, "{broken:#?}");
-    assert_eq!(slug(" Checkpoints and `--resume`"), "checkpoints-and---resume");
+    assert_eq!(
+        slug(" Checkpoints and `--resume`"),
+        "checkpoints-and---resume"
+    );
     assert_eq!(slug("What a run writes"), "what-a-run-writes");
 }

@@ -1318,8 +1318,8 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
     );
     let front = shear_front(measured, c.clock);
     md.push_str(
-        "| # | setting | overrides (`--set`) | threads | wall s | CPU s | steps | max shear ° | err max shear ° | max shear away ° | err away ° | err profile RMS ° | err draw-in mm | front | status |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| # | setting | overrides (`--set`) | threads | wall s | runs | CPU s | steps | max shear ° | err max shear ° | max shear away ° | err away ° | err profile RMS ° | err draw-in mm | front | status |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for (i, m) in measured.iter().enumerate() {
         let name = if m.row.default {
@@ -1331,17 +1331,14 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
             (Some(o), _) => {
                 let _ = writeln!(
                     md,
-                    "| {} | {} | {} | {} | {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                    "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                     i + 1,
                     name,
                     describe(&m.row.overrides),
                     m.row.threads,
                     cell(o.wall_s, 2),
-                    if m.runs > 1 {
-                        format!(" (best of {})", m.runs)
-                    } else {
-                        String::new()
-                    },
+                    // The fastest of `runs` runs (a fast row is repeated).
+                    m.runs,
                     cell(o.cpu_s, 1),
                     o.steps,
                     cell(o.max_shear_deg, 3),
@@ -1357,7 +1354,7 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
             (None, skipped) => {
                 let _ = writeln!(
                     md,
-                    "| {} | {} | {} | {} | | | | | | | | | | | skipped: {} |",
+                    "| {} | {} | {} | {} | | | | | | | | | | | | skipped: {} |",
                     i + 1,
                     name,
                     describe(&m.row.overrides),

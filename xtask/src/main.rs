@@ -11,8 +11,9 @@
 //!   card (see [`fit`]);
 //! - `bench [--quick] [--profile-only] [ARGS…]`: the explicit step's per-pass
 //!   profile, the mesh/analytic tray mould ratio and the 1- vs 2-thread
-//!   table (`benches/benches/step_profile.rs`), then the criterion benches,
-//!   `cargo bench -p drape-benches ARGS…`;
+//!   table (`benches/benches/step_profile.rs`), then the work-precision
+//!   study, both written into `docs/performance.md` ([`perf_page`]), then
+//!   the criterion benches, `cargo bench -p drape-benches ARGS…`;
 //! - `bench work-precision [--quick] [--filter SUBSTR] [--fresh-reference]
 //!   [--timeout S] [--reference-cells N] [--time wall|cpu]`: run time against error for the hemisphere's ways to go
 //!   faster (see [`work_precision`]);
@@ -32,6 +33,8 @@ use std::process::{Command, ExitCode};
 mod fit;
 mod holding;
 mod mould;
+mod pages;
+mod perf_page;
 mod slurm;
 mod stress;
 mod validate;
@@ -44,7 +47,8 @@ tasks:
   validate [--quick] [--filter SUBSTR]
       run the validation cases (analytic references vs computed values);
       --quick runs only the cases cheap enough for CI, --filter only the
-      cases whose name contains SUBSTR. Writes target/validation/report.md.
+      cases whose name contains SUBSTR. Writes target/validation/report.md
+      and the results of the cases run into docs/validation.md.
   stress [--quick] [--filter SUBSTR] [--seed N]
       run drape at its extremes and on hostile input (stiff and soft
       materials, uncrimped yarns, high friction, fast tools, coarse and
@@ -63,21 +67,23 @@ tasks:
       print the explicit step's per-pass profile (hemisphere scene and a
       200x200 blank, 1 and 2 threads), the step of a 7 104-triangle open tray
       mould against its surface of revolution (the mesh/analytic ratio) and
-      the ms/step table of the shipped scenes on 1 and 2 threads, then run
-      the criterion benches:
+      the ms/step table of the shipped scenes on 1 and 2 threads, then the
+      work-precision study below, then the criterion benches:
       cargo bench -p drape-benches ARGS... (e.g. cargo xtask bench --
       --warm-up-time 1 --measurement-time 2). --quick profiles shorter
       windows and runs the criterion benches with short warm-up and
-      measurement times; --profile-only stops after the tables.
+      measurement times; --profile-only stops after the tables. Writes the
+      tables and the study into docs/performance.md (a quick run beside, not
+      over, a full run's).
       DRAPE_BENCH_CLOCK=thread-cpu times one-thread figures by CPU time.
   bench work-precision [--quick] [--filter SUBSTR] [--fresh-reference] [--timeout S]
                        [--reference-cells N] [--time wall|cpu]
       the hemisphere's run time against its error for each way to run it
       faster (mesh, mass scaling, process time, fibres, threads, implicit
       increments), against a cached reference solution; writes
-      target/bench/work-precision.{csv,png,md} (a full run without
-      --filter also updates the README's section). --quick is the coarse
-      version CI can afford.
+      target/bench/work-precision.{csv,png,md} and, without --filter, its
+      section of docs/performance.md. --quick is the coarse version CI can
+      afford.
   mould OUT.stl|OUT.obj [--triangles N] [--punch PUNCH.stl|.obj] [--offset MM]
       write a generated open female mould: a double-curved 600 x 400 mm tray,
       80 mm deep, open at its flange's outer rim, normals pointing away from
@@ -162,8 +168,32 @@ fn bench(args: &[String]) -> ExitCode {
     if quick {
         profile.args(["--", "--quick"]);
     }
-    let status = run(&mut profile);
+    let status = match run_captured(&mut profile) {
+        Ok(table) => match perf_page::update(
+            &workspace_root(),
+            "step-profile",
+            quick,
+            &format!("```text\n{}\n```", table.trim_end()),
+        ) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        Err(code) => code,
+    };
     if profile_only || status != ExitCode::SUCCESS {
+        return status;
+    }
+    let quick_flag = if quick {
+        vec!["--quick".to_owned()]
+    } else {
+        Vec::new()
+    };
+    let precision = work_precision::Options::parse(&quick_flag).expect("the quick flag parses");
+    let status = work_precision::main(&precision, &workspace_root(), &target_dir());
+    if status != ExitCode::SUCCESS {
         return status;
     }
     if quick && !rest.contains(&"--") {
@@ -203,6 +233,39 @@ fn target_dir() -> PathBuf {
 /// toolchain override applies to the child build as well.
 fn cargo() -> String {
     std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned())
+}
+
+/// Runs `command`, echoing its standard output line by line as it comes
+/// and returning it.
+fn run_captured(command: &mut Command) -> Result<String, ExitCode> {
+    use std::io::BufRead as _;
+    let mut child = command
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .map_err(|err| {
+            eprintln!("error: could not start {command:?}: {err}");
+            ExitCode::FAILURE
+        })?;
+    let mut out = String::new();
+    if let Some(stdout) = child.stdout.take() {
+        for line in std::io::BufReader::new(stdout).lines() {
+            let line = line.unwrap_or_default();
+            println!("{line}");
+            out.push_str(&line);
+            out.push('\n');
+        }
+    }
+    match child.wait() {
+        Ok(status) if status.success() => Ok(out),
+        Ok(status) => {
+            eprintln!("error: {command:?} failed: {status}");
+            Err(ExitCode::FAILURE)
+        }
+        Err(err) => {
+            eprintln!("error: {command:?}: {err}");
+            Err(ExitCode::FAILURE)
+        }
+    }
 }
 
 fn run(command: &mut Command) -> ExitCode {

@@ -11,7 +11,9 @@
 //!
 //! The runner prints one aligned table per case, ends with the line
 //! `N passed, N failed`, writes the same tables as Markdown to
-//! `<target>/validation/report.md` and exits non-zero on any failure. A
+//! `<target>/validation/report.md`, puts each case's result into
+//! `docs/validation.md` ([`page`]; what a case checks is one line in
+//! [`describe`]) and exits non-zero on any failure. A
 //! panicking case counts as one failed check carrying the panic message.
 
 use std::cell::RefCell;
@@ -23,11 +25,13 @@ use std::process::ExitCode;
 mod bending;
 mod constitutive;
 mod contact;
+mod describe;
 mod explicit;
 mod fishnet;
 mod implicit;
 mod kinematics;
 mod locking;
+mod page;
 mod paper;
 mod pressure;
 mod scenes;
@@ -184,6 +188,9 @@ pub struct CaseResult {
     /// Markdown sections the case wrote with [`note`] (tables of results
     /// beside published ones), printed after its checks.
     pub notes: Vec<String>,
+    /// The case asked [`quick_mode`]: its quick and full runs differ, so
+    /// the page keeps the last result of each.
+    pub mode_dependent: bool,
 }
 
 /// Whether this is a `--quick` run: a case marked quick may run a coarse
@@ -191,8 +198,13 @@ pub struct CaseResult {
 /// shipped meshes in full mode) under the same name.
 static QUICK: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
+/// Set when the running case asks [`quick_mode`] (cases run one at a
+/// time; their own threads may ask too).
+static CONSULTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 /// True while `cargo xtask validate --quick` runs.
 pub fn quick_mode() -> bool {
+    CONSULTED.store(true, std::sync::atomic::Ordering::Relaxed);
     QUICK.load(std::sync::atomic::Ordering::Relaxed)
 }
 
@@ -210,6 +222,7 @@ pub fn note(markdown: impl Into<String>) {
 /// Runs one case, turning a panic into a failed check.
 pub fn run_case(case: &Case) -> CaseResult {
     NOTES.with(|n| n.borrow_mut().clear());
+    CONSULTED.store(false, std::sync::atomic::Ordering::Relaxed);
     let checks = match panic::catch_unwind(AssertUnwindSafe(case.run)) {
         Ok(checks) => checks,
         Err(payload) => {
@@ -225,6 +238,7 @@ pub fn run_case(case: &Case) -> CaseResult {
         name: case.name,
         checks,
         notes: NOTES.with(|n| std::mem::take(&mut *n.borrow_mut())),
+        mode_dependent: CONSULTED.load(std::sync::atomic::Ordering::Relaxed),
     }
 }
 
@@ -269,6 +283,14 @@ pub fn main(options: &Options, workspace_root: &Path) -> ExitCode {
             return ExitCode::FAILURE;
         }
     }
+    let page = workspace_root.join("docs").join("validation.md");
+    match page::update(&page, &results, options.quick) {
+        Ok(()) => eprintln!("page: {}", page.display()),
+        Err(err) => {
+            eprintln!("error: could not write {err}");
+            return ExitCode::FAILURE;
+        }
+    }
     if failed == 0 {
         ExitCode::SUCCESS
     } else {
@@ -304,7 +326,7 @@ fn write_atomically(path: &Path, contents: &str) -> std::io::Result<()> {
     })
 }
 
-const HEADER: [&str; 6] = [
+pub(super) const HEADER: [&str; 6] = [
     "quantity",
     "reference",
     "computed",
@@ -324,7 +346,7 @@ fn value(v: f64) -> String {
     }
 }
 
-fn cells(check: &Check) -> [String; 6] {
+pub(super) fn cells(check: &Check) -> [String; 6] {
     let tolerance = match check.tolerance {
         Tolerance::Abs(t) => format!("abs {t:.1e}"),
         Tolerance::Rel(t) => format!("rel {t:.1e}"),
@@ -579,6 +601,7 @@ mod tests {
         let r = CaseResult {
             name: "test/table",
             notes: Vec::new(),
+            mode_dependent: false,
             checks: vec![
                 Check::abs("τ̄₁₂", 1.0, 1.0, 0.0),
                 Check::abs("a longer quantity", -2.5e-7, -2.5e-7, 1e-3),

@@ -1,0 +1,215 @@
+//! What each validation case checks and against what, in one line each,
+//! for `docs/validation.md` (the tolerances and results come from the run).
+//! A case without a line here fails `every_case_is_described`: a new case
+//! adds its line with its `Case` entry.
+
+/// (what the case checks, its reference) for a case name.
+pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
+    Some(match name {
+        "kinematics/polar-decomposition" => (
+            "F = R·U on sampled deformation gradients: R orthogonal, U symmetric positive, their product F",
+            "exact constructions and nalgebra's SVD (within its own measured error)",
+        ),
+        "kinematics/rigid-rotation" => (
+            "objectivity: F = Q·E for random rotations Q gives the same U and strain increment as E",
+            "the unrotated case (U − I and Δε̄ unchanged by Q)",
+        ),
+        "kinematics/pure-shear" => (
+            "shear angle and yarn stretches of pure shear (trellising)",
+            "the prescribed shear angle; unit yarn stretch",
+        ),
+        "kinematics/uniaxial-stretch" => (
+            "stretch, logarithmic strain and fibre stretch under uniaxial stretch",
+            "closed forms (λ, ln λ)",
+        ),
+        "kinematics/strain-increment-order" => (
+            "the midpoint rotated strain increment converges at second order in the step",
+            "the exact logarithmic strain of the path; observed order",
+        ),
+        "constitutive/presets" => (
+            "the two material presets' parameters (E_f, E_m, ρ, Prony terms)",
+            "the paper's Table 1 as transcribed in the SPEC",
+        ),
+        "constitutive/fibre-closed-form" => (
+            "the crimped fibre law τ = E_f·(ε − ε_sh(1 − e^(−ε/ε_sh))) over the crimp range and beyond",
+            "the closed form from the SPEC's raw parameters",
+        ),
+        "constitutive/fibre-derivatives" => (
+            "the fibre law's energy and tangent are its integral and derivative",
+            "central finite differences",
+        ),
+        "constitutive/fibre-limits" => (
+            "the fibre law's limits: the crimp (small strain), the straight yarn (large strain), compression",
+            "the closed form's asymptotes E_f·ε²/(2ε_sh) and E_f·(ε − ε_sh)",
+        ),
+        "constitutive/prony-step-relaxation" => (
+            "the Prony resin's relaxation after a strain step, at several step sizes",
+            "the analytic hereditary integral",
+        ),
+        "constitutive/prony-ramp" => (
+            "the Prony resin under a constant strain rate, at several step sizes",
+            "the analytic hereditary integral of the ramp",
+        ),
+        "constitutive/resin-moduli" => (
+            "the resin's shear moduli: instantaneous, relaxed and the algorithmic modulus at both step limits",
+            "G₀ = E/(2(1 + ν)), G∞ = G₀(1 − Σg)",
+        ),
+        "constitutive/thickness-stretch" => (
+            "the thickness stretch λ₃ of the plane-stress resin for given area changes J",
+            "its closed form",
+        ),
+        "explicit/picture-frame" => (
+            "a glass square sheared to 60° by a pin-jointed frame: uniform shear and the frame force",
+            "the frame's kinematics and the derivative of the resin's energy",
+        ),
+        "explicit/bias-extension" => (
+            "the bias-extension test to 34° of shear: the three shear zones",
+            "ideal pin-jointed kinematics, γ_A = 90° − 2·acos((D + u)/(√2·D))",
+        ),
+        "explicit/uniaxial-tension-warp" => (
+            "the end force of a strip stretched along its warp to λ = 1.03",
+            "W·(t_f·τ_f(ln λ) + h_m·E_m·ln λ)/λ with the crimped law",
+        ),
+        "explicit/free-oscillation-energy" => (
+            "energy conservation of an undamped free blank over 10⁵ steps",
+            "the initial energy",
+        ),
+        "explicit/determinism" => (
+            "the same run on 1 and 2 threads ends bit for bit the same",
+            "the one-thread run",
+        ),
+        "contact/incline" => (
+            "a blank sliding or sticking on a tilted plane with Coulomb friction",
+            "a = g(sin α − μ cos α); rest when tan α ≤ μ",
+        ),
+        "contact/capstan" => (
+            "a strip pulled round a fixed cylinder: the pulled end's force",
+            "the capstan equation T₂ = T₁·e^(μθ)",
+        ),
+        "contact/no-penetration" => (
+            "no node inside a tool, and the force balance at rest, for each tool kind",
+            "zero gap and the applied loads",
+        ),
+        "contact/pinching" => (
+            "a strip pinched between die and force-driven holder, pulled: the sliding force",
+            "2μF, the friction of both tools",
+        ),
+        "fishnet/chebyshev-sphere" => (
+            "the kinematic net on a sphere: diagonal shear profile and order of convergence",
+            "the analytic Chebyshev net, (zγ′)′ = cos γ, integrated by RK4",
+        ),
+        "fishnet/hemisphere-mechanical-vs-kinematic" => (
+            "a forming run of hemisphere-conform.toml against the kinematic net where the fabric lies on the mould",
+            "drape's kinematic net (drape compare SCENE)",
+        ),
+        "implicit/incline" => (
+            "contact/incline run by the implicit driver",
+            "as contact/incline",
+        ),
+        "implicit/capstan" => (
+            "contact/capstan run by the implicit driver",
+            "as contact/capstan",
+        ),
+        "implicit/no-penetration" => (
+            "contact/no-penetration run by the implicit driver",
+            "as contact/no-penetration",
+        ),
+        "implicit/pinching" => (
+            "contact/pinching run by the implicit driver",
+            "as contact/pinching",
+        ),
+        "implicit/picture-frame" => (
+            "explicit/picture-frame run by the implicit driver",
+            "as explicit/picture-frame",
+        ),
+        "implicit/bias-extension" => (
+            "explicit/bias-extension run by the implicit driver",
+            "as explicit/bias-extension",
+        ),
+        "implicit/viscoelastic-rate" => (
+            "the carbon resin's rate effect: a picture frame to 10° in 1 s and in 100 s",
+            "linear viscoelasticity along the frame's path (hereditary integral)",
+        ),
+        "implicit/determinism" => (
+            "the implicit hemisphere on 1 and 2 threads: positions and solver path bit for bit",
+            "the one-thread run",
+        ),
+        "implicit/hemisphere-agreement" => (
+            "the shipped 40 × 40 hemispheres (physical mass, bending) by both drivers",
+            "the explicit run: max shear and profile within 0.5°, draw-in within 0.5 mm",
+        ),
+        "implicit/hemisphere-agreement-coarse" => (
+            "the same agreement on a 10 × 10 blank, both orientations",
+            "the explicit run, same tolerances",
+        ),
+        "implicit/hemisphere-shipped" => (
+            "the shipped mass-scaled hemispheres by both drivers: same added mass, both complete; differences reported",
+            "the explicit run (reported, not checked)",
+        ),
+        "scenes/deep-drawing-quick" => (
+            "both deep-drawing orientations at 20 × 20 quads: the CI's guard on the deep drawing",
+            "the run's health: completion and energy balance",
+        ),
+        "scenes/deep-drawing-stroke" => (
+            "the full deep-drawing stroke at three meshes, quads and triangles",
+            "energy balance, mesh agreement and a taut-yarn draw-in estimate",
+        ),
+        "scenes/deep-drawing-sensitivity" => (
+            "the ±45 draw-ins against the holder force and the tool radii, one change at a time",
+            "the shipped scene's run (trends reported)",
+        ),
+        "scenes/tray" => (
+            "the open CAD tray mould on the defaults: no fold, conforms to the mould, agrees with the net",
+            "the fold check, the mould surface (one ply thickness) and the kinematic net (2° RMS)",
+        ),
+        "bending/rolled-cylinder" => (
+            "a strip rolled onto a cylinder: its bending energy",
+            "E = B·L·W/(2R²)",
+        ),
+        "bending/peirce-cantilever-quick" => (
+            "Peirce's cantilever (a strip overhanging under its own weight), coarse",
+            "the heavy elastica, solved by shooting, and Peirce's formula",
+        ),
+        "bending/peirce-cantilever" => (
+            "Peirce's cantilever at the full set of overhangs and meshes",
+            "the heavy elastica, solved by shooting, and Peirce's formula",
+        ),
+        "locking/picture-frame" => (
+            "the picture frame with a shear-locking law: the added frame force from 20° on",
+            "the law's own picture-frame curve",
+        ),
+        "wrinkling/strip-on-foundation-quick" => (
+            "a strip on an elastic foundation compressed until it wrinkles: wavelength, coarse",
+            "λ_c = 2π·(B/k)^(1/4) (Hetényi; Timoshenko & Gere)",
+        ),
+        "wrinkling/strip-on-foundation" => (
+            "the wrinkle wavelength converging with the mesh, with and without bending",
+            "λ_c = 2π·(B/k)^(1/4); without bending the mesh's 2h",
+        ),
+        "paper/hemisphere-table2" => (
+            "the hemisphere laying-up's maximum shear at μ = 0 … 0.5, 0/90 and ±45",
+            "El Hami et al. 2009, Table 2 (experiment and the paper's simulation)",
+        ),
+        "paper/deep-drawing-table4" => (
+            "the deep drawing's draw-ins DX, DY, DD at μ = 0.01 … 0.4",
+            "El Hami et al. 2009, Table 4",
+        ),
+        "paper/hemisphere-holding" => (
+            "point springs, edge springs and a blank-holder ring: the maximum shear and where",
+            "each other; the ring's convergence with the mesh",
+        ),
+        "paper/mesh-convergence" => (
+            "the hemisphere on meshes refined by 2: observed order and Richardson extrapolation",
+            "the finest meshes' extrapolation",
+        ),
+        "pressure/strip-over-gap" => (
+            "a strip clamped over a gap and inflated by a follower pressure",
+            "a circular arc with T = p·R (hoop formula)",
+        ),
+        "pressure/strip-over-gap-implicit" => (
+            "pressure/strip-over-gap run by the implicit driver",
+            "as pressure/strip-over-gap",
+        ),
+        _ => return None,
+    })
+}

@@ -5,7 +5,9 @@
 //! results; what it reached is kept), 2 bad input (a bad scene, an output
 //! folder that cannot be written or that another run is writing into;
 //! nothing is written), 130 stopped by Ctrl-C (the last frame, the energy
-//! history and a summary with status "stopped" are written).
+//! history and a summary with status "stopped" are written). The same
+//! contract for every command, with the output-folder claim and the
+//! signals: `exit.rs`.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -1383,6 +1385,9 @@ fn export(
             r.missing.len(),
             drape_io::results::export::names::NO_ORIENTATION
         );
+    }
+    if let Some(why) = &r.source_unknown {
+        eprintln!("note: {why} (the include's header says so too)");
     }
     // A partial drape exported looks like a finished one to whatever reads
     // the files next: the header says so, and the exit code does.

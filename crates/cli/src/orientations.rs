@@ -17,6 +17,13 @@
 //! column names say. An Abaqus/CAE file is read with its parts and
 //! instances; as the include names elements by the part's labels, which
 //! repeat between instances, the mesh must have one instance at most.
+//!
+//! Nothing that cannot be computed is written as a number: a mesh beyond
+//! reach (a coordinate not finite or past 10¹² mm) is refused, an element
+//! edge-on to the fibres is listed as missing with the reason
+//! ([`drape_io::results::export::Orientations::missing`]), and a source
+//! run that did not complete is named in the include's header
+//! ([`MappedReport::source_not_completed`]; the command exits 1 on it).
 
 use std::path::{Path, PathBuf};
 
@@ -68,31 +75,37 @@ pub struct MappedReport {
     /// after its unit): less than 1 mm or more than 10 m is most likely a
     /// mesh in another unit than the one given.
     pub mesh_across_mm: f64,
-    /// Why the source run is not a finished drape (it failed, was stopped,
-    /// or left no summary), or None when it completed. The include's
-    /// header says it too.
+    /// Why the source run is not a finished drape (its summary says it
+    /// failed or was stopped), or None. The include's header says it too.
     pub source_not_completed: Option<String>,
+    /// Why the source run's state is unknown (no readable summary: orientations
+    /// written by hand or by another tool), or None. In the header too.
+    pub source_unknown: Option<String>,
     /// Elements written without values (label, why): a direction that
     /// cannot be computed. Listed in the include's `DRAPE_NO_ORIENTATION`.
     pub missing: Vec<(i64, String)>,
 }
 
-/// Why the run in `run` is not a finished drape, or None when its summary
-/// says `completed`.
-fn source_state(run: &Path) -> Option<String> {
+/// The state of the run in `run`: (why it is not a finished drape, why its
+/// state is unknown); both None when its summary says `completed`.
+fn source_state(run: &Path) -> (Option<String>, Option<String>) {
     match drape_io::results::read::read_summary(run) {
-        Ok(s) if s.status == "completed" => None,
-        Ok(s) => Some(format!(
-            "the source run {} {} at t = {} s{}: these are the orientations of its last frame, \
+        Ok(s) if s.status == "completed" => (None, None),
+        Ok(s) => (
+            Some(format!(
+                "the source run {} {} at t = {} s{}: these are the orientations of its last frame, \
              not of a finished drape",
-            run.display(),
-            s.status,
-            s.time,
-            s.reason.map(|r| format!(" ({r})")).unwrap_or_default()
-        )),
-        Err(e) => Some(format!(
-            "the source run did not finish ({e}): these are the orientations of its last frame"
-        )),
+                run.display(),
+                s.status,
+                s.time,
+                s.reason.map(|r| format!(" ({r})")).unwrap_or_default()
+            )),
+            None,
+        ),
+        Err(e) => (
+            None,
+            Some(format!("whether the source run finished is unknown ({e})")),
+        ),
     }
 }
 
@@ -174,10 +187,10 @@ pub fn map_orientations(
             run.display()
         )));
     }
-    let source_not_completed = source_state(run);
-    if let Some(note) = &source_not_completed {
-        mapped.notes.push(note.clone());
-    }
+    let (source_not_completed, source_unknown) = source_state(run);
+    mapped
+        .notes
+        .extend(source_not_completed.iter().chain(&source_unknown).cloned());
     let missing: Vec<(i64, String)> = mapped
         .incomplete()
         .into_iter()
@@ -224,6 +237,7 @@ pub fn map_orientations(
         thickness,
         mesh_across_mm,
         source_not_completed,
+        source_unknown,
         missing,
     })
 }

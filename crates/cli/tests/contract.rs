@@ -336,8 +336,10 @@ fn export_from_a_run_that_did_not_complete_says_so_and_exits_1() {
     let inp = std::fs::read_to_string(run.join("orientations_flat.inp")).unwrap();
     assert!(inp.contains("** NOTE: the source run"), "{inp}");
     std::fs::remove_file(run.join("summary.json")).unwrap();
+    // Orientations without a summary (made by hand, or by another tool):
+    // written, with a warning that the run's state is unknown.
     let o = drape(&["export", s(&run), "--onto", s(&mesh)]);
-    assert_code(&o, 1, "the source run did not finish");
+    assert_code(&o, 0, "whether the source run finished is unknown");
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -20,6 +20,7 @@
 //! `target/stress/report.md`; each run's results are in
 //! `target/stress/<row>/`.
 
+mod folders;
 mod generate;
 
 use std::fmt::Write as _;
@@ -760,6 +761,11 @@ pictures = false
         name: "damaged mesh files",
         quick: true,
         run: |ctx| generate::damaged_meshes(ctx, if ctx.quick { 24 } else { 160 }),
+    },
+    Case {
+        name: "every writing command into unusable folders",
+        quick: true,
+        run: folders::unusable_folders,
     },
 ];
 

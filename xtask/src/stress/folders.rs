@@ -251,7 +251,13 @@ fn commands(i: &Inputs, out: &Path) -> Vec<(&'static str, Vec<String>)> {
 
 /// Runs `args` into the unusable folder of `kind` under `base` and says
 /// what is wrong with how it ended, if anything.
-fn check(drape: &Path, base: &Path, kind: Kind, args: &[String]) -> Option<String> {
+fn check(
+    drape: &Path,
+    base: &Path,
+    kind: Kind,
+    args: &[String],
+    codes: &mut Vec<i32>,
+) -> Option<String> {
     let out = match kind {
         Kind::File => base.join("a-file"),
         Kind::Held | Kind::ReadOnly | Kind::Full => base.join("out"),
@@ -262,6 +268,7 @@ fn check(drape: &Path, base: &Path, kind: Kind, args: &[String]) -> Option<Strin
         Err(e) => return Some(format!("could not start: {e}")),
     };
     let code = o.status.code();
+    codes.push(code.unwrap_or(-1));
     let stderr = String::from_utf8_lossy(&o.stderr);
     let fault = match kind {
         Kind::File | Kind::Held | Kind::ReadOnly => {
@@ -318,6 +325,7 @@ pub fn unusable_folders(ctx: &Context) -> Row {
     let mut faults = Vec::new();
     let mut checked = 0;
     let mut skipped = Vec::new();
+    let mut full_codes = Vec::new();
     for kind in [Kind::File, Kind::Held, Kind::ReadOnly, Kind::Full] {
         let base = ctx.dir.join(format!("{kind:?}").to_lowercase());
         let _ = std::fs::remove_dir_all(&base);
@@ -353,6 +361,7 @@ pub fn unusable_folders(ctx: &Context) -> Row {
                 }
             }
         }
+        full_codes.clear();
         let into = if kind == Kind::File {
             base.join("a-file")
         } else {
@@ -365,11 +374,25 @@ pub fn unusable_folders(ctx: &Context) -> Row {
                 }
             }
             checked += 1;
-            if let Some(fault) = check(&drape, &base, kind, &args) {
+            if let Some(fault) = check(&drape, &base, kind, &args, &mut full_codes) {
                 faults.push(format!("{name} into {kind:?}: {fault}"));
             }
         }
     }
+    // The last kind run is the full one, when it ran: how its commands
+    // ended (1: met the full disk while writing; 2: refused before).
+    let full = if skipped.iter().any(|k| k.starts_with("Full")) {
+        String::new()
+    } else {
+        format!(
+            " (full disk: exit codes {})",
+            full_codes
+                .iter()
+                .map(i32::to_string)
+                .collect::<Vec<_>>()
+                .join(" ")
+        )
+    };
     let mut happened = if faults.is_empty() {
         format!(
             "{checked} commands into unusable folders: every one kept the exit-code contract and left no partial file"

@@ -395,7 +395,8 @@ pub fn unusable_folders(ctx: &Context) -> Row {
     };
     let mut happened = if faults.is_empty() {
         format!(
-            "{checked} commands into unusable folders: every one kept the exit-code contract and left no partial file"
+            "{checked} commands into unusable folders: every one kept the exit-code contract \
+             and left no partial file{full}"
         )
     } else {
         format!(

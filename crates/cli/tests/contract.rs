@@ -390,20 +390,11 @@ fn export_of_an_element_edge_on_to_the_fibres_lists_it_as_missing() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
-/// Takes the lock a running run holds on `dir` (the same OS lock on
-/// `.drape.lock`), until the returned file is dropped.
-fn hold(dir: &Path) -> std::fs::File {
-    std::fs::create_dir_all(dir).unwrap();
-    let f = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .create(true)
-        .truncate(true)
-        .open(dir.join(".drape.lock"))
-        .unwrap();
-    f.try_lock().unwrap();
-    std::fs::write(dir.join(".drape.lock"), std::process::id().to_string()).unwrap();
-    f
+/// Takes the lock a running run holds on `dir` (the run's own
+/// `OutputLock`: the OS lock on `.drape.lock`, with this process's id in
+/// it), until dropped.
+fn hold(dir: &Path) -> drape_io::results::OutputLock {
+    drape_io::results::OutputLock::acquire(dir).unwrap()
 }
 
 /// Fault 7: every writing command, against an output folder that is a

@@ -368,10 +368,10 @@ pub fn unusable_folders(ctx: &Context) -> Row {
             out.clone()
         };
         for (name, args) in commands(&inputs, &into) {
-            if kind == Kind::Full {
-                if let Err(e) = fill(&out) {
-                    return row(false, format!("could not fill {}: {e}", out.display()));
-                }
+            if kind == Kind::Full
+                && let Err(e) = fill(&out)
+            {
+                return row(false, format!("could not fill {}: {e}", out.display()));
             }
             checked += 1;
             if let Some(fault) = check(&drape, &base, kind, &args, &mut full_codes) {

@@ -457,21 +457,16 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
         let path = out.join(name);
         move |source| ResultsError { path, source }
     };
-    let number = |v: f64| {
-        if v.is_finite() {
-            v.to_string()
-        } else {
-            String::new()
-        }
-    };
+    // No NaN in a table: a value that cannot be had is an empty field.
+    let number = |v: f64| drape_io::finite::or_empty(v, |v| v.to_string());
     let mut csv = String::from("element,x0_mm,y0_mm,z0_mm,a_deg,b_deg,difference_deg\n");
     for (e, c) in centroid0.iter().enumerate() {
         let _ = writeln!(
             csv,
             "{e},{},{},{},{},{},{}",
-            c.x,
-            c.y,
-            c.z,
+            number(c.x),
+            number(c.y),
+            number(c.z),
             number(ga[e]),
             number(b_deg[e]),
             number(b_deg[e] - ga[e])

@@ -549,13 +549,8 @@ pub fn compare_scene(
         let path = out.join(name);
         move |source| ResultsError { path, source }
     };
-    let number = |v: f64| {
-        if v.is_finite() {
-            format!("{v}")
-        } else {
-            String::new()
-        }
-    };
+    // No NaN in a table: a value that cannot be had is an empty field.
+    let number = |v: f64| drape_io::finite::or_empty(v, |v| v.to_string());
 
     let mut csv =
         String::from("element,x0_mm,y0_mm,mechanical_deg,kinematic_deg,difference_deg,on_mould\n");
@@ -563,8 +558,8 @@ pub fn compare_scene(
         let _ = writeln!(
             csv,
             "{e},{},{},{},{},{},{}",
-            c.centroid0[e].x,
-            c.centroid0[e].y,
+            number(c.centroid0[e].x),
+            number(c.centroid0[e].y),
             number(c.mechanical_deg[e]),
             number(c.kinematic_deg[e]),
             number(c.mechanical_deg[e] - c.kinematic_deg[e]),
@@ -586,7 +581,8 @@ pub fn compare_scene(
             {
                 let _ = writeln!(
                     profiles,
-                    "{name},{distance},{},{},{},{}",
+                    "{name},{},{},{},{},{}",
+                    number(distance),
                     number(c.mechanical_deg[e]),
                     number(c.kinematic_deg[e]),
                     number(c.mechanical_deg[e] - c.kinematic_deg[e]),

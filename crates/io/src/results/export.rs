@@ -559,3 +559,77 @@ impl Orientations {
         Self::parse_inp(&text, path)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three flat triangles: the first whole, the second without a
+    /// direction (edge-on), the third with a thickness that is not finite.
+    fn three() -> Orientations {
+        let x = Vector3::x();
+        let y = Vector3::y();
+        Orientations {
+            title: "three".into(),
+            nodes: vec![
+                Vector3::new(0.0, 0.0, 0.0),
+                Vector3::new(1.0, 0.0, 0.0),
+                Vector3::new(0.0, 1.0, 0.0),
+                Vector3::new(1.0, 1.0, 0.0),
+            ],
+            elements: vec![vec![0, 1, 2], vec![1, 3, 2], vec![0, 1, 3]],
+            labels: vec![1, 2, 3],
+            centroid: vec![Vector3::repeat(0.3); 3],
+            warp: vec![x, Vector3::repeat(f64::NAN), x],
+            weft: vec![y, y, y],
+            shear_deg: vec![0.0, 1.0, 2.0],
+            thickness: vec![0.5, 0.5, f64::INFINITY],
+            nominal_thickness: 0.5,
+            distance: None,
+            missing: vec![(1, "edge-on".into())],
+            notes: vec!["the source run stopped".into()],
+        }
+    }
+
+    #[test]
+    fn values_that_cannot_be_written_are_listed_as_missing_never_as_nan() {
+        let o = three();
+        assert_eq!(
+            o.incomplete().iter().map(|(e, _)| *e).collect::<Vec<_>>(),
+            [1, 2]
+        );
+        assert!(o.check_finite().is_ok());
+        let inp = o.to_inp();
+        let csv = o.to_csv();
+        for text in [&inp, &csv] {
+            let lower = text.to_ascii_lowercase();
+            assert!(!lower.contains("nan") && !lower.contains("inf"), "{text}");
+        }
+        assert!(inp.contains("** NOTE: the source run stopped\n"), "{inp}");
+        assert!(
+            inp.contains("*ELSET, ELSET=DRAPE_NO_ORIENTATION\n2, 3\n"),
+            "{inp}"
+        );
+        assert!(inp.contains("**   element 2: edge-on\n"), "{inp}");
+        // Read back: only the whole element has values.
+        let back = Orientations::parse_inp(&inp, Path::new("three.inp")).unwrap();
+        assert_eq!(back.labels, [1]);
+        assert_eq!(back.thickness, [0.5]);
+        // The table: the centroid always, the values only where whole.
+        let rows: Vec<&str> = csv.lines().skip(1).collect();
+        assert_eq!(rows[0], "1,0.3,0.3,0.3,1,0,0,0,1,0,0,90,0.5");
+        assert_eq!(rows[1], "2,0.3,0.3,0.3,,,,,,,,,");
+        assert_eq!(rows[2], "3,0.3,0.3,0.3,,,,,,,,,");
+    }
+
+    #[test]
+    fn a_node_or_a_nominal_thickness_that_is_not_finite_is_an_error() {
+        let mut o = three();
+        o.nodes[3].z = f64::NAN;
+        let e = o.check_finite().unwrap_err();
+        assert!(e.contains("node coordinates: value 12 is NaN"), "{e}");
+        let mut o = three();
+        o.nominal_thickness = f64::NAN;
+        assert!(o.check_finite().unwrap_err().contains("nominal thickness"));
+    }
+}

@@ -290,6 +290,38 @@ fn sigterm_while_reading_a_fifo_exits_at_once() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// A signal during a kinematic drape (no clean stopping point: seconds,
+/// each file whole) ends it at once with 130 and no summary claiming a
+/// drape (today: the first signal is ignored until the drape is done, exit
+/// 0).
+#[cfg(unix)]
+#[test]
+fn sigterm_during_a_kinematic_drape_ends_it_at_once() {
+    let dir = temp("kinematic-term");
+    let out = dir.join("out");
+    // A 0.5 mm net on the hemisphere: 490 000 cells, about 10 s.
+    let child = spawn(&[
+        "kinematic",
+        "scenes/hemisphere-0-90.toml",
+        "--set",
+        "kinematic.spacing=0.5",
+        "--out",
+        s(&out),
+    ]);
+    std::thread::sleep(std::time::Duration::from_millis(800));
+    signal(&child, "TERM");
+    let started = std::time::Instant::now();
+    let o = wait(child, 30, "kinematic after SIGTERM");
+    assert_code(&o, 130, "stopped");
+    assert!(
+        started.elapsed().as_secs_f64() < 3.0,
+        "{:?} after the signal",
+        started.elapsed()
+    );
+    assert!(!out.join("summary.json").exists(), "{:?}", names(&out));
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 /// Fault 4: a structural mesh at z = 1e300 is an error naming the mesh,
 /// nothing written (today: "distance largest 0.0000 mm (element 0)").
 #[test]

@@ -71,7 +71,7 @@ pub struct KinematicReport {
 /// draped (the net left the mould or folded) its `warnings` say how many.
 /// A net of which no cell could be draped writes only its summary, with
 /// status `failed` and the reason. A spacing that leaves no cell on the
-/// blank, or a net whose estimated memory ([`crate::limits::net_bytes`])
+/// blank, or a net whose estimated memory ([`crate::memory::net_bytes`])
 /// exceeds what the machine has, is bad input: nothing is written.
 pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, KinematicError> {
     let file = scene.file.display();
@@ -86,8 +86,8 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         .first()
         .map(|b| b.section.material.clone())
         .ok_or_else(|| KinematicError::Input(format!("{file}: the blank has no elements")))?;
-    let need = crate::limits::net_bytes(&setup.net);
-    let available = crate::limits::available_memory();
+    let need = crate::memory::net_bytes(&setup.net);
+    let available = crate::memory::available_memory();
     if need > available.bytes {
         return Err(KinematicError::Input(format!(
             "{file}: kinematic.spacing {:?} mm on a {} × {} mm blank: a net of {} crossings \
@@ -97,8 +97,8 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             setup.net.outline.width,
             setup.net.outline.height,
             setup.net.lattice_crossings(),
-            crate::limits::bytes_text(need),
-            crate::limits::bytes_text(available.bytes),
+            crate::memory::bytes_text(need),
+            crate::memory::bytes_text(available.bytes),
             available.source
         )));
     }

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 mod compare;
 pub mod eta;
 mod kinematic;
-pub mod limits;
+pub mod memory;
 mod orientations;
 mod setup;
 pub use compare::{CompareError, MeasureRow, RunComparison, RunComparisonSummary, compare_runs};

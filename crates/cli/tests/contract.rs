@@ -165,7 +165,7 @@ fn a_net_with_no_cell_draped_fails_and_its_comparison_too() {
 /// run against the old binary: it would take this machine's memory.
 #[test]
 fn a_net_too_large_for_the_memory_is_refused_with_its_estimate() {
-    let available = drape::limits::available_memory().bytes;
+    let available = drape::memory::available_memory().bytes;
     if available > 87_000_000_000 {
         eprintln!("skipped: this machine has {available} bytes, enough for the net");
         return;

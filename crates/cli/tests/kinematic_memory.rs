@@ -1,4 +1,4 @@
-//! The memory estimate of a kinematic drape (`drape::limits::net_bytes`,
+//! The memory estimate of a kinematic drape (`drape::memory::net_bytes`,
 //! which refuses nets that cannot fit) against the peak a drape really
 //! takes. Alone in its test binary: the process's high-water mark is the
 //! drape's.
@@ -33,7 +33,7 @@ fn the_estimate_covers_the_peak_of_a_drape_and_not_by_much() {
         &[("kinematic.spacing".to_owned(), "1".to_owned())],
     )
     .unwrap();
-    let estimate = drape::limits::net_bytes(&scene.kinematic.as_ref().unwrap().net);
+    let estimate = drape::memory::net_bytes(&scene.kinematic.as_ref().unwrap().net);
     let out = std::env::temp_dir().join(format!("drape-memory-{}", std::process::id()));
     let (before, _) = rss_kb();
     let report = drape::kinematic_scene(&scene, &out).unwrap();

@@ -1,4 +1,4 @@
-//! Size guards from estimates: what a piece of work will need, against
+//! Memory guards from estimates: what a piece of work will need, against
 //! what the machine has, checked before the work starts, so that a size
 //! that cannot fit is refused with its estimate (bad input, exit 2)
 //! instead of aborting on a failed allocation half-way.
@@ -11,7 +11,7 @@
 //! refusing a large net there is better than an abort, and the message
 //! says the figure is assumed.
 //!
-//! Not here: the step and frame counts of a run (the driver's guards).
+//! Not here: the step and frame counts of a run (`limits.rs`).
 
 use drape_fishnet::NetSpec;
 

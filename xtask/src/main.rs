@@ -19,6 +19,8 @@
 //! - `mould OUT [--triangles N] [--punch FILE] [--offset MM]`: a generated
 //!   open female tray mould (and its matched punch) as STL or OBJ (see
 //!   [`mould`]);
+//! - `slurm [--quick] [--study] [--keep]`: `drape sweep --slurm` against a
+//!   real one-node Slurm cluster started here (see [`slurm`]);
 //! - `ci`: what CI runs, the script `.ci/run`.
 //!
 //! Only std and the workspace's own dependencies: an xtask that needs a
@@ -30,6 +32,7 @@ use std::process::{Command, ExitCode};
 mod fit;
 mod holding;
 mod mould;
+mod slurm;
 mod stress;
 mod validate;
 mod work_precision;
@@ -81,9 +84,18 @@ tasks:
       the cavity, about N triangles (default 3000); --punch also writes the
       matched punch, the same surface moved MM (default 0.57, the glass
       ply's thickness) along its normals.
+  slurm [--quick] [--study] [--keep]
+      start a one-node Slurm cluster here (installs slurm-wlm and munge with
+      apt-get when missing; needs root), submit a sweep with drape sweep
+      --slurm, requeue one task mid-run, collect, and check the results
+      against a local drape sweep bit for bit; the daemons are stopped at
+      the end. --quick is the CI form (4 short points); --study times the
+      16-point hemisphere study through Slurm (--array-limit 2) and
+      locally; --keep keeps target/slurm/run-PID (logs, sweeps).
   ci
       run what CI runs (.ci/run): the test suite, the quick validation,
-      the quick stress suite and the quick work-precision bench";
+      the quick stress suite, the quick work-precision bench and the
+      quick Slurm sweep test";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -107,6 +119,10 @@ fn main() -> ExitCode {
         "bench" => bench(rest),
         "mould" => match mould::Options::parse(rest) {
             Ok(options) => mould::main(&options),
+            Err(message) => usage_error(&message),
+        },
+        "slurm" => match slurm::Options::parse(rest) {
+            Ok(options) => slurm::main(&options, &workspace_root(), &target_dir()),
             Err(message) => usage_error(&message),
         },
         "ci" if rest.is_empty() => run(Command::new("bash")

@@ -19,9 +19,12 @@ use std::path::{Path, PathBuf};
 mod compare;
 pub mod eta;
 mod kinematic;
+pub mod limits;
 pub mod memory;
 mod orientations;
+pub mod reserve;
 mod setup;
+pub mod sweep_check;
 pub use compare::{CompareError, MeasureRow, RunComparison, RunComparisonSummary, compare_runs};
 pub use kinematic::{
     Comparison, ComparisonReport, ComparisonSummary, KinematicError, KinematicReport,
@@ -436,9 +439,10 @@ impl Observer for Recorder<'_> {
 /// reason; the warnings are what the run will also report.
 pub fn check_scene(scene: &Scene) -> Result<Vec<String>, String> {
     let checked = match scene.spec.simulation.solver {
-        Solver::Explicit => {
-            Explicit::new(&scene.model, scene.settings.clone()).map(|d| d.warnings().to_vec())
-        }
+        Solver::Explicit => Explicit::new(&scene.model, scene.settings.clone()).and_then(|d| {
+            limits::check_explicit(scene, &d).map_err(drape_time::RunError::Setup)?;
+            Ok(d.warnings().to_vec())
+        }),
         Solver::Implicit => {
             Implicit::new(&scene.model, scene.implicit.clone()).map(|d| d.warnings().to_vec())
         }
@@ -516,6 +520,8 @@ pub fn run_in(
 ) -> Result<RunReport, FacadeError> {
     let model = &scene.model;
     let mut results = results;
+    // The summary's room, before anything else is written.
+    let reserve = reserve::SummaryReserve::claim(results.path())?;
     results.set_shear_range(scene.spec.output.shear_range_deg);
     let peaks = options
         .resume
@@ -571,6 +577,9 @@ pub fn run_in(
     };
     let last_checkpoint =
         last_checkpoint.or_else(|| driver.as_ref().map(|_| (state.step, state.time)));
+    // Where a resumed run picks up: one that fails before its first step
+    // leaves the stopped run's summary as it was.
+    let resumed_at = driver.as_ref().map(|_| state.step);
     let mut settings = scene.settings.clone();
     settings.checkpoint_every = record.checkpoint_every;
     let mut recorder = Recorder {
@@ -650,8 +659,14 @@ pub fn run_in(
         }
     };
     let wall_s = started.elapsed().as_secs_f64();
-    if let Some(e) = recorder.error.take() {
-        return Err(e);
+    // A frame or checkpoint that could not be written stopped the run: it
+    // still gets a summary, which says so.
+    let mut write_error = recorder.error.take();
+    if let (Some(step), Err(e), None) = (resumed_at, &outcome, &write_error) {
+        if e.step_and_time().is_none_or(|(s, _)| s <= step) {
+            reserve.release();
+            return Err(limits::resume_refused(recorder.results.path(), e));
+        }
     }
     let (status, reason, energy) = match &outcome {
         Ok(s) if s.stopped => {
@@ -680,6 +695,14 @@ pub fn run_in(
             }
             ("failed", Some(reason), recorder.last_energy)
         }
+    };
+    // The one completion check: "completed" only with the work done.
+    let (status, reason) = match status {
+        "completed" => match limits::incomplete(&state, scene.settings.end_time, &energy) {
+            Some(why) => ("failed", Some(why)),
+            None => (status, reason),
+        },
+        _ => (status, reason),
     };
     let locking = scene.spec.output.locking_angle_deg;
     let measured = model.measures(&state, locking);
@@ -723,7 +746,7 @@ pub fn run_in(
             setup.as_ref().map_or(0.0, |s| s.added_mass_fraction),
         ));
     }
-    let summary = Summary {
+    let mut summary = Summary {
         status: status.to_owned(),
         reason,
         scene: recorder.record.scene_file.display().to_string(),
@@ -795,20 +818,39 @@ pub fn run_in(
         warnings,
     };
     let results = &recorder.results;
-    results.write_energy(&recorder.rows)?;
+    // Every file is tried, the first failure kept: the summary comes last
+    // and says what is missing.
+    let mut keep = |written: Result<(), ResultsError>| {
+        if let Err(e) = written {
+            write_error.get_or_insert(e);
+        }
+    };
+    keep(results.write_energy(&recorder.rows));
     if solver == Solver::Implicit {
-        results.write_cutbacks(&recorder.cutbacks)?;
+        keep(results.write_cutbacks(&recorder.cutbacks));
     }
-    results.write_profiles(&measures)?;
+    keep(results.write_profiles(&measures));
     if let Some(fields) = &fields {
         let title = format!("{} at t = {} s", summary.scene, state.time);
-        results.write_orientations(model, &state, fields, &title)?;
+        keep(results.write_orientations(model, &state, fields, &title));
         if scene.spec.output.pictures {
-            results.write_pictures(model, &state, fields, &measures)?;
-            results.write_view(model, &state, fields, &recorder.tools, &end_tools)?;
+            keep(results.write_pictures(model, &state, fields, &measures));
+            keep(results.write_view(model, &state, fields, &recorder.tools, &end_tools));
         }
     }
+    if let Some(e) = &write_error {
+        summary.status = "failed".to_owned();
+        summary.reason = Some(match summary.reason.take() {
+            // What the run itself found first, then the write.
+            Some(r) if status == "failed" => format!("{r}; then {}", reserve::write_failure(e)),
+            _ => reserve::write_failure(e),
+        });
+    }
+    reserve.release();
     results.write_summary(&summary)?;
+    if let Some(e) = write_error {
+        return Err(e);
+    }
     if status == "completed" {
         remove_checkpoint(results.path())?;
     }

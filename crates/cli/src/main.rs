@@ -18,14 +18,14 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow};
 use clap::{Parser, Subcommand};
 use drape::{Checkpoint, RunControl, RunOptions, RunProgress, open_output, run_in, run_scene};
-use drape_io::results::{
-    OutputLock, ResultsError, Summary, SweepAxis, SweepRun, write_sweep_picture,
-};
+use drape_io::results::{OutputLock, ResultsError, Summary};
 use drape_io::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 mod exit;
+mod slurm;
+mod sweep_table;
 
 #[derive(Parser)]
 #[command(
@@ -80,9 +80,14 @@ enum Command {
     /// Run every combination of values and write one table of results.
     Sweep {
         /// The scene file (TOML).
-        scene: PathBuf,
+        #[arg(required_unless_present = "collect")]
+        scene: Option<PathBuf>,
         /// A key and its values: --set tools.0.friction=0,0.1,0.2 (repeatable).
-        #[arg(long = "set", value_name = "KEY=V1,V2,…", required = true)]
+        #[arg(
+            long = "set",
+            value_name = "KEY=V1,V2,…",
+            required_unless_present = "collect"
+        )]
         set: Vec<String>,
         /// Output directory (default: results/<scene name>-sweep).
         #[arg(long)]
@@ -91,6 +96,9 @@ enum Command {
         /// at once is brought down to that).
         #[arg(long)]
         threads: Option<usize>,
+        /// On a Slurm cluster: --slurm and its options, --collect, --retry.
+        #[command(flatten)]
+        slurm: slurm::SlurmArgs,
     },
     /// Print the summary of a run's output directory.
     Inspect {
@@ -295,7 +303,19 @@ fn main() -> ExitCode {
             set,
             out,
             threads,
-        } => with_threads(threads, || sweep(&scene, out, &set)),
+            slurm,
+        } => match (&slurm.collect, scene) {
+            (Some(dir), _) => slurm::collect(dir, slurm.retry),
+            (None, Some(scene)) if slurm.slurm => match threads {
+                Some(_) => Err(bad(
+                    "--threads is for a sweep run here; each Slurm task runs with \
+                     --cpus-per-task threads",
+                )),
+                None => slurm::submit(&scene, out, &set, &slurm),
+            },
+            (None, Some(scene)) => with_threads(threads, || sweep(&scene, out, &set)),
+            (None, None) => Err(bad("give a scene file, or --collect DIR")),
+        },
         Command::Inspect { dir } => inspect(&dir),
         Command::Kinematic { scene, out, set } => kinematic(&scene, out, &set),
         Command::Compare {
@@ -559,9 +579,9 @@ fn print_summary(s: &Summary, out: &Path) {
         );
     }
     println!(
-        "yarn tension      {:.4} N/mm at the end, {:.4} N/mm largest (t = {:.6} s){}",
-        s.max_fibre_tension_n_per_mm,
-        p.max_fibre_tension_n_per_mm,
+        "yarn tension      {} at the end, {} largest (t = {:.6} s){}",
+        drape::limits::or_na(s.max_fibre_tension_n_per_mm, 4, "N/mm"),
+        drape::limits::or_na(p.max_fibre_tension_n_per_mm, 4, "N/mm"),
         p.max_fibre_tension_time_s,
         if s.max_fibre_tension_n.is_finite() {
             format!("; largest truss force {:.4} N", s.max_fibre_tension_n)
@@ -715,6 +735,8 @@ fn run(
         eprintln!("warning: {w}");
     }
     let out = out.unwrap_or_else(|| default_out(scene_path, ""));
+    drape::limits::check_output(&[&scene], &out)
+        .map_err(|reason| bad(format!("{}: {reason}", scene_path.display())))?;
     let options = RunOptions {
         checkpoint_every: checked_interval(checkpoint_every)?,
         overrides,
@@ -759,7 +781,14 @@ fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
             );
             return Ok(ExitCode::SUCCESS);
         }
-        Some(s) if s.status == "failed" => {
+        // A run stopped by a full disk continues once there is room.
+        Some(s)
+            if s.status == "failed"
+                && !s
+                    .reason
+                    .as_deref()
+                    .is_some_and(|r| r.starts_with("disk full")) =>
+        {
             return Err(bad(format!(
                 "{}: the run failed ({}): resuming it would repeat the failure with the same \
                  scene; change the scene and start a new run",
@@ -773,6 +802,14 @@ fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
     let scene = checkpoint.scene().map_err(|e| {
         bad(format!(
             "{}: cannot resume: {e}",
+            Checkpoint::path(dir).display()
+        ))
+    })?;
+    // What cannot run is refused before the folder is touched, as for a
+    // new run: the stopped run's summary and checkpoint stay as they were.
+    drape::check_scene(&scene).map_err(|reason| {
+        bad(format!(
+            "{}: cannot resume: {reason}",
             Checkpoint::path(dir).display()
         ))
     })?;
@@ -861,34 +898,32 @@ fn new(template: Option<&str>, path: Option<PathBuf>) -> Result<ExitCode> {
 }
 
 fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
-    let axes: Vec<(String, Vec<String>)> = parse_sets(set)?
-        .into_iter()
-        .map(|(k, v)| (k, v.split(',').map(|s| s.trim().to_owned()).collect()))
-        .collect();
-    let mut combos: Vec<Vec<(String, String)>> = vec![Vec::new()];
-    for (key, values) in &axes {
-        combos = combos
-            .into_iter()
-            .flat_map(|c| {
-                values.iter().map(move |v| {
-                    let mut c = c.clone();
-                    c.push((key.clone(), v.clone()));
-                    c
-                })
-            })
-            .collect();
-    }
-    // Every combination must load before anything runs or is written.
+    let (axes, combos) = sweep_table::points(set)?;
+    // Every combination must load, and pass the checks of `drape run`,
+    // before anything runs or is written.
     let scenes: Vec<Scene> = combos
         .iter()
         .map(|c| load(scene_path, c))
         .collect::<Result<_>>()?;
+    for (scene, combo) in scenes.iter().zip(&combos) {
+        drape::check_scene(scene).map_err(|reason| {
+            let set: Vec<String> = combo.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            bad(format!(
+                "{} with {}: {reason}",
+                scene_path.display(),
+                set.join(" ")
+            ))
+        })?;
+    }
     let out = out.unwrap_or_else(|| default_out(scene_path, "-sweep"));
+    let all: Vec<&Scene> = scenes.iter().collect();
+    drape::limits::check_output(&all, &out)
+        .map_err(|reason| bad(format!("{}: {reason}", scene_path.display())))?;
     // One sweep per folder, as one run per folder; each run's own folder
     // is locked by the run.
     let _lock = OutputLock::acquire(&out).map_err(|e| unusable_output(&out, &e))?;
     eprintln!("sweep: {} runs into {}", scenes.len(), out.display());
-    let reports: Vec<Result<Summary>> = scenes
+    let reports: Vec<Result<Summary, String>> = scenes
         .par_iter()
         .enumerate()
         .map(|(i, scene)| {
@@ -900,7 +935,8 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
                     RunControl::Continue
                 }
             })
-            .with_context(|| format!("writing {}", dir.display()))?;
+            .with_context(|| format!("writing {}", dir.display()))
+            .map_err(|e| describe(&e))?;
             eprintln!(
                 "  run_{i:03} {} max shear {:.2}°",
                 report.summary.status, report.summary.max_shear_deg
@@ -908,81 +944,7 @@ fn sweep(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Exit
             Ok(report.summary)
         })
         .collect();
-    let mut table = String::from("run");
-    for (key, _) in &axes {
-        table.push(',');
-        table.push_str(key);
-    }
-    table.push_str(",status,max_shear_deg,draw_in_dx_mm,draw_in_dy_mm,draw_in_dd_mm,max_fibre_tension_n,balance_error,steps,wall_s,peak_max_shear_deg,peak_time_s,max_fibre_tension_n_per_mm\n");
-    let mut failed = false;
-    for (i, (combo, report)) in combos.iter().zip(&reports).enumerate() {
-        table.push_str(&format!("run_{i:03}"));
-        for (_, v) in combo {
-            table.push(',');
-            table.push_str(v);
-        }
-        match report {
-            Ok(s) => {
-                failed |= s.status == "failed";
-                table.push_str(&format!(
-                    ",{},{:.4},{:.4},{:.4},{:.4},{:.3},{:.3e},{},{:.2},{:.4},{:.6},{:.5}\n",
-                    s.status,
-                    s.max_shear_deg,
-                    s.draw_in_mm.dx,
-                    s.draw_in_mm.dy,
-                    s.draw_in_mm.dd,
-                    s.max_fibre_tension_n,
-                    s.energy.balance_error,
-                    s.run.steps,
-                    s.run.wall_s,
-                    s.peak.max_shear_deg,
-                    s.peak.max_shear_time_s,
-                    s.max_fibre_tension_n_per_mm
-                ));
-            }
-            Err(e) => {
-                failed = true;
-                table.push_str(&format!(
-                    ",error: {},,,,,,,,,,,\n",
-                    describe(e).replace(',', ";")
-                ));
-            }
-        }
-    }
-    let path = out.join("sweep.csv");
-    drape_io::atomic::write(&path, table.as_bytes())
-        .with_context(|| format!("writing {}", path.display()))?;
-    // A key given one value is a setting, not a swept parameter: the
-    // picture has a column per key with more than one value (the first key
-    // when none has).
-    let mut drawn: Vec<usize> = (0..axes.len()).filter(|&k| axes[k].1.len() > 1).collect();
-    if drawn.is_empty() {
-        drawn.push(0);
-    }
-    let sweep_axes: Vec<SweepAxis> = drawn
-        .iter()
-        .map(|&k| SweepAxis {
-            key: axes[k].0.clone(),
-            values: axes[k].1.clone(),
-        })
-        .collect();
-    let runs: Vec<SweepRun> = combos
-        .iter()
-        .zip(&reports)
-        .map(|(combo, report)| {
-            let s = report.as_ref().ok();
-            let value = |f: fn(&Summary) -> f64| s.map_or(f64::NAN, f);
-            SweepRun {
-                values: drawn.iter().map(|&k| combo[k].1.clone()).collect(),
-                max_shear_deg: value(|s| s.max_shear_deg),
-                draw_in_dx_mm: value(|s| s.draw_in_mm.dx),
-                draw_in_dd_mm: value(|s| s.draw_in_mm.dd),
-            }
-        })
-        .collect();
-    let picture = out.join("sweep.png");
-    write_sweep_picture(&picture, &sweep_axes, &runs)
-        .with_context(|| format!("writing {}", picture.display()))?;
+    let (table, failed) = sweep_table::write(&out, &axes, &combos, &reports)?;
     print!("{table}");
     Ok(if failed {
         ExitCode::from(1)
@@ -1005,6 +967,9 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
             }
         )));
     }
+    if slurm::is_slurm_sweep(dir) {
+        return slurm::inspect(dir);
+    }
     let sweep = dir.join("sweep.csv");
     if sweep.is_file() && !dir.join("summary.json").exists() {
         return inspect_sweep(dir, &sweep);
@@ -1012,11 +977,14 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
     let path = dir.join("summary.json");
     let text = std::fs::read_to_string(&path).map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {
-            bad(format!(
-                "{}: no summary.json (nor a sweep's sweep.csv): no run has finished writing here \
-                 (one may still be running, or was killed)",
-                dir.display()
-            ))
+            match drape::reserve::unfinished(dir) {
+                Some(why) => anyhow!("{}: no summary.json: {why}", dir.display()),
+                None => bad(format!(
+                    "{}: no summary.json (nor a sweep's sweep.csv): no run has finished writing \
+                     here (one may still be running, or was killed)",
+                    dir.display()
+                )),
+            }
         } else {
             bad(format!("{}: {e}", path.display()))
         }
@@ -1047,11 +1015,27 @@ fn inspect(dir: &Path) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// How many run_NNN folders `dir` holds.
+fn run_folders(dir: &Path) -> usize {
+    std::fs::read_dir(dir).map_or(0, |entries| {
+        entries
+            .filter_map(|e| e.ok())
+            .filter(|e| {
+                e.file_name().to_str().is_some_and(|n| {
+                    n.strip_prefix("run_")
+                        .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+                }) && e.path().is_dir()
+            })
+            .count()
+    })
+}
+
 /// A sweep's table, aligned in columns, and where its runs are.
 fn inspect_sweep(dir: &Path, table: &Path) -> Result<ExitCode> {
     let text =
         std::fs::read_to_string(table).map_err(|e| bad(format!("{}: {e}", table.display())))?;
-    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+    let rows =
+        drape::sweep_check::check(&text).map_err(|why| anyhow!("{}: {why}", table.display()))?;
     let columns = rows.iter().map(Vec::len).max().unwrap_or(0);
     let width: Vec<usize> = (0..columns)
         .map(|c| {
@@ -1079,6 +1063,9 @@ fn inspect_sweep(dir: &Path, table: &Path) -> Result<ExitCode> {
         println!("picture           {}", dir.join("sweep.png").display());
     }
     println!("each run's folder {}", dir.join("run_NNN").display());
+    if let Some(note) = drape::sweep_check::note(rows.len() - 1, run_folders(dir)) {
+        println!("note              {note}");
+    }
     Ok(ExitCode::SUCCESS)
 }
 

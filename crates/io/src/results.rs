@@ -587,7 +587,7 @@ impl ResultsDir {
     /// (N·mm), with the header
     /// `time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,numerical_dissipation,balance_error`
     /// (numerical dissipation: what the implicit integrator removed; zero
-    /// for explicit runs).
+    /// for explicit runs). A value that is not finite is left empty.
     pub fn write_energy(&self, rows: &[EnergyRow]) -> Result<(), ResultsError> {
         let mut csv = String::with_capacity(64 + rows.len() * 200);
         csv.push_str(ENERGY_HEADER);
@@ -609,7 +609,11 @@ impl ResultsDir {
                 e.balance_error,
             ] {
                 csv.push(',');
-                csv.push_str(&fmt_f64(v));
+                // A value that is not a number is missing, not "NaN": the
+                // run's completion check says why (drape's `limits`).
+                if v.is_finite() {
+                    csv.push_str(&fmt_f64(v));
+                }
             }
             csv.push('\n');
         }

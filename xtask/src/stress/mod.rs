@@ -22,6 +22,7 @@
 
 mod folders;
 mod generate;
+mod steps;
 
 use std::fmt::Write as _;
 use std::panic::{self, AssertUnwindSafe};
@@ -751,6 +752,11 @@ pictures = false
                 Err(e) => broken(ctx, Expect::Either, format!("{}: {e}", path.display())),
             }
         },
+    },
+    Case {
+        name: "step settings at the edges of f64",
+        quick: true,
+        run: steps::step_edges,
     },
     Case {
         name: "random scenes",

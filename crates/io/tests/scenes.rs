@@ -293,7 +293,7 @@ fn type_errors_say_what_the_field_accepts() {
         (
             "point = [0, 0, -1]",
             "point = [0, 0]",
-            "tools[0].geometry",
+            "tools[0].geometry.point",
             13,
             "3 values",
         ),

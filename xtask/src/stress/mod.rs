@@ -20,6 +20,7 @@
 //! `target/stress/report.md`; each run's results are in
 //! `target/stress/<row>/`.
 
+mod edges;
 mod folders;
 mod generate;
 mod steps;
@@ -228,6 +229,8 @@ pub struct Run {
     pub step_budget: Option<u64>,
     /// Wall-clock limit before the run counts as hung.
     pub limit: Duration,
+    /// `--set key=value` overrides the scene is read with.
+    pub sets: Vec<(String, String)>,
 }
 
 impl Run {
@@ -239,6 +242,7 @@ impl Run {
             tweak: None,
             step_budget: None,
             limit: Duration::from_secs(900),
+            sets: Vec::new(),
         }
     }
 }
@@ -289,7 +293,7 @@ fn execute_here(dir: &Path, run: Run) -> Outcome {
     if let Err(e) = std::fs::write(&path, &run.text) {
         return Outcome::Io(e.to_string());
     }
-    let mut scene = match Scene::from_file(&path, &[]) {
+    let mut scene = match Scene::from_file(&path, &run.sets) {
         Ok(scene) => scene,
         Err(e) => return Outcome::Refused(e.to_string()),
     };
@@ -762,6 +766,11 @@ pictures = false
         name: "random scenes",
         quick: true,
         run: |ctx| generate::random_scenes(ctx, if ctx.quick { 6 } else { 40 }),
+    },
+    Case {
+        name: "edge numbers in every key",
+        quick: true,
+        run: |ctx| edges::edge_values(ctx, ctx.quick.then_some(150)),
     },
     Case {
         name: "damaged mesh files",

@@ -302,6 +302,10 @@ fn expected_text(expected: &str) -> String {
     if let Some(n) = e.strip_prefix("an array of length ") {
         return format!("a list of {n} values");
     }
+    // serde's arrays read inside tagged tables say "3 elements in sequence".
+    if let Some(n) = e.strip_suffix(" elements in sequence") {
+        return format!("{n} values");
+    }
     for kind in [
         "internally tagged enum ",
         "adjacently tagged enum ",

@@ -16,6 +16,7 @@ use nalgebra::{Rotation3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::SceneError;
+use super::limits::{MAX_COORDINATE_MM, MIN_MESH_SIZE_MM};
 use super::locate::Locator;
 
 /// The length unit of a mesh file's coordinates.
@@ -48,6 +49,8 @@ impl LengthUnit {
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Placement {
     scale: f64,
+    /// The key that gave the scale, for errors (`units`, `scale`, or none).
+    scale_key: Option<&'static str>,
     rotation: Rotation3<f64>,
     offset: Vector3<f64>,
 }
@@ -92,12 +95,73 @@ impl Placement {
             }
         };
         let r = finite("rotate", rotate.unwrap_or_default())?.map(f64::to_radians);
+        let offset =
+            super::limits::position(at, &format!("{table}.offset"), offset.unwrap_or_default())?;
         Ok(Self {
             scale,
+            scale_key: match (units, scale) {
+                (Some(_), _) => Some("units"),
+                (None, 1.0) => None,
+                (None, _) => Some("scale"),
+            },
             // nalgebra's roll, pitch, yaw: about x, then y, then z (fixed axes).
             rotation: Rotation3::from_euler_angles(r.x, r.y, r.z),
-            offset: finite("offset", offset.unwrap_or_default())?,
+            offset,
         })
+    }
+
+    /// Refuses a placement that takes the file's `points` (of the mesh
+    /// `key` of `table`) past ±[`MAX_COORDINATE_MM`] or makes the mesh
+    /// less than [`MIN_MESH_SIZE_MM`] across, naming the key that does:
+    /// the scale (`units` or `scale`), else the offset, else the file.
+    pub(super) fn check(
+        &self,
+        at: &Locator<'_>,
+        table: &str,
+        key: &str,
+        points: &[Vector3<f64>],
+    ) -> Result<(), SceneError> {
+        let blame = |k: Option<&str>| format!("{table}.{}", k.unwrap_or(key));
+        let reach = points.iter().fold(0.0, |m: f64, x| m.max(x.amax()));
+        let scaled = reach * self.scale;
+        if scaled > MAX_COORDINATE_MM {
+            let why = match self.scale_key {
+                Some(k) => format!("`{k}` scales the file's coordinates by {:e}", self.scale),
+                None => "the file's coordinates".to_owned(),
+            };
+            return Err(at.error(
+                &blame(self.scale_key),
+                format!(
+                    "{why}: its points reach {scaled:.3e} mm from the origin, past ±{MAX_COORDINATE_MM:e} mm \
+                     (drape's lengths are in mm)"
+                ),
+            ));
+        }
+        let size = across(points) * self.scale;
+        if !points.is_empty() && size < MIN_MESH_SIZE_MM {
+            let why = match self.scale_key {
+                Some(k) => format!("`{k}` scales the file's coordinates by {:e}", self.scale),
+                None => "the file's coordinates".to_owned(),
+            };
+            return Err(at.error(
+                &blame(self.scale_key),
+                format!(
+                    "{why}: the mesh is {size:.3e} mm across, less than {MIN_MESH_SIZE_MM:e} mm \
+                     (drape's lengths are in mm)"
+                ),
+            ));
+        }
+        // Scaled within range, placed past it: the offset's doing.
+        let placed = scaled * 3f64.sqrt() + self.offset.amax();
+        if placed > MAX_COORDINATE_MM {
+            return Err(at.error(
+                &blame(Some("offset")),
+                format!(
+                    "moves the mesh to {placed:.3e} mm from the origin, past ±{MAX_COORDINATE_MM:e} mm"
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// Where the file's point `x` goes.
@@ -161,6 +225,15 @@ pub(super) fn tool_mesh(
         }
     };
     let (vertices, triangles) = read.map_err(|e| at.error(&format!("{g}.file"), e))?;
+    placement.check(at, g, "file", &vertices)?;
+    super::limits::mesh_size(
+        at,
+        &format!("{g}.file"),
+        triangles.len(),
+        "triangle",
+        super::limits::TOOL_BYTES_PER_TRIANGLE,
+        None,
+    )?;
     let vertices: Vec<Vector3<f64>> = vertices.iter().map(|v| placement.apply(v)).collect();
     // drape works in mm: a mould of less than a millimetre or more than ten
     // metres across is most likely a file in another unit (a mould in

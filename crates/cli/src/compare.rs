@@ -43,6 +43,40 @@ pub enum CompareError {
     /// Writing the comparison failed.
     #[error(transparent)]
     Results(#[from] ResultsError),
+    /// Nothing could be compared; `comparison.json` says so with this
+    /// reason.
+    #[error("{0}")]
+    Failed(String),
+}
+
+/// The files a comparison writes into its folder.
+const COMPARISON_FILES: [&str; 3] = ["comparison.json", "comparison.csv", "comparison.png"];
+
+/// Removes an earlier comparison's files from `out` (the caller holds the
+/// folder), and the files named in `more`, so that a comparison that fails
+/// cannot leave one that looks like its own.
+pub(crate) fn clear_comparison(out: &Path, more: &[&str]) -> Result<(), ResultsError> {
+    for name in COMPARISON_FILES.iter().chain(more) {
+        let path = out.join(name);
+        match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(ResultsError { path, source: e });
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Writes `summary` as `out/comparison.json`, whole or not at all.
+pub(crate) fn write_json(out: &Path, summary: &impl Serialize) -> Result<(), ResultsError> {
+    let path = out.join("comparison.json");
+    let mut json = serde_json::to_vec_pretty(summary).map_err(|e| ResultsError {
+        path: path.clone(),
+        source: e.into(),
+    })?;
+    json.push(b'\n');
+    drape_io::atomic::write(&path, &json).map_err(|source| ResultsError { path, source })
 }
 
 /// One measure of both runs.
@@ -80,6 +114,13 @@ const COUNTS: [&str; 1] = ["steps"];
 /// `comparison.json` of two results folders.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct RunComparisonSummary {
+    /// `completed`, or `failed` when no element could be compared (the
+    /// reason says why; the differences are then meaningless).
+    #[serde(default)]
+    pub status: String,
+    /// Why it failed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
     /// Run A's folder.
     pub run_a: String,
     /// Run B's folder.
@@ -95,8 +136,12 @@ pub struct RunComparisonSummary {
     pub same_mesh: bool,
     /// Elements of run A.
     pub elements: usize,
-    /// Of those, elements with a value from both runs.
+    /// Of those, elements with a value from both runs: at least one, or
+    /// the comparison failed.
     pub compared: usize,
+    /// `compared` over `elements`.
+    #[serde(default)]
+    pub compared_fraction: f64,
     /// Largest |γ_B − γ_A| (degrees).
     pub max_abs_difference_deg: f64,
     /// Where: run A's reference centroid of that element (mm).
@@ -378,30 +423,50 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
     let n = summary.compared.max(1) as f64;
     summary.mean_difference_deg = sum / n;
     summary.rms_difference_deg = (sum2 / n).sqrt();
+    summary.compared_fraction = summary.compared as f64 / summary.elements.max(1) as f64;
 
     std::fs::create_dir_all(out).map_err(|source| ResultsError {
         path: out.to_owned(),
         source,
     })?;
+    clear_comparison(out, &[])?;
+    if summary.compared == 0 {
+        // "0 of N compared, largest difference 0°" would read as agreement.
+        let reason = if same {
+            format!(
+                "no element compared: the two runs share their mesh, but none of its {} \
+                 elements has a finite shear in both",
+                summary.elements
+            )
+        } else {
+            format!(
+                "no element compared: none of A's {} elements lies within half an element of \
+                 B's blank ({} elements): the two blanks do not overlap (placed apart, or not \
+                 the same part)",
+                summary.elements,
+                gb.len()
+            )
+        };
+        summary.status = "failed".to_owned();
+        summary.reason = Some(reason.clone());
+        write_json(out, &summary)?;
+        return Err(CompareError::Failed(reason));
+    }
+    summary.status = "completed".to_owned();
     let at = |name: &str| {
         let path = out.join(name);
         move |source| ResultsError { path, source }
     };
-    let number = |v: f64| {
-        if v.is_finite() {
-            v.to_string()
-        } else {
-            String::new()
-        }
-    };
+    // No NaN in a table: a value that cannot be had is an empty field.
+    let number = |v: f64| drape_io::finite::or_empty(v, |v| v.to_string());
     let mut csv = String::from("element,x0_mm,y0_mm,z0_mm,a_deg,b_deg,difference_deg\n");
     for (e, c) in centroid0.iter().enumerate() {
         let _ = writeln!(
             csv,
             "{e},{},{},{},{},{},{}",
-            c.x,
-            c.y,
-            c.z,
+            number(c.x),
+            number(c.y),
+            number(c.z),
             number(ga[e]),
             number(b_deg[e]),
             number(b_deg[e] - ga[e])
@@ -454,12 +519,7 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
             },
         ],
     )?;
-    let mut json = serde_json::to_vec_pretty(&summary).map_err(|e| ResultsError {
-        path: out.join("comparison.json"),
-        source: e.into(),
-    })?;
-    json.push(b'\n');
-    drape_io::atomic::write(&out.join("comparison.json"), &json).map_err(at("comparison.json"))?;
+    write_json(out, &summary)?;
     Ok(RunComparison {
         summary,
         a: sa,

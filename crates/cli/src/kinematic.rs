@@ -28,9 +28,22 @@ pub enum KinematicError {
     /// The scene cannot be draped as it is (bad input: nothing written).
     #[error("{0}")]
     Input(String),
+    /// The output folder cannot be used (a file, unwritable, or held by a
+    /// running run): nothing was written.
+    #[error(transparent)]
+    Output(ResultsError),
     /// Writing results failed.
     #[error(transparent)]
     Results(#[from] ResultsError),
+    /// The work ran and did not give what it claims (a net with no cell
+    /// draped, a comparison of no element); the folder's summary (or
+    /// `comparison.json`) says so with this reason.
+    #[error("{0}")]
+    Failed(String),
+    /// The forming run of a comparison was stopped (by the caller's
+    /// progress callback): nothing was compared.
+    #[error("{0}")]
+    Stopped(String),
 }
 
 /// What a kinematic drape leaves.
@@ -56,6 +69,10 @@ pub struct KinematicReport {
 ///
 /// The summary says `completed`; when cells of the blank could not be
 /// draped (the net left the mould or folded) its `warnings` say how many.
+/// A net of which no cell could be draped writes only its summary, with
+/// status `failed` and the reason. A spacing that leaves no cell on the
+/// blank, or a net whose estimated memory ([`crate::memory::net_bytes`])
+/// exceeds what the machine has, is bad input: nothing is written.
 pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, KinematicError> {
     let file = scene.file.display();
     let setup = scene
@@ -69,9 +86,33 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         .first()
         .map(|b| b.section.material.clone())
         .ok_or_else(|| KinematicError::Input(format!("{file}: the blank has no elements")))?;
+    let need = crate::memory::net_bytes(&setup.net);
+    let available = crate::memory::available_memory();
+    if need > available.bytes {
+        return Err(KinematicError::Input(format!(
+            "{file}: kinematic.spacing {:?} mm on a {} × {} mm blank: a net of {} crossings \
+             needs about {} (1.7 kB a cell), more than the {} this machine has ({}): give a \
+             larger kinematic.spacing",
+            setup.net.spacing,
+            setup.net.outline.width,
+            setup.net.outline.height,
+            setup.net.lattice_crossings(),
+            crate::memory::bytes_text(need),
+            crate::memory::bytes_text(available.bytes),
+            available.source
+        )));
+    }
     let started = std::time::Instant::now();
     let net = Net::drape(&tool.surface, &setup.net)
         .map_err(|e| KinematicError::Input(format!("{file}: kinematic: {e}")))?;
+    if net.stats().outline_cells == 0 {
+        return Err(KinematicError::Input(format!(
+            "{file}: kinematic.spacing {:?} mm on a {} × {} mm blank: no cell of the net has its \
+             centre on the blank, so there is nothing to drape: give a kinematic.spacing smaller \
+             than the blank",
+            setup.net.spacing, setup.net.outline.width, setup.net.outline.height
+        )));
+    }
     let wall_s = started.elapsed().as_secs_f64();
     let shift = tool.motion.direction() * setup.mould_displacement;
     let locking = scene.spec.output.locking_angle_deg;
@@ -80,8 +121,21 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         .map_err(|e| KinematicError::Input(format!("{file}: kinematic: {e}")))?;
     let stats = net.stats();
 
-    let mut dir = ResultsDir::create(out)?;
+    let mut dir = ResultsDir::create(out).map_err(KinematicError::Output)?;
     dir.set_shear_range(scene.spec.output.shear_range_deg);
+    if stats.draped_cells == 0 {
+        // Nothing to write but why: every other file would describe a net
+        // that is not there (an empty frame, a NaN thickness).
+        let summary = undraped_summary(scene, &stats, tool, &setup.mould_reason, wall_s);
+        dir.write_summary(&summary)?;
+        return Ok(KinematicReport {
+            summary,
+            net,
+            results,
+            stats,
+            mould: setup.mould,
+        });
+    }
     if scene.spec.output.vtu {
         dir.write_frame(
             0,
@@ -202,6 +256,44 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
     })
 }
 
+/// The summary of a net of which no cell could be draped: `failed`, why,
+/// and no measure (there is no net to measure).
+fn undraped_summary(
+    scene: &Scene,
+    stats: &NetStats,
+    tool: &drape_contact::Tool,
+    mould_reason: &str,
+    wall_s: f64,
+) -> Summary {
+    Summary {
+        status: "failed".to_owned(),
+        reason: Some(format!(
+            "no cell of the net could be draped: none of the blank's {} cells has its four \
+             crossings on the mould `{}` ({} crossings placed): the net leaves the mould's edge \
+             or folds at once; check kinematic.seed, kinematic.spacing and the blank's cells",
+            stats.outline_cells, tool.name, stats.placed
+        )),
+        scene: scene.file.display().to_string(),
+        draw_in_mm: DrawInMm {
+            dx: f64::NAN,
+            dy: f64::NAN,
+            dd: f64::NAN,
+        },
+        draw_in_note: Some("no net was draped".to_owned()),
+        max_fibre_tension_n: f64::NAN,
+        run: RunInfo {
+            wall_s,
+            steps: 0,
+            threads: 1,
+            solver: "kinematic".to_owned(),
+            implicit: None,
+            mould: Some(tool.name.clone()),
+            mould_reason: Some(mould_reason.to_owned()),
+        },
+        ..Summary::default()
+    }
+}
+
 /// Why a net's draw-in lacks a value: the net reads it at the flat
 /// blank's edge midpoints (DX, DY) and corners (DD), and a point it did
 /// not reach has none.
@@ -244,6 +336,13 @@ pub struct ProfileDifference {
 /// `comparison.json`: a forming run against the kinematic net.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct ComparisonSummary {
+    /// `completed`, or `failed` when nothing could be compared (the
+    /// reason says why; the other numbers are then meaningless).
+    #[serde(default)]
+    pub status: String,
+    /// Why it failed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
     /// The scene file.
     pub scene: String,
     /// The forming run's status.
@@ -403,19 +502,55 @@ pub fn compare_scene(
     progress: &mut dyn FnMut(&RunProgress) -> RunControl,
 ) -> Result<ComparisonReport, KinematicError> {
     let kinematic = kinematic_scene(scene, &out.join("kinematic"))?;
+    crate::compare::clear_comparison(out, &["profiles.csv"])?;
+    if kinematic.summary.status != "completed" {
+        let reason = format!(
+            "the kinematic net failed: {}",
+            kinematic
+                .summary
+                .reason
+                .as_deref()
+                .unwrap_or("no reason given")
+        );
+        let summary = ComparisonSummary {
+            status: "failed".to_owned(),
+            reason: Some(reason.clone()),
+            scene: scene.file.display().to_string(),
+            ..ComparisonSummary::default()
+        };
+        crate::compare::write_json(out, &summary)?;
+        return Err(KinematicError::Failed(reason));
+    }
     let mechanical = run_scene(scene, &out.join("mechanical"), progress)?;
-    let c = compare(scene, &kinematic, &mechanical);
+    if mechanical.summary.status == "stopped" {
+        return Err(KinematicError::Stopped(format!(
+            "the forming run was stopped at t = {:.6} s of {:.6} s: nothing compared (a partial \
+             run against the net would compare two different things); its results so far are \
+             in {}",
+            mechanical.summary.time,
+            scene.settings.end_time,
+            out.join("mechanical").display()
+        )));
+    }
+    let mut c = compare(scene, &kinematic, &mechanical);
+    c.summary.status = "completed".to_owned();
+    if c.summary.compared == 0 {
+        let reason = format!(
+            "no element compared: none of the forming run's {} elements has its reference \
+             centroid on the draped net",
+            c.summary.elements
+        );
+        c.summary.status = "failed".to_owned();
+        c.summary.reason = Some(reason.clone());
+        crate::compare::write_json(out, &c.summary)?;
+        return Err(KinematicError::Failed(reason));
+    }
     let at = |name: &str| {
         let path = out.join(name);
         move |source| ResultsError { path, source }
     };
-    let number = |v: f64| {
-        if v.is_finite() {
-            format!("{v}")
-        } else {
-            String::new()
-        }
-    };
+    // No NaN in a table: a value that cannot be had is an empty field.
+    let number = |v: f64| drape_io::finite::or_empty(v, |v| v.to_string());
 
     let mut csv =
         String::from("element,x0_mm,y0_mm,mechanical_deg,kinematic_deg,difference_deg,on_mould\n");
@@ -423,8 +558,8 @@ pub fn compare_scene(
         let _ = writeln!(
             csv,
             "{e},{},{},{},{},{},{}",
-            c.centroid0[e].x,
-            c.centroid0[e].y,
+            number(c.centroid0[e].x),
+            number(c.centroid0[e].y),
             number(c.mechanical_deg[e]),
             number(c.kinematic_deg[e]),
             number(c.mechanical_deg[e] - c.kinematic_deg[e]),
@@ -446,7 +581,8 @@ pub fn compare_scene(
             {
                 let _ = writeln!(
                     profiles,
-                    "{name},{distance},{},{},{},{}",
+                    "{name},{},{},{},{},{}",
+                    number(distance),
                     number(c.mechanical_deg[e]),
                     number(c.kinematic_deg[e]),
                     number(c.mechanical_deg[e] - c.kinematic_deg[e]),
@@ -496,12 +632,7 @@ pub fn compare_scene(
             },
         ],
     )?;
-    let mut json = serde_json::to_vec_pretty(&c.summary).map_err(|e| ResultsError {
-        path: out.join("comparison.json"),
-        source: e.into(),
-    })?;
-    json.push(b'\n');
-    drape_io::atomic::write(&out.join("comparison.json"), &json).map_err(at("comparison.json"))?;
+    crate::compare::write_json(out, &c.summary)?;
     Ok(ComparisonReport {
         kinematic,
         mechanical,

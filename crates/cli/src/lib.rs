@@ -20,6 +20,7 @@ mod compare;
 pub mod eta;
 mod kinematic;
 pub mod limits;
+pub mod memory;
 mod orientations;
 pub mod reserve;
 mod setup;

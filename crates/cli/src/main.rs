@@ -5,7 +5,9 @@
 //! results; what it reached is kept), 2 bad input (a bad scene, an output
 //! folder that cannot be written or that another run is writing into;
 //! nothing is written), 130 stopped by Ctrl-C (the last frame, the energy
-//! history and a summary with status "stopped" are written).
+//! history and a summary with status "stopped" are written). The same
+//! contract for every command, with the output-folder claim and the
+//! signals: `exit.rs`.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -21,6 +23,7 @@ use drape_io::scene::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
+mod exit;
 mod slurm;
 mod sweep_table;
 
@@ -241,7 +244,11 @@ const INTERRUPTED_EXIT: u8 = 130;
 /// renamed, and the next run into the folder clears the temporaries).
 fn handle_ctrl_c() {
     let installed = ctrlc::set_handler(|| {
-        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+        let repeated = INTERRUPTED.swap(true, Ordering::SeqCst);
+        if exit::signal_quits_at_once() {
+            exit::quit_now();
+        }
+        if repeated {
             eprintln!("\nquitting now: the results are those of the last frame written");
             std::process::exit(i32::from(INTERRUPTED_EXIT));
         }
@@ -274,8 +281,9 @@ fn describe(e: &anyhow::Error) -> String {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // Before anything is read: a signal must never wait on a blocked read.
     handle_ctrl_c();
+    let cli = Cli::parse();
     let result = match cli.command {
         Command::Run {
             scene,
@@ -336,9 +344,9 @@ fn main() -> ExitCode {
         Err(e) => {
             eprintln!("error: {}", describe(&e));
             if e.downcast_ref::<BadInput>().is_some() {
-                ExitCode::from(2)
+                ExitCode::from(exit::BAD_INPUT)
             } else {
-                ExitCode::from(1)
+                ExitCode::from(exit::FAILED)
             }
         }
     }
@@ -424,7 +432,8 @@ fn parse_sets(set: &[String]) -> Result<Vec<(String, String)>> {
 }
 
 fn load(path: &Path, overrides: &[(String, String)]) -> Result<Scene> {
-    let scene = Scene::from_file(path, overrides).map_err(|e| bad(e.to_string()))?;
+    let scene =
+        exit::reading(|| Scene::from_file(path, overrides)).map_err(|e| bad(e.to_string()))?;
     for warning in &scene.warnings {
         eprintln!("warning: {warning}");
     }
@@ -1063,7 +1072,11 @@ fn inspect_sweep(dir: &Path, table: &Path) -> Result<ExitCode> {
 fn kinematic_error(e: drape::KinematicError) -> anyhow::Error {
     match e {
         drape::KinematicError::Input(message) => bad(message),
+        drape::KinematicError::Output(e) => unusable_output(&e.path.clone(), &e),
         drape::KinematicError::Results(e) => anyhow!(e).context("writing results"),
+        drape::KinematicError::Failed(reason) | drape::KinematicError::Stopped(reason) => {
+            anyhow!(reason)
+        }
     }
 }
 
@@ -1077,10 +1090,19 @@ fn print_net(stats: &drape_fishnet::NetStats) {
 fn kinematic(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
     let scene = load(scene_path, &parse_sets(set)?)?;
     let out = out.unwrap_or_else(|| default_out(scene_path, "-kinematic"));
-    let report = drape::kinematic_scene(&scene, &out).map_err(kinematic_error)?;
+    // Checked before the drape (which can take minutes); the library
+    // claims the folder itself when it writes.
+    let claim = exit::claim_output(&out)?.release();
+    exit::quit_at_once_on_signal();
+    let report = drape::kinematic_scene(&scene, &out).map_err(kinematic_error);
+    let report = exit::settle(vec![claim], report)?;
     print_summary(&report.summary, &out);
     print_net(&report.stats);
-    Ok(ExitCode::SUCCESS)
+    Ok(if report.summary.status == "completed" {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(exit::FAILED)
+    })
 }
 
 fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<ExitCode> {
@@ -1096,10 +1118,24 @@ fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Ex
         return Err(bad(e.to_string()));
     }
     let out = out.unwrap_or_else(|| default_out(scene_path, "-compare"));
+    // The comparison's folder for the whole command, and the two runs'
+    // folders checked now: all refused before anything is written.
+    let mut claims = vec![exit::claim_output(&out)?];
+    for sub in ["kinematic", "mechanical"] {
+        let claim = exit::claim_output(&out.join(sub)).map(exit::OutputClaim::release);
+        let claim = exit::settle(std::mem::take(&mut claims), claim)?;
+        claims.push(claim);
+    }
     let mut reporter = Reporter::new();
-    let report =
-        drape::compare_scene(&scene, &out, &mut |p| reporter.update(p)).map_err(kinematic_error)?;
+    let report = drape::compare_scene(&scene, &out, &mut |p| reporter.update(p));
     reporter.finish();
+    let report = match report {
+        Err(drape::KinematicError::Stopped(why)) => {
+            eprintln!("stopped: {why}");
+            return Ok(ExitCode::from(exit::STOPPED));
+        }
+        other => exit::settle(claims, other.map_err(kinematic_error))?,
+    };
     let s = &report.comparison.summary;
     println!("kinematic net     {}", out.join("kinematic").display());
     print_mould(&report.kinematic.summary);
@@ -1147,9 +1183,15 @@ fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Ex
 }
 
 fn compare_error(e: drape::CompareError) -> anyhow::Error {
+    compare_error_writing(e, "writing the comparison")
+}
+
+/// [`compare_error`] for a command that writes something else.
+fn compare_error_writing(e: drape::CompareError, writing: &'static str) -> anyhow::Error {
     match e {
         drape::CompareError::Input(message) => bad(message),
-        drape::CompareError::Results(e) => anyhow!(e).context("writing the comparison"),
+        drape::CompareError::Results(e) => anyhow!(e).context(writing),
+        drape::CompareError::Failed(reason) => anyhow!(reason),
     }
 }
 
@@ -1179,7 +1221,12 @@ fn compare_folders(a: &Path, b: &Path, out: Option<PathBuf>) -> Result<ExitCode>
     let out = out.unwrap_or_else(|| {
         Path::new("results").join(format!("{}-vs-{}", folder_name(a), folder_name(b)))
     });
-    let c = drape::compare_runs(a, b, &out).map_err(compare_error)?;
+    let claim = exit::claim_output(&out)?;
+    exit::quit_at_once_on_signal();
+    let c = exit::settle(
+        vec![claim],
+        drape::compare_runs(a, b, &out).map_err(compare_error),
+    )?;
     let s = &c.summary;
     println!("{:<34} {:>14} {:>14} {:>14}", "", "A", "B", "B − A");
     println!(
@@ -1203,10 +1250,11 @@ fn compare_folders(a: &Path, b: &Path, out: Option<PathBuf>) -> Result<ExitCode>
         );
     }
     println!(
-        "shear, element by element: {} of {} elements compared ({}); |γB − γA| largest {:.3}° \
-         at ({:.1}, {:.1}, {:.1}) mm (A's flat blank), rms {:.3}°, mean {:+.3}°",
+        "shear, element by element: {} of {} elements compared ({:.1} %, {}); |γB − γA| largest \
+         {:.3}° at ({:.1}, {:.1}, {:.1}) mm (A's flat blank), rms {:.3}°, mean {:+.3}°",
         s.compared,
         s.elements,
+        100.0 * s.compared_fraction,
         if s.same_mesh {
             "the same mesh"
         } else {
@@ -1224,6 +1272,14 @@ fn compare_folders(a: &Path, b: &Path, out: Option<PathBuf>) -> Result<ExitCode>
             "shear along the {}: {} points compared; |γB − γA| largest {:.3}°, rms {:.3}°",
             p.line, p.points, p.max_abs_difference_deg, p.rms_difference_deg
         );
+    }
+    for (name, status) in [("A", &s.status_a), ("B", &s.status_b)] {
+        if status != "completed" {
+            eprintln!(
+                "note: run {name} {status}: its values are those of its last frame, not of a \
+                 finished run (comparison.json records both statuses)"
+            );
+        }
     }
     println!("comparison        {}", out.display());
     Ok(ExitCode::SUCCESS)
@@ -1271,7 +1327,13 @@ fn export(
             }
         }
     };
-    let r = drape::map_orientations(run, mesh, &units, &out).map_err(compare_error)?;
+    let claim = exit::claim_output(&out)?;
+    exit::quit_at_once_on_signal();
+    let r = exit::settle(
+        vec![claim],
+        drape::map_orientations(run, mesh, &units, &out)
+            .map_err(|e| compare_error_writing(e, "writing the orientations")),
+    )?;
     println!(
         "mapped            {} elements of {} onto the formed part of {}",
         r.mapped.len(),
@@ -1303,5 +1365,24 @@ fn export(
         units.name
     );
     println!("                  {} (lengths in mm)", r.csv.display());
-    Ok(ExitCode::SUCCESS)
+    if let Some((label, why)) = r.missing.first() {
+        eprintln!(
+            "warning: {} elements have no orientation (listed in the include's set {}, empty \
+             fields in the table); element {label}: {why}",
+            r.missing.len(),
+            drape_io::results::export::names::NO_ORIENTATION
+        );
+    }
+    if let Some(why) = &r.source_unknown {
+        eprintln!("note: {why} (the include's header says so too)");
+    }
+    // A partial drape exported looks like a finished one to whatever reads
+    // the files next: the header says so, and the exit code does.
+    Ok(match &r.source_not_completed {
+        Some(why) => {
+            eprintln!("error: {why} (the include's header says so too)");
+            ExitCode::from(exit::FAILED)
+        }
+        None => ExitCode::SUCCESS,
+    })
 }

@@ -17,6 +17,13 @@
 //! column names say. An Abaqus/CAE file is read with its parts and
 //! instances; as the include names elements by the part's labels, which
 //! repeat between instances, the mesh must have one instance at most.
+//!
+//! Nothing that cannot be computed is written as a number: a mesh beyond
+//! reach (a coordinate not finite or past 10¹² mm) is refused, an element
+//! edge-on to the fibres is listed as missing with the reason
+//! ([`drape_io::results::export::Orientations::missing`]), and a source
+//! run that did not complete is named in the include's header
+//! ([`MappedReport::source_not_completed`]; the command exits 1 on it).
 
 use std::path::{Path, PathBuf};
 
@@ -68,6 +75,38 @@ pub struct MappedReport {
     /// after its unit): less than 1 mm or more than 10 m is most likely a
     /// mesh in another unit than the one given.
     pub mesh_across_mm: f64,
+    /// Why the source run is not a finished drape (its summary says it
+    /// failed or was stopped), or None. The include's header says it too.
+    pub source_not_completed: Option<String>,
+    /// Why the source run's state is unknown (no readable summary: orientations
+    /// written by hand or by another tool), or None. In the header too.
+    pub source_unknown: Option<String>,
+    /// Elements written without values (label, why): a direction that
+    /// cannot be computed. Listed in the include's `DRAPE_NO_ORIENTATION`.
+    pub missing: Vec<(i64, String)>,
+}
+
+/// The state of the run in `run`: (why it is not a finished drape, why its
+/// state is unknown); both None when its summary says `completed`.
+fn source_state(run: &Path) -> (Option<String>, Option<String>) {
+    match drape_io::results::read::read_summary(run) {
+        Ok(s) if s.status == "completed" => (None, None),
+        Ok(s) => (
+            Some(format!(
+                "the source run {} {} at t = {} s{}: these are the orientations of its last frame, \
+             not of a finished drape",
+                run.display(),
+                s.status,
+                s.time,
+                s.reason.map(|r| format!(" ({r})")).unwrap_or_default()
+            )),
+            None,
+        ),
+        Err(e) => (
+            None,
+            Some(format!("whether the source run finished is unknown ({e})")),
+        ),
+    }
 }
 
 /// Maps the orientations of the results folder `run` onto the mesh file
@@ -117,8 +156,49 @@ pub fn map_orientations(
         |(l, h), x| (l.inf(x), h.sup(x)),
     );
     let mesh_across_mm = (high - low).norm();
-    let mapped =
+    // Coordinates past ~1e150 mm square to infinity in a distance: no
+    // closest point means anything there.
+    const FARTHEST_MM: f64 = 1e12;
+    if let Some(p) = target
+        .x0
+        .iter()
+        .find(|p| !p.iter().all(|v| v.is_finite() && v.abs() <= FARTHEST_MM))
+    {
+        return Err(input(format!(
+            "{}: a node at ({:e}, {:e}, {:e}) mm (in {}): coordinates must be finite and within \
+             {FARTHEST_MM:e} mm to be placed against the formed part: is the mesh in another \
+             unit (give --units or --scale), or broken?",
+            mesh.display(),
+            p.x,
+            p.y,
+            p.z,
+            units.name
+        )));
+    }
+    let mut mapped =
         map_onto(&source, &target).map_err(|e| input(format!("{}: {e}", source_path.display())))?;
+    let distance = mapped.distance.clone().unwrap_or_default();
+    if let Some((k, d)) = drape_io::finite::first_non_finite(distance.iter().copied()) {
+        return Err(input(format!(
+            "{}: element {}: its distance to the formed part of {} is {d}: the mesh cannot be \
+             placed against it (is it in another unit, or far from the part?)",
+            mesh.display(),
+            mapped.labels[k],
+            run.display()
+        )));
+    }
+    let (source_not_completed, source_unknown) = source_state(run);
+    mapped
+        .notes
+        .extend(source_not_completed.iter().chain(&source_unknown).cloned());
+    let missing: Vec<(i64, String)> = mapped
+        .incomplete()
+        .into_iter()
+        .map(|(e, why)| (mapped.labels[e], why))
+        .collect();
+    mapped
+        .check_finite()
+        .map_err(|e| input(format!("{}: {e}", mesh.display())))?;
     let stem = mesh
         .file_stem()
         .map_or_else(|| "mesh".to_owned(), |s| s.to_string_lossy().into_owned());
@@ -135,7 +215,6 @@ pub fn map_orientations(
             source,
         })?;
     }
-    let distance = mapped.distance.clone().unwrap_or_default();
     let max_distance =
         distance
             .iter()
@@ -157,5 +236,8 @@ pub fn map_orientations(
         mean_distance,
         thickness,
         mesh_across_mm,
+        source_not_completed,
+        source_unknown,
+        missing,
     })
 }

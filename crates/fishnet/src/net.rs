@@ -275,6 +275,63 @@ enum Aim<'a> {
 }
 
 impl NetSpec {
+    /// The lattice the net is built on: `[i_min, i_max, j_min, j_max]`,
+    /// crossing indices from the seed (0, 0), covering every cell whose
+    /// flat centre can lie in the outline and one more all round. Clamped
+    /// (at ±2²⁹) for a spacing so small that the indices would overflow.
+    pub fn lattice_bounds(&self) -> [i32; 4] {
+        let (warp0, weft0) = self.fibre_axes();
+        let [dw, df] = self.spacing;
+        let o = &self.outline;
+        let origin = Vector3::new(self.seed[0], self.seed[1], o.center.z);
+        // Cells of the outline: flat centre inside the rectangle.
+        let lattice = |p: &Vector3<f64>| {
+            let r = p - origin;
+            (r.dot(&warp0) / dw, r.dot(&weft0) / df)
+        };
+        let (mut xi, mut eta) = (
+            [f64::INFINITY, f64::NEG_INFINITY],
+            [f64::INFINITY, f64::NEG_INFINITY],
+        );
+        for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            let corner = o.center + Vector3::new(0.5 * sx * o.width, 0.5 * sy * o.height, 0.0);
+            let (a, b) = lattice(&corner);
+            xi = [xi[0].min(a), xi[1].max(a)];
+            eta = [eta[0].min(b), eta[1].max(b)];
+        }
+        // `as i32` saturates; ±2²⁹ keeps the ± 2 below and the span
+        // (i_max − i_min + 1) from overflowing i32.
+        let index = |v: f64| (v as i32).clamp(-(1 << 29), 1 << 29);
+        [
+            (index((xi[0] - 0.5).floor()) - 1).min(0),
+            (index((xi[1] - 0.5).ceil()) + 2).max(0),
+            (index((eta[0] - 0.5).floor()) - 1).min(0),
+            (index((eta[1] - 0.5).ceil()) + 2).max(0),
+        ]
+    }
+
+    /// Crossings of the lattice ([`Self::lattice_bounds`]).
+    pub fn lattice_crossings(&self) -> u64 {
+        let [i_min, i_max, j_min, j_max] = self.lattice_bounds();
+        let span = |a: i32, b: i32| (i64::from(b) - i64::from(a) + 1) as u64;
+        span(i_min, i_max) * span(j_min, j_max)
+    }
+
+    /// The bytes [`Net::drape`] allocates for this spec at most, from the
+    /// sizes of its own arrays: per crossing its position, status and
+    /// `needed` flag, and per lattice cell its index into the draped cells
+    /// and, if draped, the cell. The results drawn from the net
+    /// ([`Net::results`]) and written from them take more; the caller adds
+    /// those.
+    pub fn lattice_bytes(&self) -> u64 {
+        let per_crossing = std::mem::size_of::<Vector3<f64>>()
+            + std::mem::size_of::<NodeStatus>()
+            + std::mem::size_of::<bool>()
+            + std::mem::size_of::<u32>()
+            + std::mem::size_of::<NetCell>();
+        self.lattice_crossings().saturating_mul(per_crossing as u64)
+    }
+
     fn fibre_axes(&self) -> (Vector3<f64>, Vector3<f64>) {
         // Multiples of 90° exactly, as the blanks snap them: no 6e-17
         // components in a 0/90 net.
@@ -315,33 +372,20 @@ impl Net {
         let o = &spec.outline;
         let origin = Vector3::new(spec.seed[0], spec.seed[1], o.center.z);
 
-        // Cells of the outline: flat centre inside the rectangle.
-        let lattice = |p: &Vector3<f64>| {
-            let r = p - origin;
-            (r.dot(&warp0) / dw, r.dot(&weft0) / df)
-        };
-        let (mut xi, mut eta) = (
-            [f64::INFINITY, f64::NEG_INFINITY],
-            [f64::INFINITY, f64::NEG_INFINITY],
-        );
-        for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-            let corner = o.center + Vector3::new(0.5 * sx * o.width, 0.5 * sy * o.height, 0.0);
-            let (a, b) = lattice(&corner);
-            xi = [xi[0].min(a), xi[1].max(a)];
-            eta = [eta[0].min(b), eta[1].max(b)];
-        }
-        let i_min = ((xi[0] - 0.5).floor() as i32 - 1).min(0);
-        let i_max = ((xi[1] - 0.5).ceil() as i32 + 2).max(0);
-        let j_min = ((eta[0] - 0.5).floor() as i32 - 1).min(0);
-        let j_max = ((eta[1] - 0.5).ceil() as i32 + 2).max(0);
+        let [i_min, i_max, j_min, j_max] = spec.lattice_bounds();
         let (ni, nj) = ((i_max - i_min + 1) as usize, (j_max - j_min + 1) as usize);
-        let cells_too_many = (ni as u64) * (nj as u64) > 50_000_000;
-        if cells_too_many {
+        // Indices into the lattice are u32 (`cell_of`) and i32 (i, j): a
+        // lattice past them cannot be addressed. Whether it fits the
+        // machine's memory is the caller's to check, from
+        // [`NetSpec::lattice_bytes`], before it asks (drape's kinematic
+        // command does).
+        if (ni as u64) * (nj as u64) >= u64::from(u32::MAX) {
             return Err(FishnetError::Invalid {
                 field: "spacing",
                 what: format!(
-                    "{:?} mm on a {} × {} mm blank makes more than 50 million crossings",
-                    spec.spacing, o.width, o.height
+                    "{:?} mm on a {} × {} mm blank makes {} × {} crossings, more than a net \
+                     can index (2³² − 1)",
+                    spec.spacing, o.width, o.height, ni, nj
                 ),
             });
         }

@@ -9,6 +9,7 @@
 //! What it is not: no mechanics and no time loop.
 
 pub mod atomic;
+pub mod finite;
 pub mod mesh_import;
 pub mod results;
 pub mod scene;

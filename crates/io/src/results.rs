@@ -771,6 +771,12 @@ impl ResultsDir {
         title: &str,
     ) -> Result<(), ResultsError> {
         let o = export::Orientations::of_frame(model, state, fields, title);
+        // No NaN reaches the files: what cannot be written is an error
+        // naming the file (nothing written).
+        o.check_finite().map_err(|e| ResultsError {
+            path: self.dir.join("orientations.inp"),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidData, e),
+        })?;
         self.write_file("orientations.inp", o.to_inp().as_bytes())?;
         self.write_file("orientations.csv", o.to_csv().as_bytes())
     }

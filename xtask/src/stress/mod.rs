@@ -21,6 +21,7 @@
 //! `target/stress/<row>/`.
 
 mod edges;
+mod folders;
 mod generate;
 mod steps;
 
@@ -775,6 +776,11 @@ pictures = false
         name: "damaged mesh files",
         quick: true,
         run: |ctx| generate::damaged_meshes(ctx, if ctx.quick { 24 } else { 160 }),
+    },
+    Case {
+        name: "every writing command into unusable folders",
+        quick: true,
+        run: folders::unusable_folders,
     },
 ];
 

@@ -87,6 +87,15 @@ pub struct Orientations {
     /// For mapped orientations: each element's distance to the surface the
     /// values were taken from (mm).
     pub distance: Option<Vec<f64>>,
+    /// Elements whose fibre directions could not be computed (index, why):
+    /// written without distribution values and listed in the element set
+    /// `DRAPE_NO_ORIENTATION` of the include, with empty fields in the
+    /// table. Elements with a value that is not finite join them
+    /// ([`Self::incomplete`]).
+    pub missing: Vec<(usize, String)>,
+    /// Lines the include's header carries for its reader (the source
+    /// run's state, when it did not complete).
+    pub notes: Vec<String>,
 }
 
 /// The names the include defines.
@@ -101,6 +110,8 @@ pub mod names {
     pub const YARN_ANGLE: &str = "DRAPE_YARN_ANGLE";
     /// The distribution of the thickness.
     pub const THICKNESS: &str = "DRAPE_THICKNESS";
+    /// The element set of the elements without values.
+    pub const NO_ORIENTATION: &str = "DRAPE_NO_ORIENTATION";
     /// The element set of every element.
     pub const PLY: &str = "DRAPE_PLY";
 }
@@ -131,7 +142,52 @@ impl Orientations {
             thickness: fields.thickness.clone(),
             nominal_thickness: nominal,
             distance: None,
+            missing: Vec::new(),
+            notes: Vec::new(),
         }
+    }
+
+    /// The elements written without values (index, why): those in
+    /// [`Self::missing`], then those with a direction, shear angle or
+    /// thickness that is not finite.
+    pub fn incomplete(&self) -> Vec<(usize, String)> {
+        let mut out = self.missing.clone();
+        for e in 0..self.len() {
+            if out.iter().any(|(m, _)| *m == e) {
+                continue;
+            }
+            let values = self.warp[e]
+                .iter()
+                .chain(self.weft[e].iter())
+                .copied()
+                .chain([self.shear_deg[e], self.thickness[e]]);
+            if crate::finite::first_non_finite(values).is_some() {
+                out.push((
+                    e,
+                    "a direction, shear angle or thickness that is not a finite number".into(),
+                ));
+            }
+        }
+        out.sort_by_key(|(e, _)| *e);
+        out
+    }
+
+    /// Checks what must be finite for the files to mean anything: the
+    /// nodes, the centroids, the nominal thickness and the distances.
+    /// (Per-element values that are not finite are written as missing,
+    /// [`Self::incomplete`].)
+    pub fn check_finite(&self) -> Result<(), String> {
+        use crate::finite::check;
+        check(
+            "node coordinates",
+            self.nodes.iter().flat_map(|p| p.iter().copied()),
+        )?;
+        check(
+            "element centroids",
+            self.centroid.iter().flat_map(|p| p.iter().copied()),
+        )?;
+        check("the nominal thickness", [self.nominal_thickness])?;
+        check("distances", self.distance.iter().flatten().copied())
     }
 
     /// Number of elements.
@@ -171,6 +227,24 @@ impl Orientations {
             "** *SHELL SECTION, ELSET=DRAPE_PLY, MATERIAL=FABRIC, ORIENTATION=DRAPE_WARP\n",
             "** DRAPE_THICKNESS, 5\n",
         ));
+        for note in &self.notes {
+            let _ = writeln!(s, "** NOTE: {note}");
+        }
+        let incomplete = self.incomplete();
+        let skip: std::collections::BTreeSet<usize> = incomplete.iter().map(|(e, _)| *e).collect();
+        if !incomplete.is_empty() {
+            let _ = writeln!(
+                s,
+                "** {} elements have no values (listed in {}): they take the distributions' \
+                 defaults (the global axes, 90 degrees, the nominal thickness); give them an \
+                 orientation of your own. Why:",
+                incomplete.len(),
+                names::NO_ORIENTATION
+            );
+            for (e, why) in &incomplete {
+                let _ = writeln!(s, "**   element {}: {why}", self.labels[*e]);
+            }
+        }
         if !self.nodes.is_empty() {
             s.push_str("*NODE, NSET=DRAPE_NODES\n");
             for (i, p) in self.nodes.iter().enumerate() {
@@ -203,13 +277,23 @@ impl Orientations {
             }
             let _ = writeln!(s, "*ELSET, ELSET={}\n{}", names::PLY, sets.join(", "));
         }
+        if !incomplete.is_empty() {
+            let _ = writeln!(s, "*ELSET, ELSET={}", names::NO_ORIENTATION);
+            for chunk in incomplete.chunks(16) {
+                let labels: Vec<String> = chunk
+                    .iter()
+                    .map(|(e, _)| self.labels[*e].to_string())
+                    .collect();
+                let _ = writeln!(s, "{}", labels.join(", "));
+            }
+        }
         let _ = writeln!(
             s,
             "*DISTRIBUTION TABLE, NAME={0}_TABLE\nCOORD3D, COORD3D\n\
              *DISTRIBUTION, NAME={0}, LOCATION=ELEMENT, TABLE={0}_TABLE\n, 1, 0, 0, 0, 1, 0",
             names::AXES
         );
-        for e in 0..self.len() {
+        for e in (0..self.len()).filter(|e| !skip.contains(e)) {
             let (a, b) = (self.warp[e], self.weft[e]);
             let _ = writeln!(
                 s,
@@ -229,7 +313,7 @@ impl Orientations {
              *DISTRIBUTION, NAME={0}, LOCATION=ELEMENT, TABLE={0}_TABLE\n, 90",
             names::YARN_ANGLE
         );
-        for e in 0..self.len() {
+        for e in (0..self.len()).filter(|e| !skip.contains(e)) {
             let _ = writeln!(
                 s,
                 "{}, {}",
@@ -244,7 +328,7 @@ impl Orientations {
             names::THICKNESS,
             length(self.nominal_thickness)
         );
-        for e in 0..self.len() {
+        for e in (0..self.len()).filter(|e| !skip.contains(e)) {
             let _ = writeln!(s, "{}, {}", self.labels[e], length(self.thickness[e]));
         }
         let _ = writeln!(
@@ -266,8 +350,12 @@ impl Orientations {
     /// The text of the CSV table: header
     /// `element,x_mm,y_mm,z_mm,warp_x,warp_y,warp_z,weft_x,weft_y,weft_z,shear_deg,yarn_angle_deg,thickness_mm`
     /// (and `,distance_mm` for mapped orientations), one row per element;
-    /// x, y, z are the element's centroid.
+    /// x, y, z are the element's centroid. An element of
+    /// [`Self::incomplete`] has empty fields for its directions, angles and
+    /// thickness (never `NaN`): a value that could not be computed.
     pub fn to_csv(&self) -> String {
+        let skip: std::collections::BTreeSet<usize> =
+            self.incomplete().into_iter().map(|(e, _)| e).collect();
         let mut s = String::with_capacity(240 * (self.len() + 1));
         s.push_str(
             "element,x_mm,y_mm,z_mm,warp_x,warp_y,warp_z,weft_x,weft_y,weft_z,shear_deg,\
@@ -284,7 +372,7 @@ impl Orientations {
                 .get(e)
                 .copied()
                 .unwrap_or(Vector3::repeat(f64::NAN));
-            for v in [
+            for (k, v) in [
                 c.x,
                 c.y,
                 c.z,
@@ -300,9 +388,15 @@ impl Orientations {
             ]
             .into_iter()
             .chain(self.distance.as_ref().map(|d| d[e]))
+            .enumerate()
             {
                 s.push(',');
-                s.push_str(&fmt_f64(v));
+                // The centroid (0..3) and the distance are always written;
+                // an incomplete element's values are not.
+                let withheld = (3..12).contains(&k) && skip.contains(&e);
+                if !withheld {
+                    s.push_str(&crate::finite::or_empty(v, fmt_f64));
+                }
             }
             s.push('\n');
         }
@@ -463,5 +557,79 @@ impl Orientations {
     pub fn read_inp(path: &Path) -> Result<Self, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
         Self::parse_inp(&text, path)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three flat triangles: the first whole, the second without a
+    /// direction (edge-on), the third with a thickness that is not finite.
+    fn three() -> Orientations {
+        let x = Vector3::x();
+        let y = Vector3::y();
+        Orientations {
+            title: "three".into(),
+            nodes: vec![
+                Vector3::new(0.0, 0.0, 0.0),
+                Vector3::new(1.0, 0.0, 0.0),
+                Vector3::new(0.0, 1.0, 0.0),
+                Vector3::new(1.0, 1.0, 0.0),
+            ],
+            elements: vec![vec![0, 1, 2], vec![1, 3, 2], vec![0, 1, 3]],
+            labels: vec![1, 2, 3],
+            centroid: vec![Vector3::repeat(0.3); 3],
+            warp: vec![x, Vector3::repeat(f64::NAN), x],
+            weft: vec![y, y, y],
+            shear_deg: vec![0.0, 1.0, 2.0],
+            thickness: vec![0.5, 0.5, f64::INFINITY],
+            nominal_thickness: 0.5,
+            distance: None,
+            missing: vec![(1, "edge-on".into())],
+            notes: vec!["the source run stopped".into()],
+        }
+    }
+
+    #[test]
+    fn values_that_cannot_be_written_are_listed_as_missing_never_as_nan() {
+        let o = three();
+        assert_eq!(
+            o.incomplete().iter().map(|(e, _)| *e).collect::<Vec<_>>(),
+            [1, 2]
+        );
+        assert!(o.check_finite().is_ok());
+        let inp = o.to_inp();
+        let csv = o.to_csv();
+        for text in [&inp, &csv] {
+            let lower = text.to_ascii_lowercase();
+            assert!(!lower.contains("nan") && !lower.contains("inf"), "{text}");
+        }
+        assert!(inp.contains("** NOTE: the source run stopped\n"), "{inp}");
+        assert!(
+            inp.contains("*ELSET, ELSET=DRAPE_NO_ORIENTATION\n2, 3\n"),
+            "{inp}"
+        );
+        assert!(inp.contains("**   element 2: edge-on\n"), "{inp}");
+        // Read back: only the whole element has values.
+        let back = Orientations::parse_inp(&inp, Path::new("three.inp")).unwrap();
+        assert_eq!(back.labels, [1]);
+        assert_eq!(back.thickness, [0.5]);
+        // The table: the centroid always, the values only where whole.
+        let rows: Vec<&str> = csv.lines().skip(1).collect();
+        assert_eq!(rows[0], "1,0.3,0.3,0.3,1,0,0,0,1,0,0,90,0.5");
+        assert_eq!(rows[1], "2,0.3,0.3,0.3,,,,,,,,,");
+        assert_eq!(rows[2], "3,0.3,0.3,0.3,,,,,,,,,");
+    }
+
+    #[test]
+    fn a_node_or_a_nominal_thickness_that_is_not_finite_is_an_error() {
+        let mut o = three();
+        o.nodes[3].z = f64::NAN;
+        let e = o.check_finite().unwrap_err();
+        assert!(e.contains("node coordinates: value 12 is NaN"), "{e}");
+        let mut o = three();
+        o.nominal_thickness = f64::NAN;
+        assert!(o.check_finite().unwrap_err().contains("nominal thickness"));
     }
 }

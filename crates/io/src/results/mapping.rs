@@ -244,15 +244,33 @@ pub fn map_onto(source: &Orientations, target: &ImportedMesh) -> Result<Orientat
         .unwrap_or_else(Vector3::z);
         let s = field.sample(&centroid);
         let v = &s.values;
-        let in_plane = |d: Vector3<f64>| {
-            (d - normal * d.dot(&normal))
-                .try_normalize(1e-9)
-                .unwrap_or_else(|| Vector3::repeat(f64::NAN))
-        };
+        // A yarn along the element's normal has no direction in its plane:
+        // missing, with the reason, not a NaN direction.
+        let in_plane = |d: Vector3<f64>| (d - normal * d.dot(&normal)).try_normalize(1e-9);
+        let (warp, weft) = (
+            in_plane(Vector3::new(v[0], v[1], v[2])),
+            in_plane(Vector3::new(v[3], v[4], v[5])),
+        );
+        let edge_on: Vec<&str> = [(warp.is_none(), "warp"), (weft.is_none(), "weft")]
+            .iter()
+            .filter(|(none, _)| *none)
+            .map(|(_, name)| *name)
+            .collect();
+        if !edge_on.is_empty() {
+            out.missing.push((
+                out.labels.len(),
+                format!(
+                    "the formed part's {} runs along this element's normal (the element is \
+                     edge-on to the fibres): no direction in its plane",
+                    edge_on.join(" and ")
+                ),
+            ));
+        }
+        let none = Vector3::repeat(f64::NAN);
         out.labels.push(label);
         out.centroid.push(centroid);
-        out.warp.push(in_plane(Vector3::new(v[0], v[1], v[2])));
-        out.weft.push(in_plane(Vector3::new(v[3], v[4], v[5])));
+        out.warp.push(warp.unwrap_or(none));
+        out.weft.push(weft.unwrap_or(none));
         out.shear_deg.push(v[6]);
         out.thickness.push(v[7]);
         if let Some(d) = &mut out.distance {

@@ -209,3 +209,29 @@ fn a_spring_of_subnormal_length_names_its_anchor_offset() {
     )
     .unwrap();
 }
+
+#[test]
+fn a_spring_stiffer_or_stronger_than_physical_names_its_key() {
+    // Past 1e300 N/mm the stable step underflowed and the fault surfaced
+    // as mass scaling's (`simulation.mass_scaling_dt`), not the spring's.
+    let e = refused(
+        "imported-plate.toml",
+        "springs.0.stiffness",
+        "1.7976931348623157e308",
+        "springs[0].stiffness",
+    );
+    assert!(e.message.contains("N/mm"), "{e}");
+    refused(
+        "imported-plate.toml",
+        "springs.0.stiffness",
+        "2e12",
+        "springs[0].stiffness",
+    );
+    refused(
+        "imported-plate.toml",
+        "springs.0.preload",
+        "1e300",
+        "springs[0].preload",
+    );
+    assert!(scene("imported-plate.toml", &[("springs.0.stiffness", "1e11")]).is_ok());
+}

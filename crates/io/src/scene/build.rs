@@ -763,10 +763,8 @@ pub(super) fn build(
                 ForceTable::new(t).map_err(|e| at.error(&format!("{here}.table"), e.to_string()))?
             }
             (None, Some(k)) => {
-                positive(at, &format!("{here}.stiffness"), k)?;
-                if !(s.preload.is_finite() && s.preload >= 0.0) {
-                    return Err(at.error(&format!("{here}.preload"), "expected a force ≥ 0"));
-                }
+                limits::stiffness(at, &format!("{here}.stiffness"), k)?;
+                limits::force(at, &format!("{here}.preload"), s.preload)?;
                 ForceTable::linear(k, s.preload)
             }
             _ => {

@@ -52,6 +52,50 @@ pub(super) fn length(at: &Locator<'_>, field: &str, v: f64) -> Result<f64, Scene
     Ok(v)
 }
 
+/// The stiffest spring drape accepts (N/mm). A steel block 1 m² across
+/// and 1 mm long is 2.1e11 N/mm; a stiffer holder is a typing slip, and
+/// past about 1e300 the explicit step it would need underflows, so the
+/// value would otherwise surface as a mass-scaling or time-step fault.
+pub const MAX_STIFFNESS_N_PER_MM: f64 = 1e12;
+
+/// The largest force drape accepts (N): 1e12 N is about 1e8 tonnes-force.
+pub const MAX_FORCE_N: f64 = 1e12;
+
+/// A spring stiffness (N/mm): positive and at most
+/// [`MAX_STIFFNESS_N_PER_MM`].
+pub(super) fn stiffness(at: &Locator<'_>, field: &str, k: f64) -> Result<f64, SceneError> {
+    if !(k.is_finite() && k > 0.0) {
+        return Err(at.error(
+            field,
+            format!("{k} is not allowed: expected a positive stiffness in N/mm"),
+        ));
+    }
+    if k > MAX_STIFFNESS_N_PER_MM {
+        return Err(at.error(
+            field,
+            format!(
+                "{k:e} N/mm is not allowed: a spring stiffer than {MAX_STIFFNESS_N_PER_MM:e} \
+                 N/mm (a steel block 1 m² across and 1 mm long is 2.1e11 N/mm) is a slip"
+            ),
+        ));
+    }
+    Ok(k)
+}
+
+/// A force (N): finite, at least 0, at most [`MAX_FORCE_N`].
+pub(super) fn force(at: &Locator<'_>, field: &str, f: f64) -> Result<f64, SceneError> {
+    if !(f.is_finite() && f >= 0.0) {
+        return Err(at.error(field, "expected a force ≥ 0"));
+    }
+    if f > MAX_FORCE_N {
+        return Err(at.error(
+            field,
+            format!("{f:e} N is not allowed: forces must be at most {MAX_FORCE_N:e} N"),
+        ));
+    }
+    Ok(f)
+}
+
 /// The message for `value` past the range, as `what` (mm).
 pub(super) fn beyond(value: f64, what: &str) -> String {
     format!(

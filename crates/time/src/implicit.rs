@@ -28,7 +28,11 @@
 //! correction within `displacement_tolerance` times the increment's largest
 //! displacement, no node deeper than `gap_tolerance` in a tool nor a
 //! sticking one off its (regularised) stick law by more, no friction
-//! state changed, and every force-driven tool balanced. Stick is a stiff
+//! state changed, and every force-driven tool balanced; the first two
+//! also pass at the round-off floor ([`crate::round_off`]), which a small
+//! increment's inertia term would otherwise put above the tolerances. At
+//! the end time the blank must be outside every tool
+//! ([`crate::completion`]), whatever `gap_tolerance` let through. Stick is a stiff
 //! tangential spring by default ([`ELASTIC_SLIP`]), which makes the
 //! friction force continuous in the slip, so pairs at the edge of the
 //! friction cone settle instead of cycling between stick and slip. With

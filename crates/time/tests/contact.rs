@@ -532,3 +532,16 @@ fn a_run_that_ends_with_the_blank_through_a_tool_fails() {
         );
     }
 }
+
+/// The end check's tolerance is the lesser of a tenth of the thickness
+/// (glass, 0.57 mm) and a hundredth of the shortest element edge: 10 mm
+/// elements give the first, 0.1 mm ones the second.
+#[test]
+fn the_end_check_tolerance_follows_the_thickness_and_the_elements() {
+    let coarse = blank_model([40.0, 10.0], [4, 1], 0.0);
+    let fine = blank_model([4.0, 1.0], [40, 10], 0.0);
+    let tolerance = drape_time::completion::penetration_tolerance;
+    let thickness = 2.0 * coarse.contact_offset;
+    assert!((tolerance(&coarse) / (0.1 * thickness) - 1.0).abs() < 1e-12);
+    assert!((tolerance(&fine) / (0.01 * 0.1) - 1.0).abs() < 1e-9);
+}

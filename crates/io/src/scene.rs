@@ -27,6 +27,7 @@
 
 use std::path::{Path, PathBuf};
 
+mod implicit_checks;
 mod kinematic;
 mod limits;
 pub use kinematic::{KinematicSetup, KinematicSpec};

@@ -69,6 +69,31 @@ pub enum RunError {
         /// The node, the tool, the gap and why.
         fault: ContactFault,
     },
+    /// The run reached its end time with a node inside a tool deeper than
+    /// the physical tolerance ([`crate::completion`]): not a formed state.
+    #[error(
+        "step {step}, t = {time:.6e} s: at the end node {node} is {depth:.4e} mm inside tool `{tool}` \
+         ({count} node(s) deeper than the tolerance {tolerance:.3e} mm, the lesser of a tenth of the fabric's \
+         thickness and a hundredth of the shortest element edge): the contact was not enforced; {advice}"
+    )]
+    Penetration {
+        /// The last step.
+        step: u64,
+        /// Its time.
+        time: f64,
+        /// The deepest node.
+        node: usize,
+        /// The tool it is inside.
+        tool: String,
+        /// How deep (mm).
+        depth: f64,
+        /// The tolerance (mm).
+        tolerance: f64,
+        /// Nodes beyond the tolerance.
+        count: usize,
+        /// Which setting to change.
+        advice: String,
+    },
     /// The settings or the model cannot run.
     #[error("cannot run: {0}")]
     Setup(String),
@@ -83,7 +108,8 @@ impl RunError {
             | Self::NonFinite { step, time, .. }
             | Self::Unstable { step, time, .. }
             | Self::NoConvergence { step, time, .. }
-            | Self::ContactFault { step, time, .. } => Some((*step, *time)),
+            | Self::ContactFault { step, time, .. }
+            | Self::Penetration { step, time, .. } => Some((*step, *time)),
             Self::Setup(_) => None,
         }
     }

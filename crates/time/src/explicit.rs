@@ -878,6 +878,13 @@ impl<'m> Explicit<'m> {
                     what,
                 })?;
         }
+        if !stopped {
+            // Completed only with the blank outside every tool.
+            let u: Vec<f64> = self.contact.as_ref().map_or_else(Vec::new, |c| {
+                c.tool_state.iter().map(|t| t.displacement).collect()
+            });
+            crate::completion::check_at_end(model, state, &u, None)?;
+        }
         for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {
             if tool.is_force_driven() && !touched && !stopped {
                 self.warnings.push(format!(

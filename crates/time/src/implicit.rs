@@ -28,7 +28,11 @@
 //! correction within `displacement_tolerance` times the increment's largest
 //! displacement, no node deeper than `gap_tolerance` in a tool nor a
 //! sticking one off its (regularised) stick law by more, no friction
-//! state changed, and every force-driven tool balanced. Stick is a stiff
+//! state changed, and every force-driven tool balanced; the first two
+//! also pass at the round-off floor ([`crate::round_off`]), which a small
+//! increment's inertia term would otherwise put above the tolerances. At
+//! the end time the blank must be outside every tool
+//! ([`crate::completion`]), whatever `gap_tolerance` let through. Stick is a stiff
 //! tangential spring by default ([`ELASTIC_SLIP`]), which makes the
 //! friction force continuous in the slip, so pairs at the edge of the
 //! friction cone settle instead of cycling between stick and slip. With
@@ -67,6 +71,7 @@ use rayon::prelude::*;
 
 use crate::energy::{chunked_sum, chunked_sums};
 use crate::guard::{self, Guard, GuardSettings};
+use crate::round_off::RoundOffFloor;
 use crate::shared::{self, Constraints, ForcePass, PressurePass};
 use crate::tangent::{MembraneTangentChoice, SparseTangent};
 use crate::{
@@ -396,6 +401,27 @@ impl<'m> Implicit<'m> {
         ] {
             if let Some(v) = v {
                 positive(name, v)?;
+            }
+        }
+        // As the run resolves them: an increment below the smallest one
+        // allowed ends at its first cutback, with a non-finite residual.
+        let end = settings.end_time;
+        let min_h = settings.min_increment.unwrap_or(1e-9 * end);
+        for (name, h) in [
+            (
+                "initial increment",
+                settings.initial_increment.unwrap_or(end / 100.0),
+            ),
+            (
+                "largest increment",
+                settings.max_increment.unwrap_or(end / 20.0),
+            ),
+        ] {
+            if h < min_h {
+                return Err(RunError::Setup(format!(
+                    "the {name} {h:e} s is below the smallest increment {min_h:e} s \
+                     (`simulation.min_increment`)"
+                )));
             }
         }
         positive("force tolerance", settings.force_tolerance)?;
@@ -908,6 +934,14 @@ impl<'m> Implicit<'m> {
                     what,
                 })?;
         }
+        if !stopped {
+            // Completed only with the blank outside every tool, whatever
+            // the gap tolerance let Newton accept.
+            let u: Vec<f64> = self.contact.as_ref().map_or_else(Vec::new, |c| {
+                c.tool_state.iter().map(|t| t.displacement).collect()
+            });
+            crate::completion::check_at_end(model, state, &u, Some(self.settings.gap_tolerance))?;
+        }
         for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {
             if tool.is_force_driven() && !touched && !stopped {
                 self.warnings.push(format!(
@@ -1079,6 +1113,7 @@ impl<'m> Implicit<'m> {
             contact.begin(&self.x, &self.constraints.movable, inc);
         }
         let mass_factor = inc.mass_factor() + settings.damping * self.gamma / (self.beta * h);
+        let heaviest = self.mass.iter().copied().fold(0.0, f64::max);
         let floor = 1e-6 * self.size;
         let mut step_taken = false;
         let mut alpha = 1.0;
@@ -1210,9 +1245,22 @@ impl<'m> Implicit<'m> {
             if friction_changes > 0 {
                 switched += 1;
             }
-            let converged = res <= settings.force_tolerance * scale
+            let forces_pass = (res <= settings.force_tolerance * scale
                 && (newton == 0
-                    || correction <= settings.displacement_tolerance * increment.max(floor))
+                    || correction <= settings.displacement_tolerance * increment.max(floor)))
+                || (newton > 0 && {
+                    // Below the tolerance f64 cannot go: a small enough
+                    // increment puts the inertia term's round-off above it
+                    // (see `crate::round_off`).
+                    let coordinate = self.x.iter().map(|x| x.amax()).fold(0.0, f64::max);
+                    RoundOffFloor::new(
+                        heaviest * mass_factor + self.tangent.max_stiffness,
+                        coordinate,
+                        scale,
+                    )
+                    .reached(res, correction)
+                });
+            let converged = forces_pass
                 && pen <= settings.gap_tolerance
                 && stick_slip <= settings.gap_tolerance
                 && friction_changes == 0

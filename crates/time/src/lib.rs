@@ -49,6 +49,7 @@
 //! assert!((state.x[model.node_set("right").unwrap()[0] as usize].x - 20.1).abs() < 1e-9);
 //! ```
 
+pub mod completion;
 mod energy;
 mod error;
 mod explicit;
@@ -56,6 +57,7 @@ pub mod guard;
 mod implicit;
 mod observer;
 pub mod profile;
+pub mod round_off;
 pub mod scaling;
 mod shared;
 pub mod tangent;

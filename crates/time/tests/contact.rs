@@ -7,7 +7,9 @@ use drape_contact::{ContactStatus, ProfileSegment, Surface, Tool, ToolMotion};
 use drape_elements::{FabricSection, MembraneBatch};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion, NodalLoad};
-use drape_time::{Explicit, ExplicitSettings, Frame, NoObserver, Observer};
+use drape_time::{
+    Explicit, ExplicitSettings, Frame, Implicit, ImplicitSettings, NoObserver, Observer, RunError,
+};
 use nalgebra::Vector3;
 
 const G: f64 = 9810.0;
@@ -433,4 +435,113 @@ fn a_blank_resting_at_zero_gap_reads_in_contact() {
             .unwrap();
         assert_eq!(statuses, vec![expected; 9], "lifted by {lift} mm");
     }
+}
+
+/// A blank 1 mm above a table that rises 10 mm over 0.05 s (smooth step),
+/// under gravity: the table lifts the blank (and, as it slows down, lets
+/// it fly off and land again).
+fn lifted_by_a_table() -> Model {
+    let mut model = blank_model([40.0, 10.0], [4, 1], 1.0);
+    model.gravity = Vector3::new(0.0, 0.0, -G);
+    model.tools.push(Tool {
+        name: "table".into(),
+        surface: Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
+        motion: ToolMotion::Displacement {
+            direction: Vector3::z(),
+            distance: 10.0,
+            amplitude: Amplitude::SmoothStep { duration: 0.05 },
+        },
+        friction: 0.0,
+    });
+    model
+}
+
+/// Issue 29, fault 5: an implicit run whose `gap_tolerance` (1e8 mm) lets
+/// Newton accept the blank through the table ended "completed". The end
+/// check fails it, naming the node, the tool, the depth and the key; the
+/// state is the end's (the last frame), so the results are kept. The same
+/// run with the default tolerance, and the explicit driver, rest on the
+/// table and complete: the check does not fire on contact that holds.
+#[test]
+fn a_run_that_ends_with_the_blank_through_a_tool_fails() {
+    let model = lifted_by_a_table();
+    let tolerance = drape_time::completion::penetration_tolerance(&model);
+    // A tenth of the glass's thickness (the elements are 10 mm).
+    assert!((tolerance / (0.2 * model.contact_offset) - 1.0).abs() < 1e-15);
+    let settings = |gap_tolerance| ImplicitSettings {
+        end_time: 0.05,
+        frames: 5,
+        gap_tolerance,
+        ..ImplicitSettings::default()
+    };
+    let mut state = model.initial_state();
+    let outcome = Implicit::new(&model, settings(1e8))
+        .unwrap()
+        .run(&mut state, &mut NoObserver);
+    let Err(RunError::Penetration {
+        node,
+        tool,
+        depth,
+        count,
+        advice,
+        time,
+        ..
+    }) = &outcome
+    else {
+        panic!("{outcome:?}");
+    };
+    assert_eq!(tool, "table");
+    assert_eq!(*count, model.node_count(), "{outcome:?}");
+    assert!((time - 0.05).abs() < 1e-12);
+    // The reported depth is the node's, at the end state the run kept
+    // (the table 10 mm up).
+    let depth_there = model.contact_offset - (state.x[*node].z - 10.0);
+    assert!((depth - depth_there).abs() < 1e-12, "{depth} {depth_there}");
+    assert!(*depth > 5.0, "{depth}");
+    assert!(advice.contains("simulation.gap_tolerance"), "{advice}");
+    let message = outcome.unwrap_err().to_string();
+    assert!(message.contains("inside tool `table`"), "{message}");
+
+    for explicit in [false, true] {
+        let mut state = model.initial_state();
+        let summary = if explicit {
+            let settings = ExplicitSettings {
+                end_time: 0.05,
+                frames: 5,
+                ..ExplicitSettings::default()
+            };
+            Explicit::new(&model, settings)
+                .unwrap()
+                .run(&mut state, &mut NoObserver)
+        } else {
+            Implicit::new(&model, settings(1e-9))
+                .unwrap()
+                .run(&mut state, &mut NoObserver)
+        };
+        assert!(summary.is_ok(), "explicit {explicit}: {summary:?}");
+        // Not inside the table, to well within the tolerance.
+        let deepest = state
+            .x
+            .iter()
+            .map(|x| model.contact_offset - (x.z - 10.0))
+            .fold(f64::NEG_INFINITY, f64::max);
+        eprintln!("explicit {explicit}: deepest {deepest:e} mm, tolerance {tolerance:e} mm");
+        assert!(
+            deepest < 1e-3 * tolerance,
+            "explicit {explicit}: {deepest:e}"
+        );
+    }
+}
+
+/// The end check's tolerance is the lesser of a tenth of the thickness
+/// (glass, 0.57 mm) and a hundredth of the shortest element edge: 10 mm
+/// elements give the first, 0.1 mm ones the second.
+#[test]
+fn the_end_check_tolerance_follows_the_thickness_and_the_elements() {
+    let coarse = blank_model([40.0, 10.0], [4, 1], 0.0);
+    let fine = blank_model([4.0, 1.0], [40, 10], 0.0);
+    let tolerance = drape_time::completion::penetration_tolerance;
+    let thickness = 2.0 * coarse.contact_offset;
+    assert!((tolerance(&coarse) / (0.1 * thickness) - 1.0).abs() < 1e-12);
+    assert!((tolerance(&fine) / (0.01 * 0.1) - 1.0).abs() < 1e-9);
 }

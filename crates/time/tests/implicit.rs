@@ -97,9 +97,12 @@ impl std::fmt::Display for Norms {
 /// strip stretched by 10 % in one increment with three Newton iterations
 /// allowed and a force tolerance below round-off fails on the iteration
 /// limit (no contact, no friction, no inverted element) until the
-/// increment is below the smallest, and the reasons add up to the
+/// increment is below the smallest, 1e-3 s, and the reasons add up to the
 /// cutbacks. The observer hears of each one, in order, with its reason
-/// and message.
+/// and message. (Three iterations do not take Newton to round-off from
+/// there, so the round-off floor (`drape_time::round_off`) accepts none of
+/// these attempts; with 1e-6 s it did accept the attempt at 1.2e-6 s,
+/// where three iterations do reach round-off.)
 #[test]
 fn cutbacks_are_counted_by_reason() {
     let model = clamped_strip(FibreRepresentation::Trusses, Vector3::new(4.0, 1.0, 0.0));
@@ -108,7 +111,7 @@ fn cutbacks_are_counted_by_reason() {
         frames: 1,
         initial_increment: Some(1.0),
         max_increment: Some(1.0),
-        min_increment: Some(1e-6),
+        min_increment: Some(1e-3),
         force_tolerance: 1e-14,
         displacement_tolerance: 1e-14,
         max_iterations: 3,
@@ -141,8 +144,8 @@ fn cutbacks_are_counted_by_reason() {
         h *= 0.25;
     }
     eprintln!("{totals:?}");
-    // From 1 s to below 1e-6 s by quarters: ten cutbacks at least.
-    assert!(totals.cutbacks >= 10, "{totals:?}");
+    // From 1 s to below 1e-3 s by quarters: five cutbacks at least.
+    assert!(totals.cutbacks >= 5, "{totals:?}");
     assert_eq!(totals.cutback_reasons.newton_limit, totals.cutbacks);
     assert_eq!(totals.cutback_reasons.total(), totals.cutbacks);
     assert_eq!(totals.wasted_iterations, 3 * totals.cutbacks);
@@ -210,5 +213,109 @@ fn mass_scaling_gives_the_implicit_driver_the_explicit_masses() {
     assert!(
         ((moment - exact) / exact).abs() < 1e-8,
         "Σ m̃·Δz = {moment:e}, ½·M·g·t² = {exact:e}"
+    );
+}
+
+/// Issue 29: with many frames (or a small `max_increment`) the increment
+/// is so small that one ulp of a coordinate costs more inertia force than
+/// the force tolerance: Newton's correction falls below an ulp, the
+/// residual stays, and every cutback made it worse, so the run failed
+/// ("residual 2.4e-2 N (force scale 2.4e-2 N), last correction 3e-16
+/// mm"). A free strip falling under gravity (exact: ½·g·t², which the
+/// Bossak scheme integrates exactly) with 20 000 frames in 4 ms (h = 2e-7
+/// s) now converges, and its positions at the 20 frames of a run with 20
+/// are the same to t²·ulp/h² = 4.5e-5 mm, the drift of one ulp of the
+/// height in every increment's acceleration, all of one sign (measured
+/// 9.4e-6 mm; the fall is 0.078 mm, and the 20-frame run is within 3e-9 mm
+/// of it, well within the force tolerance's ½·1e-6·g·t² = 7.8e-8 mm). Some increments were
+/// accepted at the round-off floor with a residual above the tolerance
+/// times the scale: those the test before it refused, as the first
+/// assertion shows, so this fails on the code before the floor.
+#[test]
+fn a_tight_frame_spacing_converges_as_a_coarse_one_does() {
+    // A dense strip (1e5 × the prepreg's mass: its weight, not its
+    // stiffness, sets the force scale) 1 m above the origin (an ulp of its
+    // height is 1.1e-13 mm): at h = 2e-7 s one ulp costs
+    // m·ulp/(β·h²) = 11 mm/s² × m, 1.1e-3 of the weight, far above the
+    // force tolerance 1e-6; at the 20 frames' 2e-4 s it is 1.1e-9 of it.
+    let mut model = strip(FibreRepresentation::Trusses);
+    model.gravity = Vector3::new(0.0, 0.0, -9810.0);
+    for x in model.x0.iter_mut() {
+        x.z += 1000.0;
+    }
+    for m in model.mass.iter_mut() {
+        *m *= 1e5;
+    }
+    let end = 0.004;
+    let run = |frames: usize| {
+        let settings = ImplicitSettings {
+            end_time: end,
+            frames,
+            ..ImplicitSettings::default()
+        };
+        let mut driver = Implicit::new(&model, settings.clone()).unwrap();
+        driver.record_newton();
+        let mut state = model.initial_state();
+        struct Frames(Vec<Vec<Vector3<f64>>>);
+        impl drape_time::Observer for Frames {
+            fn frame(&mut self, f: &drape_time::Frame<'_>) {
+                self.0.push(f.state.x.clone());
+            }
+        }
+        let mut frames_seen = Frames(Vec::new());
+        let outcome = driver.run(&mut state, &mut frames_seen);
+        assert!(outcome.is_ok(), "{frames} frames: {outcome:?}");
+        let above_tolerance = driver
+            .newton_record()
+            .iter()
+            .filter(|r| r.residual > settings.force_tolerance * r.scale)
+            .count();
+        (
+            frames_seen.0,
+            driver.newton_record().to_vec(),
+            above_tolerance,
+        )
+    };
+    let (fine, fine_record, _) = run(20_000);
+    let (coarse, _, _) = run(20);
+    // Accepted iterations (each increment's last) above the old test.
+    let mut accepted_above = 0;
+    for w in fine_record.windows(2) {
+        if w[1].increment != w[0].increment && w[0].residual > 1e-6 * w[0].scale {
+            accepted_above += 1;
+        }
+    }
+    assert!(accepted_above > 0, "no increment needed the floor");
+    assert_eq!((fine.len(), coarse.len()), (20_001, 21));
+    // Differences between the runs, and from the exact fall.
+    let (mut largest, mut fine_off, mut coarse_off) = (0.0f64, 0.0f64, 0.0f64);
+    for (k, x) in coarse.iter().enumerate() {
+        let t = end * k as f64 / 20.0;
+        for (i, (a, b)) in x.iter().zip(&fine[1000 * k]).enumerate() {
+            let exact = model.x0[i] - Vector3::new(0.0, 0.0, 0.5 * 9810.0 * t * t);
+            largest = largest.max((a - b).amax());
+            fine_off = fine_off.max((b - exact).amax());
+            coarse_off = coarse_off.max((a - exact).amax());
+        }
+    }
+    eprintln!(
+        "largest difference 20 000 vs 20 frames: {largest:e} mm; from the exact fall: {fine_off:e} mm \
+         and {coarse_off:e} mm ({accepted_above} increments at the floor)"
+    );
+    // The 20 frames' run is off by what the force tolerance leaves, an
+    // acceleration of 1e-6·g over the run: ½·1e-6·g·t².
+    assert!(
+        coarse_off < 0.5 * 1e-6 * 9810.0 * end * end,
+        "{coarse_off:e}"
+    );
+    // The bound: every increment's acceleration off by the round-off of
+    // one ulp of the height, δa = ulp/(β·h²), all of one sign, moves the
+    // end by Σ γ·h·δa·(t − t_k) ≈ t²·ulp/h² (β = ¼, γ = ½).
+    let h = end / 20_000.0;
+    let ulp = 1000.0 * f64::EPSILON;
+    let bound = end * end * ulp / (h * h);
+    assert!(
+        fine_off < bound && largest < bound,
+        "{largest:e} {fine_off:e} > {bound:e}"
     );
 }

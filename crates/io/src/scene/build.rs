@@ -992,5 +992,6 @@ pub(super) fn build(
         guard,
         ..ImplicitSettings::default()
     };
+    super::implicit_checks::check(at, &implicit, &model)?;
     Ok((model, settings, implicit))
 }

@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 mod compare;
 pub mod eta;
+pub mod fit;
 mod kinematic;
 pub mod limits;
 pub mod memory;

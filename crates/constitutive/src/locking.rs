@@ -214,8 +214,8 @@ impl ShearLocking {
             .iter()
             .map(|p| {
                 let gamma = p[0].to_radians();
-                let tau = p[1] * (std::f64::consts::FRAC_PI_4 - 0.5 * gamma).sin()
-                    / (thickness * side);
+                let tau =
+                    p[1] * (std::f64::consts::FRAC_PI_4 - 0.5 * gamma).sin() / (thickness * side);
                 [gamma, tau, 1.0]
             })
             .collect();

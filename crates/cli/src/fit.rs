@@ -405,7 +405,7 @@ pub fn read_curves(
                         frame_angle_deg(*x, frame)
                     }
                 };
-                if !(gamma_deg > 0.0) || gamma_deg > options.max_angle {
+                if gamma_deg <= 0.0 || gamma_deg > options.max_angle {
                     // γ = 0 carries nothing for an odd law; beyond the
                     // largest angle asked for is not fitted.
                     continue;
@@ -688,7 +688,7 @@ pub fn picture_frame(
     if options.terms == 0 {
         return Err(option_error("--terms must be at least 1"));
     }
-    if !(options.max_angle > 0.0) {
+    if options.max_angle.is_nan() || options.max_angle <= 0.0 {
         return Err(option_error(format!(
             "--max-angle {}: expected a shear angle in degrees above 0",
             options.max_angle

@@ -345,7 +345,7 @@ fn main() -> ExitCode {
             scale,
             out,
         } => export(&run, &onto, units, scale, out),
-        Command::Fit { test } => fit_cmd::run(test, |m| bad(m)),
+        Command::Fit { test } => fit_cmd::run(test, bad::<String>),
     };
     match result {
         Ok(code) => code,

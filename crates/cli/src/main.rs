@@ -345,7 +345,7 @@ fn main() -> ExitCode {
             scale,
             out,
         } => export(&run, &onto, units, scale, out),
-        Command::Fit { test } => fit_cmd::run(test, bad::<String>),
+        Command::Fit { test } => fit_cmd::run(test, bad),
     };
     match result {
         Ok(code) => code,

@@ -189,3 +189,35 @@ fn a_text_cell_and_a_header_against_angle_are_refused() {
     let t = refused("beyond", "0,0\n5,1\n200,2\n", &[]);
     assert!(t.contains("line 3: displacement 200 mm is beyond"), "{t}");
 }
+
+/// The `twintex-plain` preset's shear law is the joint fit of the shipped
+/// benchmark curves to 40° (so the preset and the data cannot drift apart).
+#[test]
+fn the_twintex_preset_carries_the_benchmark_fit() {
+    let dir = temp("twintex");
+    let out = dir.join("t.toml");
+    let o = drape(&[
+        "fit",
+        "picture-frame",
+        "tests/data/cao2008/picture_frame_plain_normalised.csv",
+        "--force",
+        "normalised",
+        "--max-angle",
+        "40",
+        "--material",
+        "twintex-plain",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let card: drape_constitutive::Material =
+        toml::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let preset = drape_constitutive::Material::preset("twintex-plain").unwrap();
+    let (a, b) = (
+        card.resin.shear_locking.unwrap().coefficients,
+        preset.resin.shear_locking.unwrap().coefficients,
+    );
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= 1e-12 * y.abs(), "{a:?} vs {b:?}");
+    }
+}

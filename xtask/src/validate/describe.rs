@@ -210,6 +210,10 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "pressure/strip-over-gap run by the implicit driver",
             "as pressure/strip-over-gap",
         ),
+        "cao2008/picture-frame" => (
+            "the shear law `drape fit` fits to 7 labs' normalised picture-frame curves of one plain weave, to 40°",
+            "the labs' median and range (min..max) at each angle, Cao et al. 2008 benchmark",
+        ),
         _ => return None,
     })
 }

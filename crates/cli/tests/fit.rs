@@ -221,3 +221,50 @@ fn the_twintex_preset_carries_the_benchmark_fit() {
         assert!((x - y).abs() <= 1e-12 * y.abs(), "{a:?} vs {b:?}");
     }
 }
+
+/// A fitted card is used by naming it in a scene (`fabric.material =
+/// "card.toml"`, beside the scene): the run reads it; a missing card is
+/// bad input naming the key and the file.
+#[test]
+fn a_scene_runs_on_the_fitted_card() {
+    let dir = temp("scene");
+    let card = dir.join("my-twintex.toml");
+    let o = drape(&[
+        "fit",
+        "picture-frame",
+        "tests/data/cao2008/picture_frame_plain_normalised.csv",
+        "--force",
+        "normalised",
+        "--max-angle",
+        "40",
+        "--material",
+        "twintex-plain",
+        "--out",
+        card.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let scene = std::fs::read_to_string(workspace().join("scenes/picture-frame.toml")).unwrap();
+    std::fs::write(dir.join("frame.toml"), &scene).unwrap();
+    let scene_path = dir.join("frame.toml");
+    let run = |material: &str| {
+        drape(&[
+            "run",
+            scene_path.to_str().unwrap(),
+            "--out",
+            dir.join("out").to_str().unwrap(),
+            "--set",
+            &format!("fabric.material={material}"),
+            "--set",
+            "simulation.end_time=2e-4",
+        ])
+    };
+    let o = run("my-twintex.toml");
+    assert!(o.status.success(), "{}", text(&o));
+    let o = run("missing.toml");
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let t = text(&o);
+    assert!(
+        t.contains("fabric.material") && t.contains("missing.toml"),
+        "{t}"
+    );
+}

@@ -430,8 +430,17 @@ pub fn read_curves(
                     normalised,
                 });
             }
+            // Several files: the file's stem tells same-named columns apart.
+            let name = if files > 1 {
+                let stem = path
+                    .file_stem()
+                    .map_or_else(|| file.clone(), |s| s.to_string_lossy().into_owned());
+                format!("{stem}:{name}")
+            } else {
+                name.clone()
+            };
             curves.push(Curve {
-                name: name.clone(),
+                name,
                 file: file.clone(),
                 frame,
                 fabric,
@@ -556,9 +565,16 @@ impl PictureFrameFit {
             self.curves.iter().map(|c| c.points.len()).sum::<usize>(),
             self.max_angle()
         );
+        let w = self
+            .curves
+            .iter()
+            .map(|c| c.name.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(16);
         let _ = writeln!(
             s,
-            "{:<16} {:>6} {:>6} {:>12} {:>10}  own fit: N at 10°/20°/30°/40° (N/mm)",
+            "{:<w$} {:>6} {:>6} {:>12} {:>10}  own fit: N at 10°/20°/30°/40° (N/mm)",
             "curve", "points", "weight", "rms (N/mm)", "mean (%)"
         );
         for (c, own) in self.curves.iter().zip(&self.own) {
@@ -590,7 +606,7 @@ impl PictureFrameFit {
             );
             let _ = writeln!(
                 s,
-                "{:<16} {:>6} {:>6} {:>12.5} {:>+10.1}  {own}",
+                "{:<w$} {:>6} {:>6} {:>12.5} {:>+10.1}  {own}",
                 c.name,
                 c.points.len(),
                 c.weight,
@@ -601,7 +617,7 @@ impl PictureFrameFit {
         let joint = [10.0, 20.0, 30.0, 40.0]
             .map(|g| format!("{:.4}", self.normalised(g)))
             .join(" / ");
-        let _ = writeln!(s, "{:<16} {:>48}  {joint}", "joint fit", "");
+        let _ = writeln!(s, "{:<w$} {:>37}  {joint}", "joint fit", "");
         s
     }
 }

@@ -138,10 +138,10 @@ pub struct PictureFrameFit {
 }
 
 /// One file's columns: (line, x, [value per column or None]).
-struct Table {
-    names: Vec<String>,
-    abscissa: Abscissa,
-    rows: Vec<(usize, f64, Vec<Option<f64>>)>,
+pub(crate) struct Table {
+    pub(crate) names: Vec<String>,
+    pub(crate) abscissa: Abscissa,
+    pub(crate) rows: Vec<(usize, f64, Vec<Option<f64>>)>,
 }
 
 fn is_unit(field: &str) -> bool {
@@ -158,7 +158,7 @@ fn is_unit(field: &str) -> bool {
 /// and blank lines skipped). The first line may name the columns; a
 /// second line of units is refused (the units drape reads are fixed, so
 /// a units line is named, not guessed at).
-fn read_table(file: &str, text: &str, angle: bool) -> Result<Table, FitInputError> {
+pub(crate) fn read_table(file: &str, text: &str, angle: bool) -> Result<Table, FitInputError> {
     let err = |line: usize, message: String| FitInputError {
         file: file.to_owned(),
         line: Some(line),
@@ -783,7 +783,7 @@ pub fn write_outputs(
     Ok((plot, residuals))
 }
 
-fn write_whole(path: &Path, text: &str) -> Result<(), String> {
+pub(crate) fn write_whole(path: &Path, text: &str) -> Result<(), String> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".partial");
     let tmp = PathBuf::from(tmp);

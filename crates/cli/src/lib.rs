@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 mod compare;
 pub mod eta;
 pub mod fit;
+pub mod fit_bias;
 mod kinematic;
 pub mod limits;
 pub mod memory;

@@ -268,3 +268,42 @@ fn a_scene_runs_on_the_fitted_card() {
         "{t}"
     );
 }
+
+/// The benchmark's three 230 × 115 bias-extension curves fit by the ideal
+/// three-zone balance into a card; a specimen shorter than 2W is refused.
+#[test]
+fn bias_extension_three_zone_fit_of_the_benchmark() {
+    let dir = temp("bias");
+    let out = dir.join("be.toml");
+    let args = |height: &'static str| {
+        vec![
+            "fit".to_owned(),
+            "bias-extension".into(),
+            "tests/data/cao2008/bias_extension_plain_230x115_force.csv".into(),
+            "--height".into(),
+            height.into(),
+            "--width".into(),
+            "115".into(),
+            "--material".into(),
+            "twintex-plain".into(),
+            "--out".into(),
+            out.to_str().unwrap().into(),
+        ]
+    };
+    let a = args("230");
+    let o = drape(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("HKUST_115x230_N") && t.contains("32 points"),
+        "{t}"
+    );
+    let card: drape_constitutive::Material =
+        toml::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(card.resin.shear_locking.unwrap().coefficients.len(), 3);
+    assert!(dir.join("be.fit.png").exists() && dir.join("be.residuals.csv").exists());
+    let a = args("200");
+    let o = drape(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("H ≥ 2W"), "{}", text(&o));
+}

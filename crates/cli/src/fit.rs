@@ -711,13 +711,19 @@ pub fn picture_frame(
         )));
     }
     let curves = read_curves(options, |p| std::fs::read_to_string(p))?;
-    if let Some(c) = curves.iter().find(|c| c.points.len() == 1) {
+    if let Some(c) = curves.iter().find(|c| c.points.len() < 2) {
         return Err(FitInputError {
             file: c.file.clone(),
             line: None,
             message: format!(
-                "curve `{}` has a single point in (0°, {}°]: a fit needs a curve",
-                c.name, options.max_angle
+                "curve `{}` has {} in (0°, {}°]: a fit needs a curve",
+                c.name,
+                if c.points.is_empty() {
+                    "no point"
+                } else {
+                    "a single point"
+                },
+                options.max_angle
             ),
         });
     }

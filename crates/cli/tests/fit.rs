@@ -162,6 +162,9 @@ fn a_single_point_is_refused() {
     // One point past γ = 0 in a longer file is a single point too.
     let t = refused("onegamma", "0,0\n5,10\n", &[]);
     assert!(t.contains("has a single point"), "{t}");
+    // A curve all at γ ≤ 0 (the crosshead never moved out) has none.
+    let t = refused("nogamma", "0,0\n0,1\n", &[]);
+    assert!(t.contains("has no point in (0°, 60°]"), "{t}");
 }
 
 #[test]

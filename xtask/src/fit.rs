@@ -6,12 +6,14 @@
 //! labs publish), the frame's side L and the base material (a preset name
 //! or a TOML card) whose thickness h converts force to stress,
 //! τ_s = F·sin(π/4 − γ/2)/(h·L); an odd polynomial of `--terms` terms
-//! fitted by least squares (`ShearLocking::fit_picture_frame`); the base
+//! fitted by weighted least squares (`ShearLocking::fit_stresses`); the base
 //! material with `resin.shear_locking` set, printed or written to `--out`.
+//!
+//! Kept for scripts that call it: the user command is `drape fit
+//! picture-frame` (different frame and fabric sizes, displacement input,
+//! several curves, plot and residuals), and this task runs its code.
 
-use std::path::{Path, PathBuf};
-
-use drape_constitutive::{Material, ShearLocking};
+use std::path::PathBuf;
 
 /// Parsed arguments.
 #[derive(Debug, PartialEq)]
@@ -65,53 +67,22 @@ impl Options {
     }
 }
 
-/// The material card: the base material with the fitted law.
+/// The material card: the base material with the fitted law, by the same
+/// code as `drape fit picture-frame --angle` (frame and fabric of side L).
 pub fn card(options: &Options) -> Result<String, String> {
-    let base = if options.base.ends_with(".toml") {
-        let text =
-            std::fs::read_to_string(&options.base).map_err(|e| format!("{}: {e}", options.base))?;
-        toml::from_str::<Material>(&text).map_err(|e| format!("{}: {e}", options.base))?
-    } else {
-        Material::preset(&options.base).ok_or_else(|| {
-            format!(
-                "unknown preset `{}`: expected one of {} or a .toml card",
-                options.base,
-                drape_constitutive::PRESET_NAMES.join(", ")
-            )
-        })?
+    let base = drape::fit::base_material(&options.base).map_err(|e| e.to_string())?;
+    let fit_options = drape::fit::PictureFrameOptions {
+        inputs: vec![options.csv.clone()],
+        frame: vec![options.side],
+        fabric: vec![options.side],
+        angle: true,
+        force: drape::fit::ForceKind::Frame,
+        terms: options.terms,
+        max_angle: 90.0,
+        weights: vec![],
     };
-    let path = &options.csv;
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let points = ShearLocking::read_picture_frame_csv(&text)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    let law = ShearLocking::fit_picture_frame(&points, options.side, base.thickness, options.terms)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut material = base;
-    material.name = format!(
-        "{} (shear locking fitted from {})",
-        material.name,
-        file_name(path)
-    );
-    material.resin.shear_locking = Some(law);
-    material
-        .validate()
-        .map_err(|e| format!("the fitted law is not usable: {e}"))?;
-    let body = toml::to_string(&material).map_err(|e| e.to_string())?;
-    Ok(format!(
-        "# Material card: picture-frame fit of {} ({} points, frame side {} mm,\n\
-         # τ_s = F·sin(π/4 − γ/2)/(h·L) with h = {} mm), by `cargo xtask fit-shear`.\n{body}",
-        path.display(),
-        points.len(),
-        options.side,
-        material.thickness
-    ))
-}
-
-fn file_name(path: &Path) -> String {
-    path.file_name().map_or_else(
-        || path.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    )
+    let (_, card) = drape::fit::picture_frame(&fit_options, &base).map_err(|e| e.to_string())?;
+    Ok(card)
 }
 
 /// Runs the task: prints the card, or writes it to `--out` whole.
@@ -143,6 +114,7 @@ pub fn main(options: &Options) -> std::process::ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use drape_constitutive::{Material, ShearLocking};
 
     #[test]
     fn a_published_style_curve_becomes_a_card_with_its_law() {

@@ -18,6 +18,8 @@ use std::path::{Path, PathBuf};
 
 mod compare;
 pub mod eta;
+pub mod fit;
+pub mod fit_bias;
 mod kinematic;
 pub mod limits;
 pub mod memory;

@@ -24,6 +24,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
 mod exit;
+mod fit_cmd;
 mod slurm;
 mod sweep_table;
 
@@ -172,6 +173,12 @@ Which is which: the number of arguments decides.
         /// Output directory (default: the run's folder).
         #[arg(long)]
         out: Option<PathBuf>,
+    },
+    /// Fit a material law to a lab's characterisation test and write a
+    /// material card (with a plot and the residuals).
+    Fit {
+        #[command(subcommand)]
+        test: fit_cmd::FitTest,
     },
 }
 
@@ -338,6 +345,7 @@ fn main() -> ExitCode {
             scale,
             out,
         } => export(&run, &onto, units, scale, out),
+        Command::Fit { test } => fit_cmd::run(test, bad),
     };
     match result {
         Ok(code) => code,

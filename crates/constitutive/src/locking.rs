@@ -210,16 +210,51 @@ impl ShearLocking {
                 p[0]
             )));
         }
-        let rows = points.len();
+        let samples: Vec<[f64; 3]> = points
+            .iter()
+            .map(|p| {
+                let gamma = p[0].to_radians();
+                let tau =
+                    p[1] * (std::f64::consts::FRAC_PI_4 - 0.5 * gamma).sin() / (thickness * side);
+                [gamma, tau, 1.0]
+            })
+            .collect();
+        Self::fit_stresses(&samples, terms)
+    }
+
+    /// Fits `terms` coefficients [c₁, c₃, …] to `samples` = [γ (radians),
+    /// τ_s (MPa), weight ≥ 0] by weighted linear least squares (by SVD):
+    /// each sample's residual counts with the square root of its weight,
+    /// so a weight is how many equal points the sample stands for. The
+    /// common core of every fit from a test (picture frame with any
+    /// frame and fabric sizes, several curves at once).
+    pub fn fit_stresses(samples: &[[f64; 3]], terms: usize) -> Result<Self, FitError> {
+        let used = samples.iter().filter(|s| s[2] > 0.0).count();
+        if terms == 0 || used < terms {
+            return Err(FitError::Data(format!(
+                "{used} points cannot determine {terms} coefficients: give more points than terms"
+            )));
+        }
+        if let Some(s) = samples
+            .iter()
+            .find(|s| !(s.iter().all(|v| v.is_finite()) && s[0] > 0.0 && s[2] >= 0.0))
+        {
+            return Err(FitError::Data(format!(
+                "sample (γ = {} rad, τ = {} MPa, weight {}): expected finite values, γ > 0 \
+                 and a weight ≥ 0",
+                s[0], s[1], s[2]
+            )));
+        }
+        let rows = samples.len();
         let mut a = DMatrix::zeros(rows, terms);
         let mut b = DVector::zeros(rows);
         // Scale columns so the SVD sees comparable magnitudes.
-        let gamma_max = points.iter().map(|p| p[0].to_radians()).fold(0.0, f64::max);
-        for (r, p) in points.iter().enumerate() {
-            let gamma = p[0].to_radians();
-            b[r] = p[1] * (std::f64::consts::FRAC_PI_4 - 0.5 * gamma).sin() / (thickness * side);
+        let gamma_max = samples.iter().map(|s| s[0]).fold(0.0, f64::max);
+        for (r, s) in samples.iter().enumerate() {
+            let w = s[2].sqrt();
+            b[r] = w * s[1];
             for k in 0..terms {
-                a[(r, k)] = (gamma / gamma_max).powi(2 * k as i32 + 1);
+                a[(r, k)] = w * (s[0] / gamma_max).powi(2 * k as i32 + 1);
             }
         }
         let svd = a.svd(true, true);
@@ -330,5 +365,27 @@ mod tests {
         assert!(ShearLocking::fit_picture_frame(&few, 150.0, 0.5, 3).is_err());
         let wide = [[10.0, 1.0], [95.0, 2.0], [30.0, 3.0]];
         assert!(ShearLocking::fit_picture_frame(&wide, 150.0, 0.5, 1).is_err());
+    }
+
+    /// Two curves of different laws: equal weights fit between them, a
+    /// weight of 3 on one pulls the fit to the weighted mean of the two
+    /// (a one-term law is linear in c₁, so the weighted fit is exactly the
+    /// weighted mean of the two single fits); a zero weight removes a curve.
+    #[test]
+    fn weights_count_as_repeated_points() {
+        let g: Vec<f64> = (1..=10).map(|n| 0.05 * n as f64).collect();
+        let mut samples = Vec::new();
+        for &x in &g {
+            samples.push([x, 0.02 * x, 3.0]);
+            samples.push([x, 0.06 * x, 1.0]);
+        }
+        let fit = ShearLocking::fit_stresses(&samples, 1).unwrap();
+        assert!((fit.coefficients[0] - 0.03).abs() < 1e-14, "{fit:?}");
+        for s in samples.iter_mut().filter(|s| s[2] == 1.0) {
+            s[2] = 0.0;
+        }
+        let fit = ShearLocking::fit_stresses(&samples, 1).unwrap();
+        assert!((fit.coefficients[0] - 0.02).abs() < 1e-14, "{fit:?}");
+        assert!(ShearLocking::fit_stresses(&[[0.1, f64::NAN, 1.0]], 1).is_err());
     }
 }

@@ -834,6 +834,24 @@ pub fn write_profile_comparison(
     crate::atomic::write(path, &png).map_err(at(path))
 }
 
+/// Writes the PNG `path` of a fit (`drape fit`): the `measured` curves
+/// (name, (x, y) points) as dots and the `fitted` law as a line, axes
+/// described by `labels` (x, y).
+pub fn write_fit_picture(
+    path: &Path,
+    title: &str,
+    labels: (&str, &str),
+    measured: &[(String, Vec<(f64, f64)>)],
+    fitted: &[(f64, f64)],
+) -> Result<(), ResultsError> {
+    let png =
+        pictures::fit::fit_png(title, labels, measured, fitted).map_err(|e| ResultsError {
+            path: path.to_owned(),
+            source: std::io::Error::other(e),
+        })?;
+    crate::atomic::write(path, &png).map_err(at(path))
+}
+
 /// Writes the PNG `path` of a sweep: each measure of `runs` against each
 /// swept key of `axes` (see `sweep.png` in the scene reference).
 pub fn write_sweep_picture(

@@ -210,6 +210,14 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "pressure/strip-over-gap run by the implicit driver",
             "as pressure/strip-over-gap",
         ),
+        "cao2008/picture-frame" => (
+            "the shear law `drape fit` fits to 7 labs' normalised picture-frame curves of one plain weave, to 40°",
+            "the labs' median and range (min..max) at each angle, Cao et al. 2008 benchmark",
+        ),
+        "cao2008/bias-extension-three-zone" => (
+            "the shear law fitted by the ideal three-zone balance to 3 labs' 230 × 115 mm bias-extension curves, to 30° of central shear; the picture-frame law's prediction reported beside it",
+            "the labs' median and range (min..max) at each displacement, Cao et al. 2008 benchmark",
+        ),
         _ => return None,
     })
 }

@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 mod bending;
+mod cao2008;
 mod constitutive;
 mod contact;
 mod describe;
@@ -54,6 +55,7 @@ pub fn registry() -> Vec<Case> {
         wrinkling::CASES,
         paper::CASES,
         pressure::CASES,
+        cao2008::CASES,
     ]
     .concat()
 }

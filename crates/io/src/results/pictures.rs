@@ -11,6 +11,7 @@
 //! The colour map is viridis (perceptually uniform, readable in grey and
 //! by colour-blind readers), sampled from matplotlib's table (CC0).
 
+pub(super) mod fit;
 pub(super) mod maps;
 pub(super) mod oblique;
 pub(super) mod sweep;

@@ -540,11 +540,28 @@ pub(super) fn build(
 
     let fabric = &spec.fabric;
     let material = match &fabric.material {
+        // A card file (`drape fit … --out card.toml`), beside the scene.
+        MaterialSpec::Preset(name) if name.ends_with(".toml") => {
+            let path = at.file.parent().unwrap_or(Path::new(".")).join(name);
+            let text = std::fs::read_to_string(&path).map_err(|e| {
+                at.error(
+                    "fabric.material",
+                    format!("material card {}: {e}", path.display()),
+                )
+            })?;
+            toml::from_str::<Material>(&text).map_err(|e| {
+                at.error(
+                    "fabric.material",
+                    format!("material card {}: {}", path.display(), e.message()),
+                )
+            })?
+        }
         MaterialSpec::Preset(name) => Material::preset(name).ok_or_else(|| {
             at.error(
                 "fabric.material",
                 format!(
-                    "unknown preset `{name}`: expected one of {} or a table of values",
+                    "unknown preset `{name}`: expected one of {}, a material card \
+                     (`card.toml`, beside the scene) or a table of values",
                     drape_constitutive::PRESET_NAMES.join(", ")
                 ),
             )

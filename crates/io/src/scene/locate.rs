@@ -333,7 +333,7 @@ fn type_text(name: &str) -> &'static str {
              { mesh = \"blank.msh\" }"
         }
         "MaterialSpec" => {
-            "a preset name (carbon-prepreg-2x2, glass-serge-4x3) or a table of material values"
+            "a preset name (carbon-prepreg-2x2, glass-serge-4x3, twintex-plain) or a table of material values"
         }
         "Material" => {
             "a table of material values (name, thickness, fibre_volume_fraction, density, \

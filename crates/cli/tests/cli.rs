@@ -284,30 +284,6 @@ motion = { kind = "force", direction = [0, 0, -1], force = 1e15, mass = 1e-3 }
     );
 }
 
-const DRAPED: &str = r#"gravity = [0, 0, -9810]
-
-[simulation]
-end_time = 0.004
-frames = 4
-mass_scaling_dt = 2e-6
-
-[fabric]
-material = "carbon-prepreg-2x2"
-fibres = "trusses"
-orientation_deg = 45
-blank = { width = 100, height = 100, cells = [10, 10] }
-
-[[tools]]
-name = "punch"
-friction = 0.2
-geometry = { kind = "sphere", center = [0, 0, -40.2], radius = 40 }
-motion = { kind = "displacement", direction = [0, 0, 1], distance = 10, amplitude = { kind = "smooth_step", duration = 0.004 } }
-
-[[springs]]
-nodes = ["corners", "edge_midpoints"]
-stiffness = 2.0
-"#;
-
 #[test]
 fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
     use drape::{Checkpoint, RunControl, RunOptions, run_scene, run_scene_with};

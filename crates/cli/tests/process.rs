@@ -36,49 +36,9 @@ fn png_stats(path: &Path) -> (u32, u32, usize, f64) {
     )
 }
 
-/// A 100 mm carbon blank (±45 trusses on the diamond lattice: 221 nodes,
-/// 220 membrane elements) pressed 10 mm onto a sphere: a run of half a
-/// second.
-const DRAPED: &str = r#"gravity = [0, 0, -9810]
-
-[simulation]
-end_time = 0.004
-frames = 4
-mass_scaling_dt = 2e-6
-
-[fabric]
-material = "carbon-prepreg-2x2"
-fibres = "trusses"
-orientation_deg = 45
-blank = { width = 100, height = 100, cells = [10, 10] }
-
-[[tools]]
-name = "punch"
-friction = 0.2
-geometry = { kind = "sphere", center = [0, 0, -40.2], radius = 40 }
-motion = { kind = "displacement", direction = [0, 0, 1], distance = 10, amplitude = { kind = "smooth_step", duration = 0.004 } }
-
-[[springs]]
-nodes = ["corners", "edge_midpoints"]
-stiffness = 2.0
-"#;
-
+/// `drape run` of the shared draped scene, which must complete.
 fn run(dir: &Path, name: &str, set: &[&str]) -> (PathBuf, Output) {
-    let scene = dir.join("draped.toml");
-    if !scene.exists() {
-        std::fs::write(&scene, DRAPED).unwrap();
-    }
-    let out = dir.join(name);
-    let mut args = vec![
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    for s in set {
-        args.extend(["--set", s]);
-    }
-    let o = drape(&args);
+    let (out, o) = run_draped(dir, name, set);
     assert!(o.status.success(), "{}", text(&o));
     (out, o)
 }

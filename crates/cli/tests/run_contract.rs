@@ -5,77 +5,10 @@
 //! full disk, a cut sweep table read as "0 runs".
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
 
 mod common;
 use common::*;
-
-/// A 100 mm carbon blank (±45 trusses: 221 nodes) pressed onto a sphere,
-/// mass-scaled to 2e-6 s: a few hundred steps.
-const DRAPED: &str = r#"gravity = [0, 0, -9810]
-
-[simulation]
-end_time = 0.004
-frames = 4
-mass_scaling_dt = 2e-6
-
-[fabric]
-material = "carbon-prepreg-2x2"
-fibres = "trusses"
-orientation_deg = 45
-blank = { width = 100, height = 100, cells = [10, 10] }
-
-[[tools]]
-name = "punch"
-friction = 0.2
-geometry = { kind = "sphere", center = [0, 0, -40.2], radius = 40 }
-motion = { kind = "displacement", direction = [0, 0, 1], distance = 10, amplitude = { kind = "smooth_step", duration = 0.004 } }
-
-[[springs]]
-nodes = ["corners", "edge_midpoints"]
-stiffness = 2.0
-"#;
-
-/// `drape run` of DRAPED with `set` into `dir/name`, given at most a
-/// minute (a run that would not end is a failure, not a hung test).
-fn run(dir: &Path, name: &str, set: &[&str]) -> (PathBuf, Output) {
-    let scene = dir.join("draped.toml");
-    if !scene.exists() {
-        std::fs::write(&scene, DRAPED).unwrap();
-    }
-    let out = dir.join(name);
-    let mut args = vec![
-        "run".to_owned(),
-        scene.display().to_string(),
-        "--out".to_owned(),
-        out.display().to_string(),
-    ];
-    for s in set {
-        args.extend(["--set".to_owned(), (*s).to_owned()]);
-    }
-    (out, within_a_minute(&args))
-}
-
-fn within_a_minute(args: &[String]) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_drape"))
-        .args(args)
-        .current_dir(workspace())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(60) {
-            child.kill().unwrap();
-            let o = child.wait_with_output().unwrap();
-            panic!("drape {args:?} still running after a minute:\n{}", text(&o));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
-}
 
 /// Fault 7: a step forced below the mass-scaling target kept the added
 /// mass of the target, not (target/step)² times more.
@@ -87,11 +20,11 @@ fn a_forced_step_does_not_change_the_added_mass() {
         "output.vtu=false",
         "output.pictures=false",
     ];
-    let (free, o) = run(&dir, "free", &quick);
+    let (free, o) = run_draped(&dir, "free", &quick);
     assert!(o.status.success(), "{}", text(&o));
     let mut forced_set = quick.to_vec();
     forced_set.push("simulation.time_step=5e-7");
-    let (forced, o) = run(&dir, "forced", &forced_set);
+    let (forced, o) = run_draped(&dir, "forced", &forced_set);
     assert!(o.status.success(), "{}", text(&o));
     let (a, b) = (
         json(&free.join("summary.json")),
@@ -138,7 +71,7 @@ fn runs_of_no_step_or_of_for_ever_are_refused_before_they_start() {
             "more than a run may take",
         ),
     ] {
-        let (out, o) = run(&dir, "out", &[set]);
+        let (out, o) = run_draped(&dir, "out", &[set]);
         let said = text(&o);
         assert_eq!(o.status.code(), Some(2), "--set {set}: {said}");
         assert!(

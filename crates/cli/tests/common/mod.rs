@@ -4,7 +4,8 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// `drape ARGS…` run from the workspace root, to its end.
 pub fn drape(args: &[&str]) -> Output {
@@ -44,4 +45,70 @@ pub fn text(o: &Output) -> String {
 /// A JSON file, parsed.
 pub fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// A 100 mm carbon blank (±45 trusses: 221 nodes) pressed onto a sphere,
+/// mass-scaled to 2e-6 s: a few hundred steps.
+pub const DRAPED: &str = r#"gravity = [0, 0, -9810]
+
+[simulation]
+end_time = 0.004
+frames = 4
+mass_scaling_dt = 2e-6
+
+[fabric]
+material = "carbon-prepreg-2x2"
+fibres = "trusses"
+orientation_deg = 45
+blank = { width = 100, height = 100, cells = [10, 10] }
+
+[[tools]]
+name = "punch"
+friction = 0.2
+geometry = { kind = "sphere", center = [0, 0, -40.2], radius = 40 }
+motion = { kind = "displacement", direction = [0, 0, 1], distance = 10, amplitude = { kind = "smooth_step", duration = 0.004 } }
+
+[[springs]]
+nodes = ["corners", "edge_midpoints"]
+stiffness = 2.0
+"#;
+
+/// `drape run` of DRAPED with `set` into `dir/name`, given at most a
+/// minute (a run that would not end is a failure, not a hung test).
+pub fn run_draped(dir: &Path, name: &str, set: &[&str]) -> (PathBuf, Output) {
+    let scene = dir.join("draped.toml");
+    if !scene.exists() {
+        std::fs::write(&scene, DRAPED).unwrap();
+    }
+    let out = dir.join(name);
+    let mut args = vec![
+        "run".to_owned(),
+        scene.display().to_string(),
+        "--out".to_owned(),
+        out.display().to_string(),
+    ];
+    for s in set {
+        args.extend(["--set".to_owned(), (*s).to_owned()]);
+    }
+    (out, within_a_minute(&args))
+}
+
+pub fn within_a_minute(args: &[String]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_drape"))
+        .args(args)
+        .current_dir(workspace())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(60) {
+            child.kill().unwrap();
+            let o = child.wait_with_output().unwrap();
+            panic!("drape {args:?} still running after a minute:\n{}", text(&o));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
 }

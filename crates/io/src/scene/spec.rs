@@ -305,7 +305,7 @@ pub enum GeometrySpec {
         outer_radius: f64,
     },
     /// A blank holder: a ring facing down, the fabric below, its inner
-    /// edge rounded into an inner wall (see [`Surface::ring`]).
+    /// edge rounded into an inner wall (see [`drape_contact::Surface::ring`]).
     Ring {
         /// Axis position (x, y) and face height z.
         center: [f64; 3],

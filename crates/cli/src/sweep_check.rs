@@ -6,8 +6,25 @@
 //!
 //! Not here: writing the table (`sweep_table` in the `drape` binary).
 
-/// The last column of the table's header, as `drape sweep` writes it.
-pub const LAST_COLUMN: &str = "max_fibre_tension_n_per_mm";
+/// The columns of the table's header after the swept keys, as `drape
+/// sweep` writes them (one list, so writer and reader cannot drift).
+pub const MEASURE_COLUMNS: [&str; 12] = [
+    "status",
+    "max_shear_deg",
+    "draw_in_dx_mm",
+    "draw_in_dy_mm",
+    "draw_in_dd_mm",
+    "max_fibre_tension_n",
+    "balance_error",
+    "steps",
+    "wall_s",
+    "peak_max_shear_deg",
+    "peak_time_s",
+    "max_fibre_tension_n_per_mm",
+];
+
+/// The last column of the table's header.
+pub const LAST_COLUMN: &str = MEASURE_COLUMNS[MEASURE_COLUMNS.len() - 1];
 
 /// Checks the text of a `sweep.csv` and returns its rows (the header
 /// first), or why it is not a whole table: no header, a header without

@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
+use drape_io::finite::or_empty;
 use drape_io::results::{Summary, SweepAxis, SweepRun, write_sweep_picture};
 
 use crate::parse_sets;
@@ -80,7 +81,11 @@ pub fn write(
         table.push(',');
         table.push_str(key);
     }
-    table.push_str(",status,max_shear_deg,draw_in_dx_mm,draw_in_dy_mm,draw_in_dd_mm,max_fibre_tension_n,balance_error,steps,wall_s,peak_max_shear_deg,peak_time_s,max_fibre_tension_n_per_mm\n");
+    for column in drape::sweep_check::MEASURE_COLUMNS {
+        table.push(',');
+        table.push_str(column);
+    }
+    table.push('\n');
     let mut failed = false;
     for (i, (combo, report)) in combos.iter().zip(reports).enumerate() {
         table.push_str(&run_name(i));
@@ -95,18 +100,8 @@ pub fn write(
                 failed |= s.status == "failed";
                 // A value a run has not (an imported blank's draw-in,
                 // embedded fibres' truss force) is left empty, not NaN.
-                let cell = |v: f64, digits: usize| {
-                    if v.is_finite() {
-                        format!("{v:.digits$}")
-                    } else {
-                        String::new()
-                    }
-                };
-                let balance = if s.energy.balance_error.is_finite() {
-                    format!("{:.3e}", s.energy.balance_error)
-                } else {
-                    String::new()
-                };
+                let cell = |v: f64, digits: usize| or_empty(v, |v| format!("{v:.digits$}"));
+                let balance = or_empty(s.energy.balance_error, |v| format!("{v:.3e}"));
                 table.push_str(&format!(
                     ",{},{},{},{},{},{},{balance},{},{},{},{},{}\n",
                     s.status,

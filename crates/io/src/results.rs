@@ -611,9 +611,7 @@ impl ResultsDir {
                 csv.push(',');
                 // A value that is not a number is missing, not "NaN": the
                 // run's completion check says why (drape's `limits`).
-                if v.is_finite() {
-                    csv.push_str(&fmt_f64(v));
-                }
+                csv.push_str(&crate::finite::or_empty(v, fmt_f64));
             }
             csv.push('\n');
         }

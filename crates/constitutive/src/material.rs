@@ -229,7 +229,8 @@ impl Material {
                 },
                 thickness: 1.2,
                 fibre_volume_fraction: 0.146,
-                density: 743e-9 / 1.2,
+                // 743 g/m² = 743e-6 t per 1e6 mm².
+                density: 743e-12 / 1.2,
                 bending_rigidity: Some([TWINTEX_BENDING; 2]),
             }),
             _ => None,
@@ -305,9 +306,28 @@ mod tests {
         // The benchmark's table: 743 g/m² at 1.2 mm; 60 % glass by weight
         // at 2.54 g/cm³ is V_f·h of glass.
         let t = Material::preset("twintex-plain").unwrap();
-        assert!((t.areal_density() - 743e-9).abs() < 1e-18);
+        // t/mm² to kg/m²: ×1e3 kg/t ×1e6 mm²/m² (a factor of 1000 once
+        // slipped here, making the specimen 1000× too heavy).
+        assert!((t.areal_density() * 1e9 - 0.743).abs() < 1e-12);
+        // A dry fabric is lighter than its glass (2540 kg/m³) and heavier
+        // than air: 619 kg/m³ here, in t/mm³ ×1e12.
+        assert!((t.density * 1e12 - 619.17).abs() < 0.01);
         assert!((t.fibre_volume_fraction * 1.2 - 0.6 * 743.0 / 2.54e6 * 1e3).abs() < 1e-3);
         assert!(t.resin.shear_locking.is_some());
+    }
+
+    /// Every preset weighs what a fabric weighs: 50 g/m² to 3 kg/m² (the
+    /// lightest veils to the heaviest non-crimp fabrics). A slip of the
+    /// t/mm³ unit is a factor of 1000 and lands far outside.
+    #[test]
+    fn presets_weigh_what_fabrics_weigh() {
+        for name in PRESET_NAMES {
+            let kg_per_m2 = Material::preset(name).unwrap().areal_density() * 1e9;
+            assert!(
+                (0.05..3.0).contains(&kg_per_m2),
+                "{name}: {kg_per_m2} kg/m²"
+            );
+        }
     }
 
     #[test]

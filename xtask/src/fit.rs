@@ -120,6 +120,7 @@ mod tests {
     fn a_published_style_curve_becomes_a_card_with_its_law() {
         let law = ShearLocking {
             coefficients: vec![0.03, 0.05, 0.8],
+            friction: None,
         };
         let glass = Material::preset("glass-serge-4x3").unwrap();
         let dir = std::env::temp_dir().join(format!("drape-fit-{}", std::process::id()));

@@ -818,6 +818,7 @@ mod tests {
     fn two_frame_sizes_give_back_one_law() {
         let law = ShearLocking {
             coefficients: vec![0.004, 0.002, 0.03],
+            friction: None,
         };
         let h = 1.2;
         let mut texts = Vec::new();

@@ -197,6 +197,7 @@ pub fn fit_three_zone(
         })?;
     let law = ShearLocking {
         coefficients: (0..terms).map(|k| x[k] / norms[k]).collect(),
+        friction: None,
     };
     Ok(BiasFit {
         law,
@@ -355,6 +356,7 @@ mod tests {
     fn the_three_zone_force_is_the_energys_derivative_and_fits_back() {
         let law = ShearLocking {
             coefficients: vec![0.01, 0.02, 0.3],
+            friction: None,
         };
         let s = Specimen {
             height: 230.0,

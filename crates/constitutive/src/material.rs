@@ -225,6 +225,7 @@ impl Material {
                     prony: Vec::new(),
                     shear_locking: Some(crate::ShearLocking {
                         coefficients: TWINTEX_SHEAR.to_vec(),
+                        friction: None,
                     }),
                 },
                 thickness: 1.2,

@@ -82,6 +82,7 @@ fn picture_frame() -> Vec<Check> {
     let mut locking = plain.clone();
     locking.resin.shear_locking = Some(ShearLocking {
         coefficients: LAW.to_vec(),
+        friction: None,
     });
     let (with, without) = (frame_forces(&locking), frame_forces(&plain));
     let (side, h) = (100.0, plain.thickness);

@@ -179,6 +179,7 @@ fn locking_law(material: &Material) -> ShearLocking {
         / (material.thickness * onset.powi(4));
     ShearLocking {
         coefficients: vec![0.0, 0.0, c5],
+        friction: None,
     }
 }
 

@@ -950,6 +950,7 @@ fn locking_glass() -> Material {
     let mut m = glass();
     m.resin.shear_locking = Some(drape_constitutive::ShearLocking {
         coefficients: vec![0.05, 0.0, 3.0],
+        friction: None,
     });
     m.validate().unwrap();
     m

@@ -16,12 +16,14 @@
 
 use std::path::{Path, PathBuf};
 
+pub mod bias_sim;
 mod compare;
 pub mod eta;
 pub mod fit;
 pub mod fit_bias;
 mod kinematic;
 pub mod limits;
+pub mod lm;
 pub mod memory;
 mod orientations;
 pub mod reserve;

@@ -62,6 +62,12 @@ impl Specimen {
         h * (sa * law.stress(g) + 0.5 * sb * law.stress(0.5 * g)) * dg
     }
 
+    /// (γ, S_A, S_B, dγ/du) at `u` (γ NaN beyond the kinematics).
+    pub fn zones_at(&self, u: f64) -> (f64, f64, f64, f64) {
+        let (sa, sb, dg) = self.zones(u);
+        (self.gamma(u).unwrap_or(f64::NAN), sa, sb, dg)
+    }
+
     /// (S_A, S_B, dγ/du).
     fn zones(&self, u: f64) -> (f64, f64, f64) {
         let (w, d) = (self.width, self.d());
@@ -262,15 +268,43 @@ impl BiasFit {
     }
 }
 
-/// Runs the fit and writes card, plot and residuals beside `out`.
+/// How the bias-extension law is fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Method {
+    /// drape's own bias-extension runs in the loop (Levenberg–Marquardt).
+    Inverse,
+    /// The ideal three-zone energy balance only.
+    ThreeZone,
+}
+
+/// What `drape fit bias-extension` is asked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BiasOptions {
+    /// The method.
+    pub method: Method,
+    /// Polynomial terms.
+    pub terms: usize,
+    /// With the friction term τ_f·tanh(γ/γ_f).
+    pub friction: bool,
+    /// Points beyond this central shear (deg) are left out.
+    pub max_angle: f64,
+    /// One weight per curve, or empty.
+    pub weights: Vec<f64>,
+    /// Inverse: cell diagonals across the width.
+    pub cells: usize,
+    /// Inverse: also run the fitted law on twice the cells.
+    pub mesh_check: bool,
+}
+
+/// Runs the fit and writes card, plot and residuals beside `out`;
+/// returns the report.
 pub fn run(
     files: &[PathBuf],
     specimen: Specimen,
     base: &Material,
-    terms: usize,
-    max_angle_deg: f64,
+    options: &BiasOptions,
     out: &Path,
-) -> Result<BiasFit, FitInputError> {
+) -> Result<String, FitInputError> {
     let bad = |m: String| FitInputError {
         file: String::new(),
         line: None,
@@ -282,6 +316,13 @@ pub fn run(
             specimen.height, specimen.width
         )));
     }
+    if options.terms == 0 {
+        return Err(bad("--terms must be at least 1".to_owned()));
+    }
+    if options.cells == 0 {
+        return Err(bad("--cells must be at least 1".to_owned()));
+    }
+    let max_angle_deg = options.max_angle;
     let curves = read_bias_curves(files, specimen, max_angle_deg)?;
     if let Some(c) = curves.iter().find(|c| c.points.len() < 2) {
         return Err(FitInputError {
@@ -294,35 +335,103 @@ pub fn run(
             ),
         });
     }
-    let fit = fit_three_zone(curves, specimen, base.thickness, terms)?;
+    if !options.weights.is_empty() {
+        if options.weights.len() != curves.len() {
+            return Err(bad(format!(
+                "--weights: {} values for {} curves",
+                options.weights.len(),
+                curves.len()
+            )));
+        }
+        if let Some(w) = options
+            .weights
+            .iter()
+            .find(|w| !(w.is_finite() && **w >= 0.0))
+        {
+            return Err(bad(format!("--weights {w}: expected a weight ≥ 0")));
+        }
+    }
+    let form = crate::fit_inverse::LawForm {
+        terms: options.terms,
+        friction: options.friction,
+    };
+    let (law, fitted, report, residuals, what) = match options.method {
+        Method::ThreeZone => {
+            let (law, _) = crate::fit_inverse::three_zone(
+                &curves,
+                &options.weights,
+                specimen,
+                base.thickness,
+                form,
+            )
+            .map_err(bad)?;
+            let fit = BiasFit {
+                law: law.clone(),
+                thickness: base.thickness,
+                specimen,
+                curves: curves.clone(),
+            };
+            let umax = curves
+                .iter()
+                .flat_map(|c| c.points.iter().map(|p| p.1))
+                .fold(0.0, f64::max);
+            let fitted: Vec<(f64, f64)> = (1..=200)
+                .map(|n| {
+                    let u = umax * n as f64 / 200.0;
+                    (u, fit.force(u))
+                })
+                .collect();
+            (
+                law,
+                fitted,
+                fit.report(),
+                fit.residuals_csv(),
+                "ideal three-zone",
+            )
+        }
+        Method::Inverse => {
+            let fit = crate::fit_inverse::fit(
+                curves.clone(),
+                specimen,
+                base,
+                &crate::fit_inverse::InverseOptions {
+                    form,
+                    cells: options.cells,
+                    step: 1.0,
+                    weights: options.weights.clone(),
+                    mesh_check: options.mesh_check,
+                },
+            )
+            .map_err(bad)?;
+            let fitted = fit
+                .curve
+                .u
+                .iter()
+                .copied()
+                .zip(fit.curve.force.iter().copied())
+                .collect();
+            (
+                fit.law.clone(),
+                fitted,
+                fit.report(),
+                fit.residuals_csv(),
+                "inverse (simulated)",
+            )
+        }
+    };
     let mut material = base.clone();
-    material.name = format!(
-        "{} (shear law, three-zone bias-extension fit)",
-        material.name
-    );
-    material.resin.shear_locking = Some(fit.law.clone());
+    material.name = format!("{} (shear law, {what} bias-extension fit)", material.name);
+    material.resin.shear_locking = Some(law);
     material
         .validate()
         .map_err(|e| bad(format!("the fitted law is not usable: {e}")))?;
     let body = toml::to_string(&material).map_err(|e| bad(e.to_string()))?;
     let card = format!(
-        "# Material card: ideal three-zone bias-extension fit ({} × {} mm, to {max_angle_deg}° of \
+        "# Material card: {what} bias-extension fit ({} × {} mm, to {max_angle_deg}° of \
          central shear), by `drape fit bias-extension`.\n{body}",
         specimen.height, specimen.width
     );
-    let umax = fit
-        .curves
-        .iter()
-        .flat_map(|c| c.points.iter().map(|p| p.1))
-        .fold(0.0, f64::max);
-    let fitted: Vec<(f64, f64)> = (1..=200)
-        .map(|n| {
-            let u = umax * n as f64 / 200.0;
-            (u, fit.force(u))
-        })
-        .collect();
-    let measured: Vec<(String, Vec<(f64, f64)>)> = fit
-        .curves
+    let measured: Vec<(String, Vec<(f64, f64)>)> = curves
         .iter()
         .map(|c| {
             (
@@ -334,15 +443,15 @@ pub fn run(
     let plot = out.with_extension("fit.png");
     drape_io::results::write_fit_picture(
         &plot,
-        "bias extension: measured and three-zone fit",
+        &format!("bias extension: measured and {what} fit"),
         ("crosshead displacement (mm)", "clamp force (N)"),
         &measured,
         &fitted,
     )
     .map_err(|e| bad(e.to_string()))?;
-    write_whole(&out.with_extension("residuals.csv"), &fit.residuals_csv()).map_err(bad)?;
+    write_whole(&out.with_extension("residuals.csv"), &residuals).map_err(bad)?;
     write_whole(out, &card).map_err(bad)?;
-    Ok(fit)
+    Ok(report)
 }
 
 #[cfg(test)]

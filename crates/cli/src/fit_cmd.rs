@@ -52,8 +52,9 @@ pub enum FitTest {
         out: PathBuf,
     },
     /// Fit the in-plane shear law to bias-extension curves (clamp force
-    /// against crosshead displacement) by the ideal three-zone energy
-    /// balance; the inverse fit by drape's own runs is not there yet.
+    /// against crosshead displacement): by drape's own bias-extension runs
+    /// in the loop (inverse, the default) or by the ideal three-zone
+    /// energy balance.
     BiasExtension {
         /// The CSV files (first column displacement in mm, then one force
         /// column in N per curve).
@@ -79,6 +80,26 @@ pub enum FitTest {
         /// The material card to write (plot and residuals beside it).
         #[arg(long)]
         out: PathBuf,
+        /// `inverse`: Levenberg–Marquardt with drape's runs of the
+        /// specimen in the loop, started from the three-zone fit (both
+        /// reported); `three-zone`: the ideal balance only.
+        #[arg(long, value_enum, default_value = "inverse")]
+        method: drape::fit_bias::Method,
+        /// Add the friction term τ_f·tanh(γ/γ_f) to the law (a dry
+        /// fabric's early jump in force).
+        #[arg(long)]
+        friction: bool,
+        /// One weight per curve, in order (default: each curve counts once).
+        #[arg(long, value_delimiter = ',')]
+        weights: Vec<f64>,
+        /// Inverse: cell diagonals across the specimen's width in the runs
+        /// (the length gets H/W times as many).
+        #[arg(long, default_value_t = 5)]
+        cells: usize,
+        /// Inverse: run the fitted law again on twice the cells and report
+        /// how much the force moves (the mesh's error).
+        #[arg(long)]
+        mesh_check: bool,
     },
 }
 
@@ -129,12 +150,26 @@ pub fn run(test: FitTest, bad: fn(String) -> anyhow::Error) -> Result<ExitCode> 
             terms,
             max_angle,
             out,
+            method,
+            friction,
+            weights,
+            cells,
+            mesh_check,
         } => {
             let base = drape::fit::base_material(&material).map_err(|e| bad(e.to_string()))?;
             let specimen = drape::fit_bias::Specimen { height, width };
-            let fit = drape::fit_bias::run(&csv, specimen, &base, terms, max_angle, &out)
+            let options = drape::fit_bias::BiasOptions {
+                method,
+                terms,
+                friction,
+                max_angle,
+                weights,
+                cells,
+                mesh_check,
+            };
+            let report = drape::fit_bias::run(&csv, specimen, &base, &options, &out)
                 .map_err(|e| bad(e.to_string()))?;
-            print!("{}", fit.report());
+            print!("{report}");
             println!(
                 "wrote {} (material card), .fit.png and .residuals.csv beside it",
                 out.display()

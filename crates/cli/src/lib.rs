@@ -21,6 +21,7 @@ mod compare;
 pub mod eta;
 pub mod fit;
 pub mod fit_bias;
+pub mod fit_inverse;
 mod kinematic;
 pub mod limits;
 pub mod lm;

@@ -80,6 +80,9 @@ impl LmResult {
     }
 }
 
+/// A batch of points in, each one's residuals (or None) out.
+pub type BatchEval<'a> = dyn FnMut(&[DVector<f64>]) -> Vec<Option<DVector<f64>>> + 'a;
+
 /// Minimises ½·|r(x)|² from `x0`; `scale` gives each parameter's size
 /// (the difference step and the convergence test are relative to it).
 /// `eval` takes a batch of points and returns each one's residuals, or
@@ -88,7 +91,7 @@ pub fn minimise(
     x0: DVector<f64>,
     scale: &DVector<f64>,
     options: LmOptions,
-    eval: &mut dyn FnMut(&[DVector<f64>]) -> Vec<Option<DVector<f64>>>,
+    eval: &mut BatchEval<'_>,
 ) -> Result<LmResult, String> {
     let n = x0.len();
     let mut evaluations = 1;
@@ -253,8 +256,8 @@ mod tests {
             },
         )
         .unwrap();
-        for k in 0..3 {
-            assert!((result.x[k] - truth[k]).abs() < 1e-6, "{:?}", result.x);
+        for (x, t) in result.x.iter().zip(truth) {
+            assert!((x - t).abs() < 1e-6, "{:?}", result.x);
         }
         assert_eq!(result.evaluations, calls);
         assert!(result.standard_errors().unwrap().max() < 1e-6);

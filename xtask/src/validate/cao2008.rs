@@ -22,6 +22,16 @@ pub const CASES: &[Case] = &[
         quick: true,
         run: picture_frame,
     },
+    Case {
+        name: "cao2008/bias-extension-inverse",
+        quick: true,
+        run: bias_extension_inverse,
+    },
+    Case {
+        name: "cao2008/bias-extension-picture-frame-law",
+        quick: true,
+        run: bias_extension_frame_law,
+    },
     // Not in CI: it fails (21 of 25 points outside the labs' range), a
     // true result kept visible until the inverse fit replaces it.
     Case {
@@ -200,6 +210,233 @@ fn bias_extension() -> Vec<Check> {
         "\nThree-zone law: {:?} (MPa, γ in rad, h = {h} mm); picture-frame law (`twintex-plain`): \
          {:?}.\n",
         fit.law.coefficients, frame_law.coefficients
+    );
+    note(table);
+    checks
+}
+
+/// The digitised curves' reading accuracy in force (N), from the data's
+/// README ("≈ 0.05 N"): where the three labs agree more closely than
+/// that (±1 % near 10°), the range cannot be read tighter.
+const READ_ACCURACY_N: f64 = 0.05;
+
+/// Cell diagonals across the specimen's width: 5 (10 × 5 cells, about
+/// 0.1 s a run) in the quick mode, 10 in full.
+fn bias_cells() -> usize {
+    if super::quick_mode() { 5 } else { 10 }
+}
+
+/// (u, γ°, the labs' forces) of the 230 × 115 data with 0 < γ ≤ 30°.
+fn bias_rows(text: &str, specimen: drape::fit_bias::Specimen) -> Vec<(f64, f64, Vec<f64>)> {
+    text.lines()
+        .skip(1)
+        .filter_map(|line| {
+            let v: Vec<f64> = line
+                .split(',')
+                .filter_map(|f| f.trim().parse().ok())
+                .collect();
+            let g = specimen.gamma(v[0])?.to_degrees();
+            (g > 0.0 && g <= BIAS_CHECKED && v.len() == 4).then(|| (v[0], g, v[1..].to_vec()))
+        })
+        .collect()
+}
+
+fn range(v: &[f64]) -> (f64, f64) {
+    v.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        })
+}
+
+/// `cao2008/bias-extension-inverse` (issue case 2): the law fitted by
+/// `drape fit bias-extension --method inverse --friction --terms 2` (drape's
+/// own runs of the 230 × 115 specimen in the loop, the three labs at
+/// once, to 40°) must reproduce the labs' clamp force within their range
+/// (min..max), widened by the curves' reading accuracy, at every
+/// displacement up to 30° of central shear. The table says where the fit
+/// is strictly inside the range. Two polynomial terms with the friction
+/// term: with three, the fit's c₅ goes negative and the law softens
+/// beyond the data until the card's check (tangent ≥ 0 to 85°) stops it.
+fn bias_extension_inverse() -> Vec<Check> {
+    use drape::fit_bias::{Specimen, read_bias_curves};
+    use drape::fit_inverse::{InverseOptions, LawForm, fit};
+    let path = data("bias_extension_plain_230x115_force.csv");
+    let text = std::fs::read_to_string(&path).expect("the benchmark's data are in the repository");
+    let specimen = Specimen {
+        height: 230.0,
+        width: 115.0,
+    };
+    let base = drape_constitutive::Material::preset("twintex-plain").expect("preset");
+    let curves =
+        read_bias_curves(std::slice::from_ref(&path), specimen, MAX_ANGLE).expect("readable");
+    let options = InverseOptions {
+        form: LawForm {
+            terms: 2,
+            friction: true,
+        },
+        cells: bias_cells(),
+        step: 1.0,
+        weights: vec![],
+        mesh_check: !super::quick_mode(),
+    };
+    let fit = fit(curves, specimen, &base, &options).expect("the inverse fit succeeds");
+    let mut checks = Vec::new();
+    let [nx, ny] = fit.test.mesh();
+    let mut table = format!(
+        "Bias extension 230 × 115 mm, three labs: the law fitted by simulation (`drape fit \
+         bias-extension --method inverse --friction --terms 2`, {nx} × {ny} cells, to 40°) against \
+         the labs' clamp force (N); {} simulations, {} iterations, {:.1} s wall. The three-zone \
+         fit of the same form, by the ideal balance, beside it.\n\n\
+         | u (mm) | γ (deg) | min | median | max | inverse fit | − median | in range | \
+         three-zone fit | − median |\n|---:|---:|---:|---:|---:|---:|---:|:---:|---:|---:|\n",
+        fit.simulations, fit.iterations, fit.seconds
+    );
+    let mut strict = 0;
+    let rows = bias_rows(&text, specimen);
+    for (u, g, labs) in &rows {
+        let (lo, hi) = range(labs);
+        let mid = median(labs);
+        let f = fit.curve.at(*u);
+        let t = fit.three_zone_force(*u);
+        let room = if f >= mid { hi - mid } else { mid - lo };
+        checks.push(Check::abs(
+            format!(
+                "clamp force at u = {u} mm (γ = {g:.1}°), N: inverse fit vs the labs' median, within \
+                 their range [{lo:.3}, {hi:.3}] ± {READ_ACCURACY_N} N"
+            ),
+            mid,
+            f,
+            room + READ_ACCURACY_N,
+        ));
+        let inside = (lo..=hi).contains(&f);
+        strict += usize::from(inside);
+        let _ = writeln!(
+            table,
+            "| {u} | {g:.1} | {lo:.3} | {mid:.3} | {hi:.3} | {f:.3} | {:+.1} % | {} | {t:.3} | {:+.1} % |",
+            100.0 * (f - mid) / mid,
+            if inside { "yes" } else { "no" },
+            100.0 * (t - mid) / mid
+        );
+    }
+    let _ = write!(
+        table,
+        "\nStrictly inside the labs' range: {strict} of {}.\n\n```\n{}```\n",
+        rows.len(),
+        fit.report()
+    );
+    note(table);
+    checks
+}
+
+/// `cao2008/bias-extension-picture-frame-law` (issue case 3): drape's run
+/// of the 230 × 115 bias extension with the picture-frame law
+/// (`twintex-plain`), against the labs' clamp force. Its error is
+/// reported, not checked: the frames store 3–4 times the bias
+/// extension's energy per area at the same shear, whatever the model
+/// (see the note). Checked: the run is quasi-static (the fixed grip
+/// holds what the moving one pulls, within 0.1 %) and, with the law
+/// the frames give, within 3 % of the three-zone balance of the same law
+/// (the idealisation the frames' normalisation shares).
+fn bias_extension_frame_law() -> Vec<Check> {
+    use drape::bias_sim::VirtualTest;
+    use drape::fit_bias::Specimen;
+    let path = data("bias_extension_plain_230x115_force.csv");
+    let text = std::fs::read_to_string(&path).expect("the benchmark's data are in the repository");
+    let specimen = Specimen {
+        height: 230.0,
+        width: 115.0,
+    };
+    let base = drape_constitutive::Material::preset("twintex-plain").expect("preset");
+    let law = base
+        .resin
+        .shear_locking
+        .clone()
+        .expect("twintex-plain has its law");
+    let test = VirtualTest {
+        specimen,
+        cells: bias_cells(),
+        u_max: 25.0,
+        step: 1.0,
+    };
+    let curve = test.run(&base).expect("the run completes");
+    let [nx, ny] = test.mesh();
+    let mut checks = Vec::new();
+    let mut table = format!(
+        "Bias extension 230 × 115 mm predicted by drape's run ({nx} × {ny} cells) with the \
+         picture-frame law (`twintex-plain`), against the labs' clamp force (N).\n\n\
+         | u (mm) | γ (deg) | median | simulated | error | three-zone balance | sim/balance |\n\
+         |---:|---:|---:|---:|---:|---:|---:|\n"
+    );
+    let mut errors = Vec::new();
+    let scale = curve.force.iter().fold(0.0f64, |a, f| a.max(f.abs()));
+    for (u, g, labs) in bias_rows(&text, specimen) {
+        let mid = median(&labs);
+        let f = curve.at(u);
+        let k = curve
+            .u
+            .iter()
+            .position(|&x| (x - u).abs() < 1e-9)
+            .expect("an output at u");
+        let t = specimen.force(&law, base.thickness, u);
+        checks.push(Check::abs(
+            format!(
+                "u = {u} mm: fixed grip's force against the pulled grip's (quasi-static: within \
+                 0.1 % of the run's largest force), N"
+            ),
+            curve.force[k],
+            curve.held[k],
+            1e-3 * scale,
+        ));
+        if g >= 5.0 {
+            checks.push(Check::rel(
+                format!("u = {u} mm (γ = {g:.1}°): simulated force against the three-zone balance of the same law, N"),
+                t,
+                f,
+                0.03,
+            ));
+        }
+        errors.push((u, 100.0 * (f - mid) / mid));
+        let _ = writeln!(
+            table,
+            "| {u} | {g:.1} | {mid:.3} | {f:.3} | {:+.0} % | {t:.3} | {:.3} |",
+            100.0 * (f - mid) / mid,
+            f / t
+        );
+    }
+    let at = |u: f64| errors.iter().find(|e| e.0 == u).map_or(f64::NAN, |e| e.1);
+    let (lo, hi) = range(&errors.iter().map(|e| e.1).collect::<Vec<_>>());
+    // The energy per area each test gives at the same shear: the frames'
+    // law against the bias extension's own (its three-zone fit of the
+    // inverse fit's form, computed here; case 2 puts the inverse fit
+    // 3–10 % below it).
+    let curves =
+        drape::fit_bias::read_bias_curves(std::slice::from_ref(&path), specimen, MAX_ANGLE)
+            .expect("readable");
+    let form = drape::fit_inverse::LawForm {
+        terms: 2,
+        friction: true,
+    };
+    let (bias, _) =
+        drape::fit_inverse::three_zone(&curves, &[], specimen, base.thickness, form).expect("fit");
+    let ratio = |g: f64| law.energy(g.to_radians()) / bias.energy(g.to_radians());
+    let _ = write!(
+        table,
+        "\nThe picture-frame law's error against the labs' median is {lo:+.0} % to {hi:+.0} % up to \
+         30°: under by 2°, over from 4° on ({:+.0} % at 10.5°, {:+.0} % at 28.8°). It is not the model: drape's run and the three-zone balance of the same law agree \
+         within a few per cent (column sim/balance). Nor the normalisation: both sides are the \
+         energy per unit reference area h·∫τ dγ (the frames' F_s·L_frame/L_fabric² is that \
+         energy's rate per unit area over cos γ, and the bias extension's three-zone balance \
+         counts the zones' areas), and a per-length normalisation of the frames would change \
+         them by L_fabric/L_frame = 0.7–0.96, not by 3. At the same shear the frames store \
+         {:.1}× (10°), {:.1}× (20°), {:.1}× (30°) the energy per area the bias extension's \
+         fit does: the tests disagree about the fabric itself (a frame pre-tensions and \
+         bends the yarns it clamps, a bias specimen lets them slip; the benchmark's paper \
+         reports the same gap).\n",
+        at(10.0),
+        at(25.0),
+        ratio(10.0),
+        ratio(20.0),
+        ratio(30.0)
     );
     note(table);
     checks

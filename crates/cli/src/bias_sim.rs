@@ -212,7 +212,10 @@ mod tests {
         let g_m = m.resin.young / (2.0 * (1.0 + m.resin.poisson));
         ideal_law.coefficients[0] += g_m * m.resin_thickness() / m.thickness;
         for (k, &u) in c.u.iter().enumerate() {
-            assert!((c.force[k] - c.held[k]).abs() < 2e-3 * top, "u = {u}: {c:?}");
+            assert!(
+                (c.force[k] - c.held[k]).abs() < 2e-3 * top,
+                "u = {u}: {c:?}"
+            );
             let g = t.specimen.gamma(u).unwrap();
             if (3.0..=30.0).contains(&g.to_degrees()) {
                 let ideal = t.specimen.force(&ideal_law, m.thickness, u);

@@ -94,7 +94,7 @@ pub enum FitTest {
         weights: Vec<f64>,
         /// Inverse: cell diagonals across the specimen's width in the runs
         /// (the length gets H/W times as many).
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, default_value_t = 10)]
         cells: usize,
         /// Inverse: run the fitted law again on twice the cells and report
         /// how much the force moves (the mesh's error).

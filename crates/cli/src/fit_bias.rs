@@ -1,6 +1,6 @@
-//! `drape fit bias-extension`, the ideal three-zone fit: the shear law
-//! from bias-extension curves (clamp force against crosshead
-//! displacement) by the energy balance of ideal pin-jointed kinematics.
+//! `drape fit bias-extension`: reading the curves, the ideal three-zone
+//! balance, and the command's card, plot and residuals for either method
+//! (the inverse fit by simulation is [`crate::fit_inverse`]).
 //!
 //! A specimen H long between the grips and W wide (H ≥ 2W), yarns at ±45°:
 //! zone A (area W·(H − 3W/2)) shears by γ, zones B (area W²) by γ/2, the
@@ -9,9 +9,10 @@
 //! F·du = h·[S_A·τ_s(γ) + S_B·τ_s(γ/2)/2]·dγ — linear in the law's
 //! coefficients, fitted by weighted least squares.
 //!
-//! What it is not: the inverse fit by drape's own bias-extension runs
-//! (yarn slip, intra-ply tension and the zones' blurred borders, which the
-//! ideal kinematics ignore) is not done here yet.
+//! What the balance is not: a model of yarn stretch, yarn bending at the
+//! zones' borders or the borders' width, which drape's runs carry (on the
+//! benchmark the three-zone law comes out 3–10 % above the inverse one);
+//! nor of yarn slip, which neither models.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

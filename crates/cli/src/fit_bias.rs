@@ -11,7 +11,7 @@
 //!
 //! What the balance is not: a model of yarn stretch, yarn bending at the
 //! zones' borders or the borders' width, which drape's runs carry (on the
-//! benchmark the three-zone law comes out 3–10 % above the inverse one);
+//! benchmark the three-zone law comes out 4–16 % above the inverse one);
 //! nor of yarn slip, which neither models.
 
 use std::fmt::Write as _;

@@ -410,7 +410,7 @@ fn bias_extension_frame_law() -> Vec<Check> {
     // The energy per area each test gives at the same shear: the frames'
     // law against the bias extension's own (its three-zone fit of the
     // inverse fit's form, computed here; case 2 puts the inverse fit
-    // 3–10 % below it).
+    // 4–16 % below it).
     let curves =
         drape::fit_bias::read_bias_curves(std::slice::from_ref(&path), specimen, MAX_ANGLE)
             .expect("readable");

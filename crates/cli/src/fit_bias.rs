@@ -63,6 +63,31 @@ impl Specimen {
         h * (sa * law.stress(g) + 0.5 * sb * law.stress(0.5 * g)) * dg
     }
 
+    /// The crosshead displacement (mm) at central shear `gamma` (rad).
+    pub fn displacement(&self, gamma: f64) -> f64 {
+        let theta = 0.5 * (std::f64::consts::FRAC_PI_2 - gamma);
+        std::f64::consts::SQRT_2 * self.d() * theta.cos() - self.d()
+    }
+
+    /// The normalised shear force F_sh(γ) (N/mm) of a clamp-force curve
+    /// `force(u)`, by the benchmark's energy normalisation (Harrison,
+    /// Launay; Cao et al. 2008): F_sh(γ) = [(H/W − 1)·F·(cos(γ/2) −
+    /// sin(γ/2)) − W·F_sh(γ/2)·cos(γ/2)] / ((2H − 3W)·cos γ), recursive
+    /// in γ/2 down to 1e-8 rad, linear below. It is the picture frame's F_s·L_frame/L_fabric²
+    /// for the same fabric: both are h·τ_s(γ)/cos γ (tested).
+    pub fn normalised(&self, force: &dyn Fn(f64) -> f64, gamma: f64) -> f64 {
+        let (h, w) = (self.height, self.width);
+        let f = force(self.displacement(gamma));
+        if gamma < 1e-8 {
+            // Any smooth odd law is linear there: F_sh(γ/2) = F_sh(γ)/2.
+            return (h / w - 1.0) * f / (2.0 * h - 2.5 * w);
+        }
+        let half = self.normalised(force, 0.5 * gamma);
+        ((h / w - 1.0) * f * ((0.5 * gamma).cos() - (0.5 * gamma).sin())
+            - w * half * (0.5 * gamma).cos())
+            / ((2.0 * h - 3.0 * w) * gamma.cos())
+    }
+
     /// (γ, S_A, S_B, dγ/du) at `u` (γ NaN beyond the kinematics).
     pub fn zones_at(&self, u: f64) -> (f64, f64, f64, f64) {
         let (sa, sb, dg) = self.zones(u);
@@ -458,6 +483,29 @@ pub fn run(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The benchmark's normalisation of the three-zone force is the
+    /// frame's normalised force of the same law, h·τ_s/cos γ: the two
+    /// tests are compared per unit area on both sides (to 1e-9).
+    #[test]
+    fn the_benchmarks_bias_normalisation_is_the_frames() {
+        let law = ShearLocking {
+            coefficients: vec![0.0766, -0.1217, 0.3107],
+            friction: Some([0.003, 0.02]),
+        };
+        let s = Specimen {
+            height: 230.0,
+            width: 115.0,
+        };
+        let h = 1.2;
+        for g in [5.0f64, 10.0, 20.0, 30.0] {
+            let g = g.to_radians();
+            assert!((s.gamma(s.displacement(g)).unwrap() - g).abs() < 1e-12);
+            let n = s.normalised(&|u| s.force(&law, h, u), g);
+            let frame = h * law.stress(g) / g.cos();
+            assert!((n - frame).abs() < 1e-9 * frame, "{n} vs {frame}");
+        }
+    }
 
     /// The three-zone force of a known law, sampled, fits back to it; and
     /// the force is the derivative of the zones' energy (finite difference

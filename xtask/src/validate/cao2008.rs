@@ -333,7 +333,7 @@ fn bias_extension_inverse() -> Vec<Check> {
 /// `cao2008/bias-extension-picture-frame-law` (issue case 3): drape's run
 /// of the 230 × 115 bias extension with the picture-frame law
 /// (`twintex-plain`), against the labs' clamp force. Its error is
-/// reported, not checked: the frames store 3–4 times the bias
+/// reported, not checked: the frames store 2–4 times the bias
 /// extension's energy per area at the same shear, whatever the model
 /// (see the note). Checked: the run is quasi-static (the fixed grip
 /// holds what the moving one pulls, within 0.1 %) and, with the law
@@ -421,6 +421,38 @@ fn bias_extension_frame_law() -> Vec<Check> {
     let (bias, _) =
         drape::fit_inverse::three_zone(&curves, &[], specimen, base.thickness, form).expect("fit");
     let ratio = |g: f64| law.energy(g.to_radians()) / bias.energy(g.to_radians());
+    // The labs' own curves in the benchmark's normalisation, both per unit
+    // area (`Specimen::normalised` is the frames' F_s·L_frame/L_fabric² for
+    // one law, tested): the bias median against the frames' median.
+    let all = bias_rows(&text, specimen);
+    let median_curve = |u: f64| {
+        let mut prev = (0.0, 0.0);
+        for (x, _, labs) in &all {
+            let m = median(labs);
+            if *x >= u {
+                return prev.1 + (u - prev.0) / (x - prev.0) * (m - prev.1);
+            }
+            prev = (*x, m);
+        }
+        f64::NAN
+    };
+    let frames_text = std::fs::read_to_string(data("picture_frame_plain_normalised.csv"))
+        .expect("the benchmark's data are in the repository");
+    let frames = lab_rows(&frames_text);
+    let _ = write!(
+        table,
+        "\nThe labs' own curves in the benchmark's energy normalisation (N/mm, per unit area on \
+         both sides):\n\n| γ (deg) | bias extension, median curve | picture frames, median | \
+         frames / bias |\n|---:|---:|---:|---:|\n"
+    );
+    for g in [10.0, 20.0, 27.5] {
+        let b = specimen.normalised(&median_curve, f64::to_radians(g));
+        let f = frames
+            .iter()
+            .find(|(a, _)| (*a - g).abs() < 1e-9)
+            .map_or(f64::NAN, |(_, v)| median(v));
+        let _ = writeln!(table, "| {g} | {b:.4} | {f:.4} | {:.1} |", f / b);
+    }
     let _ = write!(
         table,
         "\nThe picture-frame law's error against the labs' median is {lo:+.0} % to {hi:+.0} % up to \
@@ -428,12 +460,14 @@ fn bias_extension_frame_law() -> Vec<Check> {
          within a few per cent (column sim/balance). Nor the normalisation: both sides are the \
          energy per unit reference area h·∫τ dγ (the frames' F_s·L_frame/L_fabric² is that \
          energy's rate per unit area over cos γ, and the bias extension's three-zone balance \
-         counts the zones' areas), and a per-length normalisation of the frames would change \
-         them by L_fabric/L_frame = 0.7–0.96, not by 3. At the same shear the frames store \
-         {:.1}× (10°), {:.1}× (20°), {:.1}× (30°) the energy per area the bias extension's \
-         fit does: the tests disagree about the fabric itself (a frame pre-tensions and \
-         bends the yarns it clamps, a bias specimen lets them slip; the benchmark's paper \
-         reports the same gap).\n",
+         counts the zones' areas; the benchmark's own bias normalisation of a three-zone curve is the \
+         frames' normalised force, h·τ_s/cos γ, to 1e-9: `fit_bias` tests it), and a per-length \
+         normalisation of the frames would change them by L_fabric/L_frame = 0.65–0.98, not by 3. \
+         The labs' own curves, normalised alike (table above), differ by 2.8–3.7×, and at the same \
+         shear the frames' law stores {:.1}× (10°), {:.1}× (20°), {:.1}× (30°) the energy per \
+         area of the bias extension's fit: the two tests disagree about the fabric itself. Likely \
+         causes, not checked here: a frame's clamps pre-tension and bend the yarns (a slightly \
+         misaligned sample reads stiffer), while a bias specimen's yarns can slip at the crossovers.\n",
         at(10.0),
         at(25.0),
         ratio(10.0),

@@ -435,3 +435,45 @@ impl InverseFit {
         s
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three-zone curves of a known friction-form law (two curves, one
+    /// weighted 0: it must not count) fit back to it to 1e-6 of each
+    /// parameter, from the grid of γ_f and Levenberg–Marquardt.
+    #[test]
+    fn the_three_zone_fit_gives_back_a_friction_law() {
+        let law = ShearLocking {
+            coefficients: vec![0.007, 0.013],
+            friction: Some([0.003, 1.3f64.to_radians()]),
+        };
+        let s = Specimen {
+            height: 230.0,
+            width: 115.0,
+        };
+        let h = 1.2;
+        let curve = |name: &str, scale: f64| BiasCurve {
+            name: name.into(),
+            file: "x.csv".into(),
+            points: (1..=40)
+                .map(|n| (n, n as f64, scale * s.force(&law, h, n as f64)))
+                .collect(),
+        };
+        let form = LawForm {
+            terms: 2,
+            friction: true,
+        };
+        let (fit, r) =
+            three_zone(&[curve("a", 1.0), curve("b", 1.5)], &[1.0, 0.0], s, h, form).unwrap();
+        let (p, q) = (form.params(&fit), form.params(&law));
+        for k in 0..p.len() {
+            assert!(
+                (p[k] - q[k]).abs() < 1e-6 * q[k].abs(),
+                "{fit:?} after {}",
+                r.stop
+            );
+        }
+    }
+}

@@ -40,6 +40,7 @@ use drape_model::Model;
 use drape_time::{ExplicitSettings, ImplicitSettings};
 
 mod bending;
+mod yarn_buckling;
 mod build;
 mod locate;
 mod open_mesh;

@@ -112,6 +112,7 @@ fn linear_glass() -> Material {
     let mut m = Material::preset("glass-serge-4x3").unwrap();
     m.fibre.crimp_strain = 0.0;
     m.fibre.compression_factor = 1.0;
+    m.fibre.buckling_stress = 0.0;
     m
 }
 
@@ -191,6 +192,7 @@ fn stable_step_bounds_the_highest_frequency_of_uncrimped_and_stiff_yarns() {
     stiff.fibre.modulus *= 100.0;
     let mut carbon = Material::preset("carbon-prepreg-2x2").unwrap();
     carbon.fibre.compression_factor = 1.0;
+    carbon.fibre.buckling_stress = 0.0;
     // An uncrimped yarn at ε → 0⁺ (any stretch makes every yarn taut with
     // E_t = E_f), a linear one, 100 times stiffer yarns, and a crimped
     // yarn stretched to 10 ε_sh, where E_t = E_f·(1 − e⁻¹⁰).

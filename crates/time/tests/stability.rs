@@ -173,7 +173,7 @@ fn diamond(width: f64, height: f64, cells: [usize; 2]) -> RectangleBlank {
 /// The glass preset with straight yarns that buckle: the tangent jumps
 /// from 0 to E_f at ε = 0.
 fn uncrimped_glass() -> Material {
-    let mut m = Material::preset("glass-serge-4x3").unwrap();
+    let mut m = Material::paper_preset("glass-serge-4x3").unwrap();
     m.fibre.crimp_strain = 0.0;
     m
 }

@@ -9,6 +9,14 @@ use crate::MaterialError;
 const SERIES_BELOW: f64 = 1e-3;
 /// The energy's closed form cancels more: its series runs further.
 const ENERGY_SERIES_BELOW: f64 = 0.1;
+/// The share of E_f below which a jump of the tangent at ε = 0 is not a
+/// kink for the explicit driver (see [`FibreLaw::has_kink`]) **\[choice\]**:
+/// 0.01. The branch of stiffness J then has a stable limit 1/√(J/E_f) ≥ 10
+/// times the step E_f sets, where a bilinear oscillator's lowest resonance
+/// band sits at 1/0.2 = 5 times (ARCHITECTURE.md, "Dashpots on kinked
+/// yarns"). The presets' buckling yarns jump by 8.7e-4 (glass), 2.6e-3
+/// (twintex) and 8.1e-3 (carbon) of E_f.
+const KINK_SHARE: f64 = 0.01;
 
 /// The crimped yarn, hyperelastic in the log strain ε = ln λ (SPEC §4,
 /// paper eq. 8–9 integrated in closed form):
@@ -64,6 +72,10 @@ impl FibreLaw {
     /// [`Self::stress_and_tangent`]); public so that a batched evaluation
     /// of the law can switch where the scalar one does.
     pub const TENSION_SERIES_BELOW: f64 = SERIES_BELOW;
+
+    /// The share of E_f a tangent jump at ε = 0 must reach to be a kink
+    /// (see [`Self::has_kink`]).
+    pub const KINK_SHARE: f64 = KINK_SHARE;
 
     /// A fibre with no compression stiffness, validated.
     pub fn new(modulus: f64, crimp_strain: f64) -> Result<Self, MaterialError> {
@@ -228,11 +240,12 @@ impl FibreLaw {
         self.modulus
     }
 
-    /// Whether the tangent jumps at ε = 0: an uncrimped yarn (ε_sh = 0)
-    /// that carries less in compression than in tension (c_c < 1) goes
-    /// from E_f to c_c·E_f, a crimped one with c_c > 0 from 0 to c_c·E_f.
-    /// (A crimped yarn without compression stiffness has E_t = 0 on both
-    /// sides: no jump; a buckling one jumps from 0 to σ_b/(2ε_sh).)
+    /// Whether the tangent jumps at ε = 0 by [`Self::KINK_SHARE`] of E_f or
+    /// more: an uncrimped yarn (ε_sh = 0) that carries less in compression
+    /// than in tension (c_c < 1) goes from E_f to c_c·E_f, a crimped one
+    /// with c_c > 0 from 0 to c_c·E_f, a buckling one from 0 to
+    /// σ_b/(2ε_sh). (A crimped yarn without compression stiffness has
+    /// E_t = 0 on both sides: no jump.)
     ///
     /// Such a yarn switches between a taut and a slack stiffness as it
     /// crosses ε = 0, and central differences are not stable for such a
@@ -240,11 +253,13 @@ impl FibreLaw {
     /// resonance bands make it grow (drape-time damps the yarn's ringing).
     #[inline]
     pub fn has_kink(&self) -> bool {
-        if self.crimp_strain == 0.0 {
-            self.compression_factor < 1.0
+        let taut = if self.crimp_strain == 0.0 {
+            self.modulus
         } else {
-            self.compression_factor > 0.0 || self.buckling_stress > 0.0
-        }
+            0.0
+        };
+        let compressed = self.stress_and_tangent(0.0).1;
+        (taut - compressed).abs() >= KINK_SHARE * self.modulus
     }
 }
 
@@ -310,7 +325,16 @@ mod tests {
     #[test]
     fn a_kink_is_a_jump_of_the_tangent_at_zero() {
         let h = 1e-12;
-        for (sh, cc) in [(0.0, 0.0), (0.0, 0.5), (0.0, 1.0), (0.01, 0.0), (0.01, 0.3)] {
+        for (sh, cc) in [
+            (0.0, 0.0),
+            (0.0, 0.5),
+            (0.0, 1.0),
+            (0.01, 0.0),
+            (0.01, 0.3),
+            (0.01, 0.02),
+            (0.01, 0.005),
+            (0.0, 0.995),
+        ] {
             let law = FibreLaw {
                 modulus: 1000.0,
                 crimp_strain: sh,
@@ -320,7 +344,7 @@ mod tests {
             let jump = (law.tangent(h) - law.tangent(-h)).abs();
             assert_eq!(
                 law.has_kink(),
-                jump > 1.0,
+                jump >= KINK_SHARE * law.modulus,
                 "ε_sh {sh}, c_c {cc}: jump {jump}"
             );
         }
@@ -391,13 +415,33 @@ mod tests {
         // w = σ_b·ε_sh·(3 − 2) exactly (to round-off).
         let (tau, tangent) = law.stress_and_tangent(-3.0 * sh);
         assert!((tau + 0.5 * s).abs() <= 1e-15 * s, "{tau}");
-        assert!((tangent - s / (16.0 * sh)).abs() <= 1e-15 * tangent, "{tangent}");
+        assert!(
+            (tangent - s / (16.0 * sh)).abs() <= 1e-15 * tangent,
+            "{tangent}"
+        );
         assert!((law.energy(-3.0 * sh) - s * sh).abs() <= 1e-15 * s * sh);
         // At ε = 0 the tangent is σ_b/(2ε_sh) (a jump from the tension
         // side's 0) and the stress and energy vanish.
         assert_eq!(law.stress_and_tangent(0.0), (0.0, s / (2.0 * sh)));
         assert_eq!(law.energy(0.0), 0.0);
-        assert!(law.has_kink());
+        // A jump of 8.7e-4·E_f: too small to ring (no dashpots); the
+        // largest jump allowed, E_f, is a kink.
+        assert!(!law.has_kink());
+        let edge = FibreLaw {
+            buckling_stress: 2.0 * sh * law.modulus,
+            ..law
+        };
+        assert!(edge.has_kink());
+        let share = FibreLaw {
+            buckling_stress: 2.0 * sh * law.modulus * KINK_SHARE,
+            ..law
+        };
+        assert!(share.has_kink());
+        let below = FibreLaw {
+            buckling_stress: 2.0 * sh * law.modulus * KINK_SHARE * 0.99,
+            ..law
+        };
+        assert!(!below.has_kink());
         // Near zero, no cancellation: w = σ_b·ε_sh·x²/4·(1 − x/2 + …).
         let x = 1e-9;
         let w = law.energy(-x * sh);
@@ -420,22 +464,48 @@ mod tests {
         let field = |law: FibreLaw| law.validate("fibre").unwrap_err().field;
         let glass = buckling_glass();
         glass.validate("fibre").unwrap();
-        assert_eq!(field(FibreLaw { buckling_stress: -1.0, ..glass }), "fibre.buckling_stress");
         assert_eq!(
-            field(FibreLaw { buckling_stress: f64::NAN, ..glass }),
+            field(FibreLaw {
+                buckling_stress: -1.0,
+                ..glass
+            }),
+            "fibre.buckling_stress"
+        );
+        assert_eq!(
+            field(FibreLaw {
+                buckling_stress: f64::NAN,
+                ..glass
+            }),
             "fibre.buckling_stress"
         );
         // No crimp, no bow: the column law has nothing to grow.
-        assert_eq!(field(FibreLaw { crimp_strain: 0.0, ..glass }), "fibre.crimp_strain");
         assert_eq!(
-            field(FibreLaw { compression_factor: 0.1, ..glass }),
+            field(FibreLaw {
+                crimp_strain: 0.0,
+                ..glass
+            }),
+            "fibre.crimp_strain"
+        );
+        assert_eq!(
+            field(FibreLaw {
+                compression_factor: 0.1,
+                ..glass
+            }),
             "fibre.compression_factor"
         );
         // σ_b/(2ε_sh) = E_f is the largest allowed: the stable step stays E_f's.
         let edge = 2.0 * glass.crimp_strain * glass.modulus;
-        FibreLaw { buckling_stress: edge, ..glass }.validate("fibre").unwrap();
+        FibreLaw {
+            buckling_stress: edge,
+            ..glass
+        }
+        .validate("fibre")
+        .unwrap();
         assert_eq!(
-            field(FibreLaw { buckling_stress: edge * (1.0 + 1e-12), ..glass }),
+            field(FibreLaw {
+                buckling_stress: edge * (1.0 + 1e-12),
+                ..glass
+            }),
             "fibre.buckling_stress"
         );
     }

@@ -222,7 +222,12 @@ fn stable_step_bounds_the_highest_frequency_of_uncrimped_and_stiff_yarns() {
 /// glass (200 × 50 mm, 10 mm diamond cells) 16 mm at the full stable
 /// estimate, with dashpots on the kinked yarns at ratio `fibre_damping`.
 fn uncrimped_pull(fibre_damping: f64) -> f64 {
-    let mut model = Model::from_blank(&diamond(200.0, 50.0, [20, 5]), &uncrimped_glass()).unwrap();
+    pull(&uncrimped_glass(), fibre_damping)
+}
+
+/// [`uncrimped_pull`] of a strip of `material`.
+fn pull(material: &Material, fibre_damping: f64) -> f64 {
+    let mut model = Model::from_blank(&diamond(200.0, 50.0, [20, 5]), material).unwrap();
     let left = model.node_set("left").unwrap().to_vec();
     let right = model.node_set("right").unwrap().to_vec();
     model.boundary.push(BoundaryCondition::fixed(left));
@@ -264,6 +269,19 @@ fn uncrimped_yarns_run_stably_at_the_full_estimate() {
         "undamped {undamped:e}: the case no longer shows the resonance"
     );
     assert!(damped < 1e-7, "damped {damped:e}");
+}
+
+#[test]
+fn buckling_yarns_run_stably_undamped_at_the_full_estimate() {
+    // The presets' buckling yarn jumps from 0 to σ_b/(2ε_sh) = 8.7e-4·E_f
+    // at ε = 0 (glass), under `FibreLaw::KINK_SHARE`: no dashpots, and the
+    // pull closes its balance as the paper's crimped yarn (no jump) does.
+    let buckling = Material::preset("glass-serge-4x3").unwrap();
+    assert!(buckling.fibre.buckling_stress > 0.0 && !buckling.fibre.has_kink());
+    let paper = Material::paper_preset("glass-serge-4x3").unwrap();
+    let (with, without) = (pull(&buckling, 0.0), pull(&paper, 0.0));
+    eprintln!("balance error: buckling {with:e}, paper's yarn {without:e}");
+    assert!(with < 1e-7 && without < 1e-7, "{with:e}, {without:e}");
 }
 
 #[test]

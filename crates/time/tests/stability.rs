@@ -222,11 +222,12 @@ fn stable_step_bounds_the_highest_frequency_of_uncrimped_and_stiff_yarns() {
 /// glass (200 × 50 mm, 10 mm diamond cells) 16 mm at the full stable
 /// estimate, with dashpots on the kinked yarns at ratio `fibre_damping`.
 fn uncrimped_pull(fibre_damping: f64) -> f64 {
-    pull(&uncrimped_glass(), fibre_damping)
+    pull(&uncrimped_glass(), fibre_damping, 16.0)
 }
 
-/// [`uncrimped_pull`] of a strip of `material`.
-fn pull(material: &Material, fibre_damping: f64) -> f64 {
+/// [`uncrimped_pull`] of a strip of `material`, its right end moved
+/// `travel` mm along x (< 0: pushed in).
+fn pull(material: &Material, fibre_damping: f64, travel: f64) -> f64 {
     let mut model = Model::from_blank(&diamond(200.0, 50.0, [20, 5]), material).unwrap();
     let left = model.node_set("left").unwrap().to_vec();
     let right = model.node_set("right").unwrap().to_vec();
@@ -235,7 +236,7 @@ fn pull(material: &Material, fibre_damping: f64) -> f64 {
         nodes: right,
         components: [true, true, true],
         motion: Motion::Displacement {
-            value: Vector3::new(16.0, 0.0, 0.0),
+            value: Vector3::new(travel, 0.0, 0.0),
             amplitude: Amplitude::SmoothStep { duration: 0.01 },
         },
     });
@@ -274,14 +275,17 @@ fn uncrimped_yarns_run_stably_at_the_full_estimate() {
 #[test]
 fn buckling_yarns_run_stably_undamped_at_the_full_estimate() {
     // The presets' buckling yarn jumps from 0 to σ_b/(2ε_sh) = 8.7e-4·E_f
-    // at ε = 0 (glass), under `FibreLaw::KINK_SHARE`: no dashpots, and the
-    // pull closes its balance as the paper's crimped yarn (no jump) does.
+    // at ε = 0 (glass), under `FibreLaw::KINK_SHARE`: no dashpots. Pulled,
+    // and pushed in so that its yarns cross ε = 0 into the column law, the
+    // strip closes its balance as the paper's crimped yarn (no jump) does.
     let buckling = Material::preset("glass-serge-4x3").unwrap();
     assert!(buckling.fibre.buckling_stress > 0.0 && !buckling.fibre.has_kink());
     let paper = Material::paper_preset("glass-serge-4x3").unwrap();
-    let (with, without) = (pull(&buckling, 0.0), pull(&paper, 0.0));
-    eprintln!("balance error: buckling {with:e}, paper's yarn {without:e}");
-    assert!(with < 1e-7 && without < 1e-7, "{with:e}, {without:e}");
+    for travel in [16.0, -16.0] {
+        let (with, without) = (pull(&buckling, 0.0, travel), pull(&paper, 0.0, travel));
+        eprintln!("travel {travel} mm: balance error buckling {with:e}, paper's yarn {without:e}");
+        assert!(with < 1e-7 && without < 1e-7, "{with:e}, {without:e}");
+    }
 }
 
 #[test]

@@ -40,7 +40,6 @@ use drape_model::Model;
 use drape_time::{ExplicitSettings, ImplicitSettings};
 
 mod bending;
-mod yarn_buckling;
 mod build;
 mod locate;
 mod open_mesh;
@@ -48,6 +47,7 @@ mod placement;
 mod set_path;
 mod shape;
 mod spec;
+mod yarn_buckling;
 
 use build::{build, finite3, positive, unit};
 use locate::{Locator, Override, field_at, line_at, plain};

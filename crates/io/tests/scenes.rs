@@ -523,7 +523,10 @@ material = { name = "m", thickness = 0.5, fibre_volume_fraction = 0.5, density =
         "crimp_strain = 0.0, buckling_stress = 1.0 }",
     );
     let text = error_of(&bad).to_string();
-    assert!(text.contains("fabric.material.fibre.crimp_strain"), "{text}");
+    assert!(
+        text.contains("fabric.material.fibre.crimp_strain"),
+        "{text}"
+    );
 }
 
 /// Unset, `fabric.bending` is on wherever the material has a rigidity and

@@ -191,7 +191,11 @@ fn presets() -> Vec<Check> {
         // The preset differs from the paper's material in σ_b alone.
         let mut shipped = Material::preset(n).expect("a SPEC preset");
         shipped.fibre.buckling_stress = 0.0;
-        exact("preset = paper's but σ_b (1 = equal)", 1.0, f64::from(u8::from(shipped == m)));
+        exact(
+            "preset = paper's but σ_b (1 = equal)",
+            1.0,
+            f64::from(u8::from(shipped == m)),
+        );
         exact("E_m (MPa)", spec.e_m, m.resin.young);
         exact("ν_m", spec.nu_m, m.resin.poisson);
         exact("h (mm)", spec.h, m.thickness);

@@ -22,10 +22,10 @@
 //! The first and last checks fail (2026-11-28, second session; numbers
 //! release, one thread): 7.96° rms over 816 elements (8.40° while the
 //! preset's yarns buckled at no cost), the median profile agreeing to
-//! 0.26° and the diagonals differing by 8.78°. In the tray's corners the
-//! run's yarns end up to 17 % shorter (truss stretch 0.830; 17.5 % of the
+//! 0.26° and the diagonals differing by 8.80°. In the tray's corners the
+//! run's yarns end up to 17 % shorter (truss stretch 0.831; 17.5 % of the
 //! yarns' length below 0.95, which the fold check reports as gathering),
-//! and the blank's corners are drawn in along the diagonal by DD 31.1 mm
+//! and the blank's corners are drawn in along the diagonal by DD 31.0 mm
 //! where the net's move 9.6 mm: the ply lies on the mould there by
 //! shortening its yarns, where a pin-jointed net must shear (45° against
 //! the run's 23.8°).

@@ -121,9 +121,9 @@ fn stress(law: &FibreLaw, eps: f64x4) -> f64x4 {
     if law.buckling_stress > 0.0 {
         // The buckled column's square roots, only in the compressed lanes,
         // by the scalar law's own function (the same bits).
-        for k in 0..LANES {
-            compression.0[k] = if compressed[k] {
-                law.buckled_stress_and_tangent(eps.0[k]).0
+        for ((out, &eps), &squeezed) in compression.0.iter_mut().zip(&eps.0).zip(&compressed) {
+            *out = if squeezed {
+                law.buckled_stress_and_tangent(eps).0
             } else {
                 0.0
             };

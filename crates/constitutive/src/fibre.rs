@@ -9,13 +9,24 @@ use crate::MaterialError;
 const SERIES_BELOW: f64 = 1e-3;
 /// The energy's closed form cancels more: its series runs further.
 const ENERGY_SERIES_BELOW: f64 = 0.1;
+/// The share of E_f below which a jump of the tangent at ε = 0 is not a
+/// kink for the explicit driver (see [`FibreLaw::has_kink`]) **\[choice\]**:
+/// 0.01. The branch of stiffness J then has a stable limit 1/√(J/E_f) ≥ 10
+/// times the step E_f sets, where a bilinear oscillator's lowest resonance
+/// band sits at 1/0.2 = 5 times (ARCHITECTURE.md, "Dashpots on kinked
+/// yarns"). The presets' buckling yarns jump by 8.7e-4 (glass), 2.6e-3
+/// (twintex) and 8.1e-3 (carbon) of E_f.
+const KINK_SHARE: f64 = 0.01;
 
 /// The crimped yarn, hyperelastic in the log strain ε = ln λ (SPEC §4,
 /// paper eq. 8–9 integrated in closed form):
 ///
 /// - tension (ε > 0): τ = E_f·(ε − ε_sh·(1 − e^(−ε/ε_sh))), tangent
 ///   E_t = E_f·(1 − e^(−ε/ε_sh));
-/// - compression (ε ≤ 0): τ = c_c·E_f·ε.
+/// - compression (ε ≤ 0): τ = c_c·E_f·ε (SPEC §4; c_c = 0, the paper's
+///   yarn, buckles at no cost), or, with a buckling stress σ_b > 0, the
+///   crimped yarn as an imperfect column (beyond the paper, see
+///   [`Self::buckling_stress`]): τ = −σ_b·(1 − 1/√(1 + x)), x = −ε/ε_sh.
 ///
 /// τ is the Kirchhoff stress conjugate to ε per unit reference volume, so a
 /// truss of section A₀ carries N = A₀·τ/λ and stores A₀·L₀·w(ε).
@@ -30,6 +41,30 @@ pub struct FibreLaw {
     /// c_c, the fraction of E_f carried in compression (0: yarns buckle).
     #[serde(default)]
     pub compression_factor: f64,
+    /// σ_b (MPa, on the family's fibre section V_f·h/2), the stress a
+    /// compressed yarn tends to as it buckles between its interlacings;
+    /// 0 (the paper's yarn): it buckles at no cost.
+    ///
+    /// Why this form: a yarn segment of length L between two interlacings
+    /// is a pinned column of bending rigidity EI, already bowed by its
+    /// crimp into a half sine of amplitude a₀ whose arc length exceeds its
+    /// chord by ε_sh = (π·a₀/2L)², the same crimp strain that the tension
+    /// branch straightens. Under an end load P the bow grows to
+    /// a = a₀/(1 − P/P_E) (the imperfect column), P_E = π²·EI/L², so the
+    /// segment shortens by ε = −ε_sh·((a/a₀)² − 1) (the fibres' own
+    /// shortening, P/(E_f·A), is four orders smaller and left out).
+    /// Solved for the load: P/P_E = 1 − 1/√(1 + x), x = −ε/ε_sh, which
+    /// starts at the tangent σ_b/(2ε_sh) and tends to the Euler stress
+    /// σ_b = P_E/A from below (a buckled yarn keeps carrying its Euler
+    /// load; it does not shorten for free). Per unit width of a family,
+    /// EI = B·pitch and A = pitch·V_f·h/2, so σ_b = π²·B/(L²·V_f·h/2) from
+    /// the fabric's bending rigidity B ([`crate::Material::bending_rigidity`]).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub buckling_stress: f64,
+}
+
+fn is_zero(value: &f64) -> bool {
+    *value == 0.0
 }
 
 impl FibreLaw {
@@ -38,12 +73,17 @@ impl FibreLaw {
     /// of the law can switch where the scalar one does.
     pub const TENSION_SERIES_BELOW: f64 = SERIES_BELOW;
 
+    /// The share of E_f a tangent jump at ε = 0 must reach to be a kink
+    /// (see [`Self::has_kink`]).
+    pub const KINK_SHARE: f64 = KINK_SHARE;
+
     /// A fibre with no compression stiffness, validated.
     pub fn new(modulus: f64, crimp_strain: f64) -> Result<Self, MaterialError> {
         let law = Self {
             modulus,
             crimp_strain,
             compression_factor: 0.0,
+            buckling_stress: 0.0,
         };
         law.validate("fibre")?;
         Ok(law)
@@ -65,7 +105,55 @@ impl FibreLaw {
             self.compression_factor,
             (0.0..=1.0).contains(&self.compression_factor),
             "a fraction of the tensile modulus in [0, 1]",
-        )
+        )?;
+        MaterialError::check(
+            path,
+            "buckling_stress",
+            self.buckling_stress,
+            self.buckling_stress >= 0.0,
+            "a stress >= 0 (MPa)",
+        )?;
+        if self.buckling_stress > 0.0 {
+            // The column law needs the crimp as its imperfection, replaces
+            // the linear compression branch, and must not raise the stable
+            // step's modulus: its steepest tangent, σ_b/(2ε_sh) at ε = 0,
+            // stays at most E_f.
+            MaterialError::check(
+                path,
+                "crimp_strain",
+                self.crimp_strain,
+                self.crimp_strain > 0.0,
+                "a crimp strain > 0 with buckling_stress (the crimp is the column's bow)",
+            )?;
+            MaterialError::check(
+                path,
+                "compression_factor",
+                self.compression_factor,
+                self.compression_factor == 0.0,
+                "0 with buckling_stress (one compression law at a time)",
+            )?;
+            MaterialError::check(
+                path,
+                "buckling_stress",
+                self.buckling_stress,
+                self.buckling_stress <= 2.0 * self.crimp_strain * self.modulus,
+                "at most 2·crimp_strain·modulus (its initial tangent σ_b/(2ε_sh) at most E_f)",
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The buckled column's stress and tangent at ε ≤ 0 (σ_b > 0, ε_sh > 0),
+    /// written without cancellation: 1 − 1/√(1+x) = x/(√(1+x)·(1 + √(1+x))).
+    /// Public so that a batched evaluation computes the same bits.
+    #[inline]
+    pub fn buckled_stress_and_tangent(&self, eps: f64) -> (f64, f64) {
+        let sh = self.crimp_strain;
+        let x = -eps / sh;
+        let root = (1.0 + x).sqrt();
+        let tau = -self.buckling_stress * x / (root * (1.0 + root));
+        let tangent = self.buckling_stress / (2.0 * sh * root * (1.0 + x));
+        (tau, tangent)
     }
 
     /// The stress τ(ε) and the tangent dτ/dε.
@@ -73,6 +161,9 @@ impl FibreLaw {
     pub fn stress_and_tangent(&self, eps: f64) -> (f64, f64) {
         let e = self.modulus;
         if eps <= 0.0 {
+            if self.buckling_stress > 0.0 {
+                return self.buckled_stress_and_tangent(eps);
+            }
             let k = self.compression_factor * e;
             return (k * eps, k);
         }
@@ -109,6 +200,13 @@ impl FibreLaw {
     pub fn energy(&self, eps: f64) -> f64 {
         let e = self.modulus;
         if eps <= 0.0 {
+            if self.buckling_stress > 0.0 {
+                // w = σ_b·ε_sh·(x − 2(√(1+x) − 1)) = σ_b·ε_sh·x²/(1 + √(1+x))².
+                let sh = self.crimp_strain;
+                let x = -eps / sh;
+                let d = 1.0 + (1.0 + x).sqrt();
+                return self.buckling_stress * sh * x * x / (d * d);
+            }
             return 0.5 * self.compression_factor * e * eps * eps;
         }
         let sh = self.crimp_strain;
@@ -135,17 +233,19 @@ impl FibreLaw {
     }
 
     /// The modulus that sets the stable time step: the largest tangent the
-    /// law can reach, E_f (SPEC §7).
+    /// law can reach, E_f (SPEC §7; the column's σ_b/(2ε_sh) is validated
+    /// not to exceed it).
     #[inline]
     pub fn wave_modulus(&self) -> f64 {
         self.modulus
     }
 
-    /// Whether the tangent jumps at ε = 0: an uncrimped yarn (ε_sh = 0)
-    /// that carries less in compression than in tension (c_c < 1) goes
-    /// from E_f to c_c·E_f, a crimped one with c_c > 0 from 0 to c_c·E_f.
-    /// (A crimped yarn without compression stiffness has E_t = 0 on both
-    /// sides: no jump.)
+    /// Whether the tangent jumps at ε = 0 by [`Self::KINK_SHARE`] of E_f or
+    /// more: an uncrimped yarn (ε_sh = 0) that carries less in compression
+    /// than in tension (c_c < 1) goes from E_f to c_c·E_f, a crimped one
+    /// with c_c > 0 from 0 to c_c·E_f, a buckling one from 0 to
+    /// σ_b/(2ε_sh). (A crimped yarn without compression stiffness has
+    /// E_t = 0 on both sides: no jump.)
     ///
     /// Such a yarn switches between a taut and a slack stiffness as it
     /// crosses ε = 0, and central differences are not stable for such a
@@ -153,11 +253,13 @@ impl FibreLaw {
     /// resonance bands make it grow (drape-time damps the yarn's ringing).
     #[inline]
     pub fn has_kink(&self) -> bool {
-        if self.crimp_strain == 0.0 {
-            self.compression_factor < 1.0
+        let taut = if self.crimp_strain == 0.0 {
+            self.modulus
         } else {
-            self.compression_factor > 0.0
-        }
+            0.0
+        };
+        let compressed = self.stress_and_tangent(0.0).1;
+        (taut - compressed).abs() >= KINK_SHARE * self.modulus
     }
 }
 
@@ -177,7 +279,7 @@ mod tests {
             sh in prop_oneof![Just(0.0), 1e-4f64..0.02],
             cc in 0.0f64..1.0,
         ) {
-            let law = FibreLaw { modulus: 75_000.0, crimp_strain: sh, compression_factor: cc };
+            let law = FibreLaw { modulus: 75_000.0, crimp_strain: sh, compression_factor: cc, buckling_stress: 0.0 };
             // Stay off the kink at ε = 0 where the compression branch starts.
             prop_assume!(eps.abs() > 1e-5);
             let h = 1e-7 * eps.abs().max(1e-4);
@@ -192,7 +294,7 @@ mod tests {
         #[test]
         fn series_and_closed_form_meet(sh in 1e-4f64..0.02) {
             // Either side of the switch the two forms agree to round-off.
-            let law = FibreLaw { modulus: 1.0, crimp_strain: sh, compression_factor: 0.0 };
+            let law = FibreLaw { modulus: 1.0, crimp_strain: sh, compression_factor: 0.0, buckling_stress: 0.0 };
             let below = SERIES_BELOW * sh * (1.0 - 1e-12);
             let above = SERIES_BELOW * sh * (1.0 + 1e-12);
             let (t0, k0) = law.stress_and_tangent(below);
@@ -223,16 +325,26 @@ mod tests {
     #[test]
     fn a_kink_is_a_jump_of_the_tangent_at_zero() {
         let h = 1e-12;
-        for (sh, cc) in [(0.0, 0.0), (0.0, 0.5), (0.0, 1.0), (0.01, 0.0), (0.01, 0.3)] {
+        for (sh, cc) in [
+            (0.0, 0.0),
+            (0.0, 0.5),
+            (0.0, 1.0),
+            (0.01, 0.0),
+            (0.01, 0.3),
+            (0.01, 0.02),
+            (0.01, 0.005),
+            (0.0, 0.995),
+        ] {
             let law = FibreLaw {
                 modulus: 1000.0,
                 crimp_strain: sh,
                 compression_factor: cc,
+                buckling_stress: 0.0,
             };
             let jump = (law.tangent(h) - law.tangent(-h)).abs();
             assert_eq!(
                 law.has_kink(),
-                jump > 1.0,
+                jump >= KINK_SHARE * law.modulus,
                 "ε_sh {sh}, c_c {cc}: jump {jump}"
             );
         }
@@ -246,6 +358,165 @@ mod tests {
         };
         assert_eq!(law.stress(-0.002), -0.1 * 230_000.0 * 0.002);
         assert_eq!(law.tangent(-0.002), 23_000.0);
+    }
+
+    /// The glass preset's yarn: σ_b = π²·B/(L²·V_f·h/2) with B = 0.465 N·mm,
+    /// L = 4.55 mm, V_f·h/2 = 0.1425 mm.
+    fn buckling_glass() -> FibreLaw {
+        FibreLaw {
+            buckling_stress: 1.556,
+            ..FibreLaw::new(75_000.0, 0.012).unwrap()
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn buckling_stress_is_the_derivative_of_energy_and_tangent_of_stress(
+            x in 1e-3f64..50.0,
+            sh in 1e-3f64..0.05,
+            sigma in 0.01f64..20.0,
+        ) {
+            let law = FibreLaw { buckling_stress: sigma, ..FibreLaw::new(75_000.0, sh).unwrap() };
+            let eps = -x * sh;
+            let h = 1e-6 * eps.abs();
+            let d_energy = (law.energy(eps + h) - law.energy(eps - h)) / (2.0 * h);
+            let d_stress = (law.stress(eps + h) - law.stress(eps - h)) / (2.0 * h);
+            let (tau, tangent) = law.stress_and_tangent(eps);
+            // Central differences: truncation ~h²·w''' and round-off
+            // ~ε_mach·w/h, both below 1e-7 of the scale here.
+            prop_assert!((d_energy - tau).abs() <= 1e-7 * sigma, "dW/dε {d_energy} vs τ {tau}");
+            prop_assert!(
+                (d_stress - tangent).abs() <= 1e-6 * tangent,
+                "dτ/dε {d_stress} vs E_t {tangent}"
+            );
+            // Monotone, bounded by the Euler stress, and storing energy.
+            prop_assert!(tau < 0.0 && tau > -sigma && tangent > 0.0 && law.energy(eps) > 0.0);
+        }
+
+        #[test]
+        fn buckling_law_is_the_imperfect_column(r in 1e-6f64..0.999) {
+            // A pinned column bowed by a₀ carries P = r·P_E at a bow
+            // a = a₀/(1 − r); its chord shortens by ε_sh·((a/a₀)² − 1).
+            let law = buckling_glass();
+            let eps = -law.crimp_strain * ((1.0 - r).powi(-2) - 1.0);
+            let tau = law.stress(eps);
+            prop_assert!(
+                (tau + r * law.buckling_stress).abs() <= 1e-12 * law.buckling_stress,
+                "r {r}: τ {tau}"
+            );
+        }
+    }
+
+    #[test]
+    fn buckling_law_values_and_limits() {
+        let law = buckling_glass();
+        let (s, sh) = (law.buckling_stress, law.crimp_strain);
+        // x = 3: √(1 + x) = 2, so τ = −σ_b/2, E_t = σ_b/(16·ε_sh) and
+        // w = σ_b·ε_sh·(3 − 2) exactly (to round-off).
+        let (tau, tangent) = law.stress_and_tangent(-3.0 * sh);
+        assert!((tau + 0.5 * s).abs() <= 1e-15 * s, "{tau}");
+        assert!(
+            (tangent - s / (16.0 * sh)).abs() <= 1e-15 * tangent,
+            "{tangent}"
+        );
+        assert!((law.energy(-3.0 * sh) - s * sh).abs() <= 1e-15 * s * sh);
+        // At ε = 0 the tangent is σ_b/(2ε_sh) (a jump from the tension
+        // side's 0) and the stress and energy vanish.
+        assert_eq!(law.stress_and_tangent(0.0), (0.0, s / (2.0 * sh)));
+        assert_eq!(law.energy(0.0), 0.0);
+        // A jump of 8.7e-4·E_f: too small to ring (no dashpots); the
+        // largest jump allowed, E_f, is a kink.
+        assert!(!law.has_kink());
+        let edge = FibreLaw {
+            buckling_stress: 2.0 * sh * law.modulus,
+            ..law
+        };
+        assert!(edge.has_kink());
+        let share = FibreLaw {
+            buckling_stress: 2.0 * sh * law.modulus * KINK_SHARE,
+            ..law
+        };
+        assert!(share.has_kink());
+        let below = FibreLaw {
+            buckling_stress: 2.0 * sh * law.modulus * KINK_SHARE * 0.99,
+            ..law
+        };
+        assert!(!below.has_kink());
+        // Near zero, no cancellation: w = σ_b·ε_sh·x²/4·(1 − x/2 + …).
+        let x = 1e-9;
+        let w = law.energy(-x * sh);
+        assert!((w / (s * sh * x * x / 4.0) - 1.0).abs() <= 1e-8, "{w}");
+        let tau = law.stress(-x * sh);
+        assert!((tau / (-s * x / 2.0) - 1.0).abs() <= 1e-8, "{tau}");
+        // Far into compression it carries the Euler stress, not more:
+        // 1 − 1/√(1 + x) at x = 9999 is 0.99.
+        assert!((law.stress(-9999.0 * sh) / -s - 0.99).abs() <= 1e-12);
+        // Tension is the crimped law's, untouched.
+        let plain = FibreLaw::new(75_000.0, 0.012).unwrap();
+        for eps in [1e-7, 1e-3, 0.02] {
+            assert_eq!(law.stress_and_tangent(eps), plain.stress_and_tangent(eps));
+            assert_eq!(law.energy(eps), plain.energy(eps));
+        }
+    }
+
+    #[test]
+    fn buckling_parameters_are_checked_and_named() {
+        let field = |law: FibreLaw| law.validate("fibre").unwrap_err().field;
+        let glass = buckling_glass();
+        glass.validate("fibre").unwrap();
+        assert_eq!(
+            field(FibreLaw {
+                buckling_stress: -1.0,
+                ..glass
+            }),
+            "fibre.buckling_stress"
+        );
+        assert_eq!(
+            field(FibreLaw {
+                buckling_stress: f64::NAN,
+                ..glass
+            }),
+            "fibre.buckling_stress"
+        );
+        // No crimp, no bow: the column law has nothing to grow.
+        assert_eq!(
+            field(FibreLaw {
+                crimp_strain: 0.0,
+                ..glass
+            }),
+            "fibre.crimp_strain"
+        );
+        assert_eq!(
+            field(FibreLaw {
+                compression_factor: 0.1,
+                ..glass
+            }),
+            "fibre.compression_factor"
+        );
+        // σ_b/(2ε_sh) = E_f is the largest allowed: the stable step stays E_f's.
+        let edge = 2.0 * glass.crimp_strain * glass.modulus;
+        FibreLaw {
+            buckling_stress: edge,
+            ..glass
+        }
+        .validate("fibre")
+        .unwrap();
+        assert_eq!(
+            field(FibreLaw {
+                buckling_stress: edge * (1.0 + 1e-12),
+                ..glass
+            }),
+            "fibre.buckling_stress"
+        );
+    }
+
+    #[test]
+    fn a_law_without_buckling_writes_no_key() {
+        // Cards written before the key read and write the same text.
+        let text = toml::to_string(&FibreLaw::new(75_000.0, 0.012).unwrap()).unwrap();
+        assert!(!text.contains("buckling"), "{text}");
+        let back: FibreLaw = toml::from_str(&toml::to_string(&buckling_glass()).unwrap()).unwrap();
+        assert_eq!(back, buckling_glass());
     }
 
     #[test]

@@ -93,6 +93,21 @@ const TWINTEX_SHEAR: [f64; 3] = [
     0.3107451018711586,
 ];
 
+/// σ_b = π²·B/(L²·V_f·h/2), the Euler stress of a yarn segment of length
+/// L between interlacings ([`FibreLaw::buckling_stress`]), from a preset's
+/// bending rigidity B (N·mm), L (mm), V_f and h (mm).
+fn euler_buckling_stress(bending: f64, segment: f64, fibre_volume_fraction: f64, h: f64) -> f64 {
+    std::f64::consts::PI.powi(2) * bending / (segment * segment * 0.5 * fibre_volume_fraction * h)
+}
+
+/// L of `glass-serge-4x3` (mm): one pitch at the paper's 2.2 yarns/cm.
+const GLASS_SEGMENT: f64 = 10.0 / 2.2;
+/// L of `carbon-prepreg-2x2` (mm), **\[assumption\]**: a 2×2 twill's yarn
+/// interlaces every second crossing, at 5 yarns/cm (a 3K 200 g/m² twill).
+const CARBON_SEGMENT: f64 = 2.0 * 10.0 / 5.0;
+/// L of `twintex-plain` (mm): one pitch at the benchmark's 1.93 yarns/cm.
+const TWINTEX_SEGMENT: f64 = 10.0 / 1.93;
+
 /// The names [`Material::preset`] knows.
 pub const PRESET_NAMES: [&str; 3] = ["carbon-prepreg-2x2", "glass-serge-4x3", "twintex-plain"];
 
@@ -132,7 +147,22 @@ impl Material {
     ///   length c = 50 mm (w = 7.29e-6 N/mm², B = 0.91 N·mm), reasoned as
     ///   for the glass serge below (the same areal weight, twice as thick).
     ///
-    /// All have no compression stiffness in the yarns.
+    /// Yarns in compression (beyond the paper, whose yarns buckle at no
+    /// cost, c_c = 0): each preset's yarn is an imperfect column between
+    /// interlacings ([`FibreLaw::buckling_stress`]), bowed by its own crimp,
+    /// whose load tends to the Euler stress σ_b = π²·B/(L²·V_f·h/2) of a
+    /// segment of length L with the preset's bending rigidity B:
+    /// glass-serge-4x3 L = 4.55 mm (one pitch at 2.2 yarns/cm), σ_b =
+    /// 1.56 MPa; carbon-prepreg-2x2 L = 4 mm (assumed, see
+    /// `CARBON_SEGMENT`), σ_b = 18.6 MPa; twintex-plain L = 5.18 mm (one
+    /// pitch at 1.93 yarns/cm), σ_b = 3.82 MPa. Why: with c_c = 0 a ply
+    /// lies on a double-curved tool by shortening its yarns below the
+    /// mesh's scale at no cost, where a fabric must shear or wrinkle; a
+    /// buckled yarn keeps carrying its Euler load. L is the shortest span
+    /// a yarn can buckle over (the crossing yarns pin it), so σ_b is the
+    /// most a buckling yarn carries; B is the assumed rigidity below, so
+    /// σ_b is as uncertain as B. The paper's own law (c_c = 0) is
+    /// [`Self::paper_preset`].
     ///
     /// Bending rigidities (on by default in a scene, so they shape every
     /// run that does not turn bending off) are **\[assumptions\]**, not
@@ -177,6 +207,12 @@ impl Material {
                         modulus: 230_000.0,
                         crimp_strain: 0.005,
                         compression_factor: 0.0,
+                        buckling_stress: euler_buckling_stress(
+                            CARBON_BENDING,
+                            CARBON_SEGMENT,
+                            0.5,
+                            0.3,
+                        ),
                     },
                     resin: ResinLaw {
                         young: 45.0,
@@ -200,6 +236,7 @@ impl Material {
                     modulus: 75_000.0,
                     crimp_strain: 0.012,
                     compression_factor: 0.0,
+                    buckling_stress: euler_buckling_stress(GLASS_BENDING, GLASS_SEGMENT, 0.5, 0.57),
                 },
                 resin: ResinLaw {
                     young: 30.0,
@@ -218,6 +255,12 @@ impl Material {
                     modulus: 73_000.0,
                     crimp_strain: 0.01,
                     compression_factor: 0.0,
+                    buckling_stress: euler_buckling_stress(
+                        TWINTEX_BENDING,
+                        TWINTEX_SEGMENT,
+                        0.146,
+                        1.2,
+                    ),
                 },
                 resin: ResinLaw {
                     young: 0.002,
@@ -236,6 +279,15 @@ impl Material {
             }),
             _ => None,
         }
+    }
+
+    /// A preset with the paper's yarn (SPEC §4): no compression stiffness
+    /// (c_c = 0, σ_b = 0), as the paper's validation runs it; otherwise
+    /// [`Self::preset`].
+    pub fn paper_preset(name: &str) -> Option<Self> {
+        let mut m = Self::preset(name)?;
+        m.fibre.buckling_stress = 0.0;
+        Some(m)
     }
 
     /// Checks every parameter, naming the first invalid field.
@@ -329,6 +381,41 @@ mod tests {
                 "{name}: {kg_per_m2} kg/m²"
             );
         }
+    }
+
+    #[test]
+    fn paper_presets_keep_the_papers_yarn_and_presets_buckle_at_their_euler_stress() {
+        // σ_b = π²·B/(L²·V_f·h/2), worked by hand from the documented
+        // numbers (B = w·c³, L from the yarn counts): 4 digits.
+        for (name, sigma) in [
+            ("glass-serge-4x3", 1.5595),
+            ("carbon-prepreg-2x2", 18.590),
+            ("twintex-plain", 3.8236),
+        ] {
+            let preset = Material::preset(name).unwrap();
+            let paper = Material::paper_preset(name).unwrap();
+            let s = preset.fibre.buckling_stress;
+            assert!((s / sigma - 1.0).abs() < 1e-4, "{name}: σ_b {s}");
+            // The paper's yarn: nothing in compression, as SPEC §4.
+            assert_eq!(paper.fibre.compression_factor, 0.0);
+            assert_eq!(paper.fibre.buckling_stress, 0.0);
+            assert_eq!(paper.fibre.stress_and_tangent(-0.05), (0.0, 0.0));
+            assert_eq!(paper.fibre.energy(-0.05), 0.0);
+            // … and otherwise the same material, field by field.
+            let mut stripped = preset.clone();
+            stripped.fibre.buckling_stress = 0.0;
+            assert_eq!(stripped, paper, "{name}");
+            // A paper card written out has no buckling key: the text of
+            // a card from before the key.
+            assert!(!toml::to_string(&paper).unwrap().contains("buckling"));
+            paper.validate().unwrap();
+        }
+        // The tables' literals (SPEC §4), unchanged in the paper's yarn.
+        let g = Material::paper_preset("glass-serge-4x3").unwrap().fibre;
+        assert_eq!((g.modulus, g.crimp_strain), (75_000.0, 0.012));
+        let c = Material::paper_preset("carbon-prepreg-2x2").unwrap().fibre;
+        assert_eq!((c.modulus, c.crimp_strain), (230_000.0, 0.005));
+        assert!(Material::paper_preset("kevlar").is_none());
     }
 
     #[test]

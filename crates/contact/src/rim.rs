@@ -91,6 +91,23 @@ impl MeshSurface {
         sides
     }
 
+    /// How many of `points` lie on the surface at the start, inside the
+    /// fabric's contact band: their closest point is on it (not beside its
+    /// rim) and within `tolerance`; with the first of them by index. Such
+    /// a point is pushed out by the whole band in the first step.
+    pub fn touching(&self, points: &[Vector3<f64>], tolerance: f64) -> (usize, Option<usize>) {
+        let mut count = 0;
+        let mut first = None;
+        for (i, x) in points.iter().enumerate() {
+            let (p, _, on_rim) = self.locate(x);
+            if !on_rim && p.gap.abs() <= tolerance {
+                count += 1;
+                first.get_or_insert(i);
+            }
+        }
+        (count, first)
+    }
+
     /// The same surface with every triangle wound the other way: its
     /// normals, and the fabric's side, reversed.
     pub fn flipped(&self) -> Self {

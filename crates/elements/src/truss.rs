@@ -341,6 +341,11 @@ mod tests {
                 compression_factor: 0.2,
                 ..FibreLaw::new(75_000.0, 0.012).unwrap()
             },
+            // The glass preset's buckling yarn.
+            FibreLaw {
+                buckling_stress: 1.556,
+                ..FibreLaw::new(75_000.0, 0.012).unwrap()
+            },
         ];
         for law in laws {
             let (t, _) = batch(law);
@@ -465,7 +470,7 @@ mod tests {
         (TrussBatch::new(law, &x0, nodes, section).unwrap(), x)
     }
 
-    fn laws() -> [FibreLaw; 3] {
+    fn laws() -> [FibreLaw; 4] {
         [
             // Crimped carbon, slack in compression.
             FibreLaw::new(230_000.0, 0.005).unwrap(),
@@ -478,6 +483,11 @@ mod tests {
             FibreLaw {
                 compression_factor: 0.5,
                 ..FibreLaw::new(75_000.0, 0.0).unwrap()
+            },
+            // Crimped glass buckling as an imperfect column.
+            FibreLaw {
+                buckling_stress: 1.556,
+                ..FibreLaw::new(75_000.0, 0.012).unwrap()
             },
         ]
     }

@@ -117,7 +117,18 @@ fn stress(law: &FibreLaw, eps: f64x4) -> f64x4 {
     let e = law.modulus;
     let zero = f64x4::splat(0.0);
     let compressed = eps.le(zero);
-    let compression = f64x4::splat(law.compression_factor * e) * eps;
+    let mut compression = f64x4::splat(law.compression_factor * e) * eps;
+    if law.buckling_stress > 0.0 {
+        // The buckled column's square roots, only in the compressed lanes,
+        // by the scalar law's own function (the same bits).
+        for ((out, &eps), &squeezed) in compression.0.iter_mut().zip(&eps.0).zip(&compressed) {
+            *out = if squeezed {
+                law.buckled_stress_and_tangent(eps).0
+            } else {
+                0.0
+            };
+        }
+    }
     let sh = law.crimp_strain;
     if sh == 0.0 {
         return f64x4::select(compressed, compression, f64x4::splat(e) * eps);

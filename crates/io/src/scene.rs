@@ -47,6 +47,7 @@ mod placement;
 mod set_path;
 mod shape;
 mod spec;
+mod yarn_buckling;
 
 use build::{build, finite3, positive, unit};
 use locate::{Locator, Override, field_at, line_at, plain};

@@ -298,3 +298,61 @@ fn an_open_tool_mesh_takes_the_blanks_side_or_says_why_it_cannot() {
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn a_rim_extension_laid_under_the_blank_is_refused_or_shortened() {
+    let dir = temp("speck");
+    // A 0.5 mm speck of a mould in the blank's own plane, 3 mm beside its
+    // edge (x = 5): the surface has no node of the blank on it, but its
+    // rim extended in that plane would lie under the blank, within the
+    // half thickness that the first step throws every such node off.
+    let speck = "v 8 0 0\nv 8.5 0 0\nv 8.5 0.5 0\nv 8 0.5 0\nf 1 2 3\nf 1 3 4\n";
+    std::fs::write(dir.join("speck.obj"), speck).unwrap();
+    let e = scene_with_tool(
+        &dir,
+        r#"{ kind = "mesh", file = "speck.obj", flip_normals = false, rim_extension = 10 }"#,
+    )
+    .unwrap_err();
+    for part in [
+        "rim_extension",
+        "`floor`: the rim extended by 10 mm lies under the blank within half its thickness",
+        "first node",
+        "shorter rim_extension",
+    ] {
+        assert!(e.contains(part), "{part}: {e}");
+    }
+    // Unset, the default (the overhang and three elements) is halved until
+    // it stays clear of the blank, and the scene says by how much.
+    let scene = scene_with_tool(
+        &dir,
+        r#"{ kind = "mesh", file = "speck.obj", flip_normals = false }"#,
+    )
+    .unwrap();
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("its open rim is extended by") && w.contains("lies under it")),
+        "{:?}",
+        scene.warnings
+    );
+    let drape_contact::Surface::Mesh(mesh) = &scene.model.tools[0].surface else {
+        panic!("a mesh tool");
+    };
+    assert_eq!(mesh.touching(&scene.model.x0, 0.285).0, 0);
+    assert!(mesh.aabb().min.x > 5.0, "{:?}", mesh.aabb());
+    // Far enough from the blank, the extension is the default.
+    let far = "v 30 0 0\nv 30.5 0 0\nv 30.5 0.5 0\nv 30 0.5 0\nf 1 2 3\nf 1 3 4\n";
+    std::fs::write(dir.join("speck.obj"), far).unwrap();
+    let scene = scene_with_tool(
+        &dir,
+        r#"{ kind = "mesh", file = "speck.obj", flip_normals = false, rim_extension = 10 }"#,
+    )
+    .unwrap();
+    assert!(
+        !scene.warnings.iter().any(|w| w.contains("rim")),
+        "{:?}",
+        scene.warnings
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}

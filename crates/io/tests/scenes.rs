@@ -489,6 +489,46 @@ material = { name = "m", thickness = 0.5, fibre_volume_fraction = 0.5, density =
     assert!(text.contains("bending_rigidity[1]"), "{text}");
 }
 
+#[test]
+fn yarn_buckling_is_the_presets_law_and_false_runs_the_papers_yarn() {
+    let preset = drape_constitutive::Material::preset("glass-serge-4x3").unwrap();
+    let paper = drape_constitutive::Material::paper_preset("glass-serge-4x3").unwrap();
+    let scene = Scene::parse(GOOD, Path::new("good.toml"), &[]).unwrap();
+    assert_eq!(scene.model.trusses[0].law, preset.fibre);
+    assert!(scene.model.trusses[0].law.buckling_stress > 0.0);
+    let off = [("fabric.yarn_buckling".to_owned(), "false".to_owned())];
+    let scene = Scene::parse(GOOD, Path::new("good.toml"), &off).unwrap();
+    assert_eq!(scene.model.trusses[0].law, paper.fibre);
+    // Embedded fibres get it from the same material.
+    let mut set = off.to_vec();
+    set.push(("fabric.fibres".to_owned(), "embedded".to_owned()));
+    let scene = Scene::parse(GOOD, Path::new("good.toml"), &set).unwrap();
+    assert!(scene.model.trusses.is_empty());
+    let on = [("fabric.yarn_buckling".to_owned(), "true".to_owned())];
+    Scene::parse(GOOD, Path::new("good.toml"), &on).unwrap();
+    // `true` on a material without a buckling stress names the key.
+    let inline = GOOD.replace(
+        r#"material = "glass-serge-4x3""#,
+        r#"yarn_buckling = true
+material = { name = "m", thickness = 0.5, fibre_volume_fraction = 0.5, density = 1e-9, fibre = { modulus = 1000.0, crimp_strain = 0.01 }, resin = { young = 10.0, poisson = 0.3 } }"#,
+    );
+    let text = error_of(&inline).to_string();
+    assert!(
+        text.contains("fabric.yarn_buckling") && text.contains("buckling_stress"),
+        "{text}"
+    );
+    // A table's buckling stress is checked against its crimp, by name.
+    let bad = inline.replace(
+        "crimp_strain = 0.01 }",
+        "crimp_strain = 0.0, buckling_stress = 1.0 }",
+    );
+    let text = error_of(&bad).to_string();
+    assert!(
+        text.contains("fabric.material.fibre.crimp_strain"),
+        "{text}"
+    );
+}
+
 /// Unset, `fabric.bending` is on wherever the material has a rigidity and
 /// the mesh lines follow the yarns; where either is missing the scene
 /// loads without it and one warning says why, naming the field.

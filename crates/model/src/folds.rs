@@ -51,12 +51,14 @@ pub const WAVY_AREA_SHARE: f64 = 0.01;
 
 /// Yarn stretch below which a truss counts as gathered (shortened)
 /// **\[choice\]**: 0.95. Yarns that buckle at no cost (`compression_factor
-/// = 0`) let a ply lie on a double-curved mould by shortening instead of
-/// shearing, gathering material below the mesh's scale where a real fabric
-/// wrinkles; waviness cannot see it. The shipped hemisphere's yarns end no
-/// shorter than 0.969 (0.7 % of them below 0.98); the open tray formed by
-/// a punch has 20 % of its yarns below 0.95, down to 0.82, in the corners
-/// where a pin-jointed net shears 45° and the run 22°.
+/// = 0`), or for less than shearing costs (the presets' Euler load,
+/// `buckling_stress`), let a ply lie on a double-curved mould by
+/// shortening instead of shearing, gathering material below the mesh's
+/// scale where a real fabric wrinkles; waviness cannot see it. The shipped
+/// hemisphere's yarns end no shorter than 0.969 (0.7 % of them below
+/// 0.98; before the presets' buckling law); the open tray formed by a
+/// punch has 17.5 % of its yarns' length below 0.95, down to 0.83, in the
+/// corners where a pin-jointed net shears 45° and the run 24°.
 pub const GATHERED_STRETCH: f64 = 0.95;
 
 /// Share of the yarns' reference length that may be gathered
@@ -246,7 +248,8 @@ impl FoldCheck {
                  there below the mesh's scale, so the ply lies on the tool by gathering material where \
                  a fabric shears or wrinkles. Shear there is not that of a formed ply (see stretch in \
                  trusses.pvd): hold the blank so that it shears instead (holder force, springs), or \
-                 give the yarns a compressive stiffness (fibre.compression_factor)",
+                 give the yarns more compressive stiffness (fibre.buckling_stress, or \
+                 fibre.compression_factor)",
                 100.0 * g.share,
                 100.0 * GATHERED_STRETCH,
                 g.shortest_stretch,

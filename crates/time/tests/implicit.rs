@@ -17,7 +17,11 @@ fn strip(fibres: FibreRepresentation) -> Model {
         meshing: Meshing::Cells([8, 2]),
         fibres,
     };
-    let material = Material::preset("carbon-prepreg-2x2").unwrap();
+    // The paper's yarn: the presets' buckling yarn jumps in tangent at
+    // ε = 0 (0 to σ_b/(2ε_sh)), and a truss crossing it costs Newton its
+    // quadratic rate for an iteration (measured: 8.7e-3 → 1.0e-3), which
+    // is not what these tests are about.
+    let material = Material::paper_preset("carbon-prepreg-2x2").unwrap();
     Model::from_blank(&blank, &material).unwrap()
 }
 

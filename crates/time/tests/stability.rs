@@ -112,6 +112,7 @@ fn linear_glass() -> Material {
     let mut m = Material::preset("glass-serge-4x3").unwrap();
     m.fibre.crimp_strain = 0.0;
     m.fibre.compression_factor = 1.0;
+    m.fibre.buckling_stress = 0.0;
     m
 }
 
@@ -172,7 +173,7 @@ fn diamond(width: f64, height: f64, cells: [usize; 2]) -> RectangleBlank {
 /// The glass preset with straight yarns that buckle: the tangent jumps
 /// from 0 to E_f at ε = 0.
 fn uncrimped_glass() -> Material {
-    let mut m = Material::preset("glass-serge-4x3").unwrap();
+    let mut m = Material::paper_preset("glass-serge-4x3").unwrap();
     m.fibre.crimp_strain = 0.0;
     m
 }
@@ -191,6 +192,7 @@ fn stable_step_bounds_the_highest_frequency_of_uncrimped_and_stiff_yarns() {
     stiff.fibre.modulus *= 100.0;
     let mut carbon = Material::preset("carbon-prepreg-2x2").unwrap();
     carbon.fibre.compression_factor = 1.0;
+    carbon.fibre.buckling_stress = 0.0;
     // An uncrimped yarn at ε → 0⁺ (any stretch makes every yarn taut with
     // E_t = E_f), a linear one, 100 times stiffer yarns, and a crimped
     // yarn stretched to 10 ε_sh, where E_t = E_f·(1 − e⁻¹⁰).
@@ -220,7 +222,13 @@ fn stable_step_bounds_the_highest_frequency_of_uncrimped_and_stiff_yarns() {
 /// glass (200 × 50 mm, 10 mm diamond cells) 16 mm at the full stable
 /// estimate, with dashpots on the kinked yarns at ratio `fibre_damping`.
 fn uncrimped_pull(fibre_damping: f64) -> f64 {
-    let mut model = Model::from_blank(&diamond(200.0, 50.0, [20, 5]), &uncrimped_glass()).unwrap();
+    pull(&uncrimped_glass(), fibre_damping, 16.0)
+}
+
+/// [`uncrimped_pull`] of a strip of `material`, its right end moved
+/// `travel` mm along x (< 0: pushed in).
+fn pull(material: &Material, fibre_damping: f64, travel: f64) -> f64 {
+    let mut model = Model::from_blank(&diamond(200.0, 50.0, [20, 5]), material).unwrap();
     let left = model.node_set("left").unwrap().to_vec();
     let right = model.node_set("right").unwrap().to_vec();
     model.boundary.push(BoundaryCondition::fixed(left));
@@ -228,7 +236,7 @@ fn uncrimped_pull(fibre_damping: f64) -> f64 {
         nodes: right,
         components: [true, true, true],
         motion: Motion::Displacement {
-            value: Vector3::new(16.0, 0.0, 0.0),
+            value: Vector3::new(travel, 0.0, 0.0),
             amplitude: Amplitude::SmoothStep { duration: 0.01 },
         },
     });
@@ -262,6 +270,22 @@ fn uncrimped_yarns_run_stably_at_the_full_estimate() {
         "undamped {undamped:e}: the case no longer shows the resonance"
     );
     assert!(damped < 1e-7, "damped {damped:e}");
+}
+
+#[test]
+fn buckling_yarns_run_stably_undamped_at_the_full_estimate() {
+    // The presets' buckling yarn jumps from 0 to σ_b/(2ε_sh) = 8.7e-4·E_f
+    // at ε = 0 (glass), under `FibreLaw::KINK_SHARE`: no dashpots. Pulled,
+    // and pushed in so that its yarns cross ε = 0 into the column law, the
+    // strip closes its balance as the paper's crimped yarn (no jump) does.
+    let buckling = Material::preset("glass-serge-4x3").unwrap();
+    assert!(buckling.fibre.buckling_stress > 0.0 && !buckling.fibre.has_kink());
+    let paper = Material::paper_preset("glass-serge-4x3").unwrap();
+    for travel in [16.0, -16.0] {
+        let (with, without) = (pull(&buckling, 0.0, travel), pull(&paper, 0.0, travel));
+        eprintln!("travel {travel} mm: balance error buckling {with:e}, paper's yarn {without:e}");
+        assert!(with < 1e-7 && without < 1e-7, "{with:e}, {without:e}");
+    }
 }
 
 #[test]

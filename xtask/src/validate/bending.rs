@@ -158,6 +158,7 @@ fn cantilever_material() -> Material {
     m.fibre.modulus = 20.0;
     m.fibre.crimp_strain = 0.0;
     m.fibre.compression_factor = 1.0;
+    m.fibre.buckling_stress = 0.0;
     m.resin.young = 2.0;
     m
 }

@@ -107,8 +107,10 @@ const GLASS: Spec = Spec {
 const SPECS: [&Spec; 2] = [&CARBON, &GLASS];
 
 impl Spec {
+    /// The preset with the paper's yarn (the tables' c_c = 0); the
+    /// presets' own buckling law is checked in [`presets`].
     fn material(&self) -> Material {
-        Material::preset(self.name).expect("a SPEC preset")
+        Material::paper_preset(self.name).expect("a SPEC preset")
     }
 
     fn g0(&self) -> f64 {
@@ -185,6 +187,15 @@ fn presets() -> Vec<Check> {
         exact("E_f (MPa)", spec.e_f, m.fibre.modulus);
         exact("ε_sh", spec.eps_sh, m.fibre.crimp_strain);
         exact("c_c", 0.0, m.fibre.compression_factor);
+        exact("σ_b (the paper's yarn)", 0.0, m.fibre.buckling_stress);
+        // The preset differs from the paper's material in σ_b alone.
+        let mut shipped = Material::preset(n).expect("a SPEC preset");
+        shipped.fibre.buckling_stress = 0.0;
+        exact(
+            "preset = paper's but σ_b (1 = equal)",
+            1.0,
+            f64::from(u8::from(shipped == m)),
+        );
         exact("E_m (MPa)", spec.e_m, m.resin.young);
         exact("ν_m", spec.nu_m, m.resin.poisson);
         exact("h (mm)", spec.h, m.thickness);
@@ -357,6 +368,7 @@ fn fibre_limits() -> Vec<Check> {
     // The compression option is linear.
     let stiff = FibreLaw {
         compression_factor: 0.1,
+        buckling_stress: 0.0,
         ..CARBON.material().fibre
     };
     let eps = -0.002;

@@ -164,7 +164,8 @@ fn viscoelastic_rate() -> Vec<Check> {
         picture_frame_model, smooth_step,
     };
     let (side, cells, gamma_max) = (100.0, 8usize, 10f64.to_radians());
-    let material = drape_constitutive::Material::preset("carbon-prepreg-2x2").expect("preset");
+    let material =
+        drape_constitutive::Material::paper_preset("carbon-prepreg-2x2").expect("preset");
     let resin = &material.resin;
     let g0 = resin.young / (2.0 * (1.0 + resin.poisson));
     let h_m = (1.0 - material.fibre_volume_fraction) * material.thickness;

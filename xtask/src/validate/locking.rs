@@ -78,7 +78,7 @@ fn frame_forces(material: &Material) -> Vec<(f64, f64)> {
 /// law's picture-frame curve, 1 %, from 20° on (below, the law's force is
 /// a few mN and the difference is the dynamics' noise).
 fn picture_frame() -> Vec<Check> {
-    let plain = Material::preset("glass-serge-4x3").expect("preset");
+    let plain = Material::paper_preset("glass-serge-4x3").expect("preset");
     let mut locking = plain.clone();
     locking.resin.shear_locking = Some(ShearLocking {
         coefficients: LAW.to_vec(),

@@ -65,7 +65,7 @@ fn strip_model() -> Model {
         meshing: Meshing::Cells([CELLS, 2]),
         fibres: FibreRepresentation::Trusses,
     };
-    let material = Material::preset("glass-serge-4x3").expect("preset");
+    let material = Material::paper_preset("glass-serge-4x3").expect("preset");
     let mut model = Model::from_blank(&blank, &material).expect("model");
     let all: Vec<u32> = (0..model.node_count() as u32).collect();
     model.boundary.push(BoundaryCondition {

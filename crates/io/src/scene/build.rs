@@ -568,6 +568,7 @@ pub(super) fn build(
         })?,
         MaterialSpec::Inline(m) => m.clone(),
     };
+    let material = super::yarn_buckling::apply(fabric.yarn_buckling, material, at)?;
     material.validate().map_err(|e| {
         at.error(
             &format!("fabric.material.{}", e.field),

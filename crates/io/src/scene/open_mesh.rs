@@ -146,15 +146,33 @@ pub(super) fn place(
     };
     // Whether an extension puts the blank on both of its sides where the
     // surface alone had it on one (a wall's rim extended through the
-    // blank): the first node on the side the rest is not.
-    let pierced = |extended: &MeshSurface| {
+    // blank), or lays itself under the blank within the contact band where
+    // the surface alone had no node that close (a mould in the blank's own
+    // plane beside it): every such node would be pushed out by the band in
+    // the first step, and the run blows up. What it is, with the node.
+    let pierced = |extended: &MeshSurface| -> Option<String> {
         let before = mesh.sides(&model.x0, tolerance);
         let after = extended.sides(&model.x0, tolerance);
         let straddles = |s: &drape_contact::Sides| s.front > 0 && s.back > 0;
-        (straddles(&after) && !straddles(&before)).then_some(if before.back > 0 {
-            after.first_front
-        } else {
-            after.first_back
+        if straddles(&after) && !straddles(&before) {
+            let node = if before.back > 0 {
+                after.first_front
+            } else {
+                after.first_back
+            };
+            return Some(format!(
+                "passes through the blank ({} is on its other side)",
+                at_node(model, node)
+            ));
+        }
+        let (touching, first) = extended.touching(&model.x0, tolerance);
+        (touching > 0 && mesh.touching(&model.x0, tolerance).0 == 0).then(|| {
+            format!(
+                "lies under the blank within half its thickness ({touching} node{} on it, first {}), \
+                 where the mesh itself has none: the first step would throw them off it",
+                if touching == 1 { "" } else { "s" },
+                at_node(model, first)
+            )
         })
     };
     let extended = match open.rim_extension {
@@ -169,13 +187,11 @@ pub(super) fn place(
                 ));
             }
             let extended = extend(&mesh, l)?;
-            if let Some(node) = pierced(&extended) {
+            if let Some(why) = pierced(&extended) {
                 return Err(at.error(
                     &key,
                     format!(
-                        "`{name}`: the rim extended by {l} mm passes through the blank ({} is on its other side): \
-                         give a shorter rim_extension, or 0",
-                        at_node(model, node)
+                        "`{name}`: the rim extended by {l} mm {why}: give a shorter rim_extension, or 0"
                     ),
                 ));
             }
@@ -205,8 +221,8 @@ pub(super) fn place(
                             &key,
                             format!(
                                 "`{name}`: its open rim is extended by {length:.3} mm only: the default {full:.3} mm \
-                                 (the blank's overhang and three of its elements) passes through the blank at its \
-                                 start; a node that goes past the shorter extension meets the open rim again (give \
+                                 (the blank's overhang and three of its elements) passes through the blank, or lies \
+                                 under it within half its thickness, at its start; a node that goes past the shorter extension meets the open rim again (give \
                                  `rim_extension` to choose, and place the blank clear of it)",
                             ),
                         );
@@ -218,7 +234,7 @@ pub(super) fn place(
                         &key,
                         format!(
                             "`{name}`: its open rim is not extended: any extension from {full:.3} mm down to \
-                             {length:.3} mm passes through the blank (give `rim_extension` to choose, 0 to silence \
+                             {length:.3} mm passes through the blank or lies under it (give `rim_extension` to choose, 0 to silence \
                              this)",
                         ),
                     );

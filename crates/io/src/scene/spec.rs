@@ -258,6 +258,11 @@ pub struct FabricSpec {
     /// (an error where it cannot), `false` turns it off.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bending: Option<bool>,
+    /// The yarns' buckling law (beyond the paper): unset or `true`, the
+    /// material's `fibre.buckling_stress` (every preset has one); `false`
+    /// runs the paper's yarn, which buckles at no cost.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub yarn_buckling: Option<bool>,
 }
 
 /// A tool's shape.

@@ -1767,6 +1767,8 @@ mod active_set;
 pub use active_set::{REGULARISATION, SLOTS_PER_PAIR, SystemRow};
 mod mprgp;
 use mprgp::{RoundOff, Work, mprgp};
+#[cfg(test)]
+use mprgp::ROUNDOFF;
 
 #[cfg(test)]
 mod tests;

@@ -174,6 +174,9 @@ pub struct ImplicitTotals {
     /// Normal contact rows that entered or left the active set, over the
     /// converged and the cut attempts (active-set solver).
     pub active_set_changes: u64,
+    /// The contact solver's name as the scene gives it (`condensed`,
+    /// `active_set`).
+    pub contact_solver: &'static str,
 }
 
 /// Why the implicit driver's attempts failed (each one cut the increment

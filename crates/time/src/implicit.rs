@@ -600,6 +600,10 @@ impl<'m> Implicit<'m> {
             indefinite: self.tangent.indefinite + self.totals.indefinite,
             compression_scaled: self.tangent.compression_scaled,
             factor_seconds: self.tangent.factor_seconds + self.saddle.factor_seconds,
+            contact_solver: match self.settings.contact_solver {
+                ContactSolver::Condensed => "condensed",
+                ContactSolver::ActiveSet => "active_set",
+            },
             ..self.totals
         }
     }

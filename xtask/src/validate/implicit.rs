@@ -122,6 +122,33 @@ pub const CASES: &[Case] = &[
         quick: false,
         run: hemisphere_shipped,
     },
+    // The contact cases and the coarse agreement again with the active-set
+    // contact solver, same references and tolerances.
+    Case {
+        name: "implicit/active-set-incline",
+        quick: true,
+        run: || contact::incline_with(Driver::ImplicitActiveSet),
+    },
+    Case {
+        name: "implicit/active-set-capstan",
+        quick: true,
+        run: || contact::capstan_with(Driver::ImplicitActiveSet),
+    },
+    Case {
+        name: "implicit/active-set-no-penetration",
+        quick: true,
+        run: || contact::no_penetration_with(Driver::ImplicitActiveSet),
+    },
+    Case {
+        name: "implicit/active-set-pinching",
+        quick: true,
+        run: || contact::pinching_with(Driver::ImplicitActiveSet),
+    },
+    Case {
+        name: "implicit/active-set-hemisphere-agreement-coarse",
+        quick: true,
+        run: hemisphere_agreement_coarse_active_set,
+    },
 ];
 
 fn incline() -> Vec<Check> {
@@ -350,6 +377,17 @@ fn hemisphere_agreement_coarse() -> Vec<Check> {
     checks
 }
 
+fn hemisphere_agreement_coarse_active_set() -> Vec<Check> {
+    let coarse = [
+        ("fabric.blank.cells", "[10, 10]"),
+        PHYSICAL_MASS,
+        ("simulation.contact_solver", "active_set"),
+    ];
+    let mut checks = agreement("hemisphere-0-90", &coarse, Gate::Checked);
+    checks.extend(agreement("hemisphere-45", &coarse, Gate::Checked));
+    checks
+}
+
 fn hemisphere_shipped() -> Vec<Check> {
     let mut checks = agreement("hemisphere-0-90", &[], Gate::Reported);
     checks.extend(agreement("hemisphere-45", &[], Gate::Reported));
@@ -406,7 +444,15 @@ fn agreement(name: &str, overrides: &[(&str, &str)], gate: Gate) -> Vec<Check> {
         drape::run_scene(&s, &out.join(dir), &mut |_| drape::RunControl::Continue)
             .expect("the run writes its results")
     };
-    let tag = format!("{name}-{cells}");
+    let solver_tag = if overrides
+        .iter()
+        .any(|(k, v)| k == "simulation.contact_solver" && v == "active_set")
+    {
+        "-active-set"
+    } else {
+        ""
+    };
+    let tag = format!("{name}-{cells}{solver_tag}");
     let explicit = run(Solver::Explicit, &format!("{tag}-explicit"));
     let implicit = run(Solver::Implicit, &format!("{tag}-implicit"));
     let completed = |r: &drape::RunReport| {

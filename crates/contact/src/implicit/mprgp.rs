@@ -53,7 +53,7 @@ pub(super) struct RoundOff {
 /// rounding per force; the forward/back solve with the factors adds more
 /// (one per factor entry on the way), which the factor 100 leaves room
 /// for. It is chosen, not fitted to a run: no case was tuned with it.
-const ROUNDOFF: f64 = 100.0;
+pub(super) const ROUNDOFF: f64 = 100.0;
 
 impl RoundOff {
     /// Takes the rows of this solve: their nodes, A_kk = `scale`², tools

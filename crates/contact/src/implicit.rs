@@ -1766,9 +1766,9 @@ impl ImplicitContact {
 mod active_set;
 pub use active_set::{REGULARISATION, SLOTS_PER_PAIR, SystemRow};
 mod mprgp;
-use mprgp::{RoundOff, Work, mprgp};
 #[cfg(test)]
 use mprgp::ROUNDOFF;
+use mprgp::{RoundOff, Work, mprgp};
 
 #[cfg(test)]
 mod tests;

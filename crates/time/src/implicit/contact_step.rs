@@ -172,10 +172,14 @@ impl Implicit<'_> {
         }
         match failure {
             None => {}
-            Some(e @ SaddleError::Indefinite { .. }) => {
-                self.totals.indefinite += 1;
-                return Err((Cutback::ContactIndefinite, e.to_string()));
-            }
+            // Indefinite on the held rows' null space (compressed resin):
+            // the step is taken as the condensed solver takes its LDLᵀ of
+            // an indefinite K̂, the line search and the convergence test
+            // judging it. Cutting the increment instead was measured
+            // (hemisphere 10 × 10, 0/90, physical mass, bending, one
+            // core): 341 increments, 2 510 + 735 Newton iterations, 48
+            // cutbacks, 3.1 s, against 112, 999 + 50, 2 and 1.0 s.
+            Some(SaddleError::Indefinite { .. }) => self.totals.indefinite += 1,
             Some(e) => return Err((Cutback::TangentFailure, e.to_string())),
         }
         let started = Instant::now();

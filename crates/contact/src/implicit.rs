@@ -144,6 +144,10 @@
 //! displacement along its axis, with the same Newmark update as the nodes
 //! and its mass as inertia; its rows couple it to every node it touches.
 //!
+//! The active-set alternative (`contact_solver = "active_set"`) shares the
+//! pairs, rows, friction and tools, and replaces the condensed solve by
+//! the held rows of a saddle-point system: see `implicit/active_set.rs`.
+//!
 //! What it is not: no assembly, no factorisation, no time loop; the driver
 //! owns those and hands the pass a solve with its factors.
 

@@ -59,6 +59,11 @@
 //! reported as numerical dissipation, so the balance error is the
 //! equilibrium residual's work (checked like the explicit one).
 //!
+//! **Contact solvers** (`contact_solver`, see [`ContactSolver`]): the
+//! paper's condensed multiplier solve on the factorised K̂ (the reference),
+//! or the active-set saddle-point system ([`crate::saddle`]), one
+//! factorisation per Newton iteration; both in `implicit/contact_step.rs`.
+//!
 //! Not here: the tangent's assembly ([`crate::tangent`]), the contact solve
 //! (`drape_contact::ImplicitContact`).
 

@@ -1,9 +1,11 @@
 //! The saddle-point system of `contact_solver = "active_set"`
 //! ([`drape_contact::SystemRow`] says what its rows are and which are held):
 //!
-//!   [K̂  0   Cᵀ ] [ Δx]   [ r  ]
-//!   [0  k_d C_dᵀ] [ Δd] = [ r_d]
-//!   [C  C_d −D ] [−λ ]   [ −g ]
+//! ```text
+//! [K̂  0   Cᵀ ] [ Δx]   [ r  ]
+//! [0  k_d C_dᵀ] [ Δd] = [ r_d]
+//! [C  C_d −D ] [−λ ]   [ −g ]
+//! ```
 //!
 //! over the nodes' 3·N components, one unknown per tool (a force-driven
 //! tool's displacement along its axis with its inertia k_d; an identity for

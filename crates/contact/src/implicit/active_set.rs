@@ -3,8 +3,10 @@
 //! driver's Newton iteration as a semi-smooth Newton method, so that each
 //! iteration solves one linear system, the saddle-point system
 //!
-//!   [K̂   Cᵀ] [ Δx]   [ r + springs' forces]
-//!   [C  −D ] [−λ ] = [ −g                  ]
+//! ```text
+//! [K̂   Cᵀ] [ Δx]   [ r + springs' forces]
+//! [C  −D ] [−λ ] = [ −g                  ]
+//! ```
 //!
 //! over the rows held as equalities, with λ = 0 on the others. The driver
 //! assembles and factorises it (`drape_time::saddle`); this module decides

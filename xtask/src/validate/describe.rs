@@ -158,6 +158,10 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "contact/pinching run by the implicit driver with the active-set contact solver",
             "as contact/pinching",
         ),
+        "implicit/active-set-determinism" => (
+            "implicit/determinism with the active-set contact solver",
+            "the one-thread run",
+        ),
         "implicit/active-set-hemisphere-agreement-coarse" => (
             "implicit/hemisphere-agreement-coarse with the active-set contact solver",
             "the explicit run, same tolerances",

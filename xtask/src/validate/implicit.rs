@@ -145,6 +145,11 @@ pub const CASES: &[Case] = &[
         run: || contact::pinching_with(Driver::ImplicitActiveSet),
     },
     Case {
+        name: "implicit/active-set-determinism",
+        quick: true,
+        run: determinism_active_set,
+    },
+    Case {
         name: "implicit/active-set-hemisphere-agreement-coarse",
         quick: true,
         run: hemisphere_agreement_coarse_active_set,
@@ -276,6 +281,15 @@ const PHYSICAL_MASS: (&str, &str) = ("simulation.mass_scaling_dt", "1e-9");
 /// contact passes run on rayon; what they sum must not depend on how the
 /// work was split.
 fn determinism() -> Vec<Check> {
+    determinism_with("condensed")
+}
+
+fn determinism_active_set() -> Vec<Check> {
+    determinism_with("active_set")
+}
+
+/// [`determinism`] with the contact solver `solver`.
+fn determinism_with(solver: &str) -> Vec<Check> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .expect("xtask lives inside the workspace");
@@ -284,6 +298,7 @@ fn determinism() -> Vec<Check> {
         ("fabric.bending", "true"),
         ("simulation.end_time", "0.5"),
         ("simulation.solver", "\"implicit\""),
+        ("simulation.contact_solver", solver),
     ]
     .iter()
     .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
@@ -299,7 +314,7 @@ fn determinism() -> Vec<Check> {
             .install(|| {
                 drape::run_scene(
                     &scene,
-                    &out.join(format!("implicit-determinism-{threads}")),
+                    &out.join(format!("implicit-determinism-{solver}-{threads}")),
                     &mut |_| drape::RunControl::Continue,
                 )
                 .expect("the run writes its results")

@@ -210,14 +210,6 @@ impl SaddleSystem {
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
         ]));
-        if std::env::var_os("DRAPE_DEBUG_SADDLE").is_some() {
-            eprintln!(
-                "saddle: n {n}, slots {slots}, factor {} (K̂ alone {}), supernodal {}",
-                symbolic.len_val(),
-                tangent.symbolic().len_val(),
-                matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_))
-            );
-        }
         self.factor_values = vec![0.0; symbolic.len_val()];
         self.values = vec![0.0; nnz];
         self.rhs = vec![0.0; n];

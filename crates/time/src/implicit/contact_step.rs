@@ -32,6 +32,10 @@ pub(in crate::implicit) struct StepCounts {
     pub active_changes: usize,
 }
 
+/// Solves again on one linearisation at most this many times when a step
+/// would jump a contact (see [`Implicit::active_set_step`]).
+const MAX_RESOLVES: usize = 8;
+
 impl Implicit<'_> {
     /// The condensed step: K̂ factorised, the multipliers by MPRGP.
     pub(super) fn condensed_step(
@@ -187,27 +191,52 @@ impl Implicit<'_> {
         self.rhs.copy_from_slice(&self.r);
         contact.add_spring_forces(&mut self.rhs);
         let solves_before = self.saddle.solves;
-        self.saddle.solve(
-            &self.rhs,
-            &self.fixed,
-            contact,
-            &self.system_rows,
-            contact.settings.tolerance,
-            &mut self.dx,
-            &mut self.multipliers,
-            &mut self.tool_steps,
-        );
-        let stats = contact.finish_active_set(
-            &self.system_rows,
-            &self.multipliers,
-            &self.tool_steps,
-            &self.dx,
-        );
+        let mut changes = 0;
+        // A step that would carry a row left out deeper than half the
+        // margin into its tool is solved again with the set its gaps ask
+        // for (see `drape_contact`'s `active_set` module).
+        let jump = 0.5 * contact.settings.margin;
+        for round in 0..=MAX_RESOLVES {
+            if round > 0 {
+                let tangent = &self.tangent;
+                let block = |i: usize| Matrix3::from_fn(|a, b| tangent.entry(3 * i + a, 3 * i + b));
+                contact.active_set_rows(&block, true, &mut self.system_rows);
+                if let Err(e) =
+                    self.saddle
+                        .factorise(&self.tangent, &self.fixed, contact, &self.system_rows)
+                {
+                    match e {
+                        SaddleError::Indefinite { .. } => self.totals.indefinite += 1,
+                        e => return Err((Cutback::TangentFailure, e.to_string())),
+                    }
+                }
+            }
+            self.saddle.solve(
+                &self.rhs,
+                &self.fixed,
+                contact,
+                &self.system_rows,
+                contact.settings.tolerance,
+                &mut self.dx,
+                &mut self.multipliers,
+                &mut self.tool_steps,
+            );
+            let stats = contact.finish_active_set(
+                &self.system_rows,
+                &self.multipliers,
+                &self.tool_steps,
+                &self.dx,
+            );
+            changes += stats.active_changes;
+            if contact.unheld_penetration() <= jump {
+                break;
+            }
+        }
         self.totals.contact_seconds += started.elapsed().as_secs_f64();
-        self.totals.active_set_changes += stats.active_changes as u64;
+        self.totals.active_set_changes += changes as u64;
         Ok(StepCounts {
             solves: (self.saddle.solves - solves_before) as usize,
-            active_changes: stats.active_changes,
+            active_changes: changes,
         })
     }
 }

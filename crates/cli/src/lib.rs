@@ -805,6 +805,12 @@ pub fn run_in(
                 newton_iterations: t.newton_iterations,
                 wasted_iterations: t.wasted_iterations,
                 contact_iterations: t.contact_iterations,
+                contact_solver: if t.contact_solver == "active_set" {
+                    drape_io::results::ContactSolverName::ActiveSet
+                } else {
+                    drape_io::results::ContactSolverName::Condensed
+                },
+                active_set_changes: t.active_set_changes,
                 factorisations: t.factorisations,
                 indefinite: t.indefinite,
                 compression_scaled: t.compression_scaled,

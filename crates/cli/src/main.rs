@@ -496,12 +496,14 @@ impl Reporter {
                 p.progress.step, p.progress.time, p.max_shear_deg
             ),
             Some(i) => format!(
-                "increment {} t = {:.4e} s (h {:.2e}): Newton {}, PCG {}, contacts {} ({} stick, {} slip){}, max shear {:.1}°",
+                "increment {} t = {:.4e} s (h {:.2e}): Newton {}, solves {}, factorisations {}, active-set changes {}, contacts {} ({} stick, {} slip){}, max shear {:.1}°",
                 p.progress.step,
                 p.progress.time,
                 p.progress.dt,
                 i.newton,
                 i.contact_iterations,
+                i.factorisations,
+                i.active_changes,
                 i.active,
                 i.stick,
                 i.slip,
@@ -613,13 +615,16 @@ fn print_summary(s: &Summary, out: &Path) {
     );
     if let Some(i) = &s.run.implicit {
         println!(
-            "implicit          {} Newton iterations ({} more in {} cutbacks), {} PCG iterations, \
+            "implicit          {} contact solver: {} Newton iterations ({} more in {} cutbacks), \
+             {} solves with the factors, {} active-set changes, \
              {} factorisations ({} indefinite, {} with the resin's compression scaled down), \
              factorisation {:.1} s ({:.0} % of the run)",
+            i.contact_solver,
             i.newton_iterations,
             i.wasted_iterations,
             i.cutbacks,
             i.contact_iterations,
+            i.active_set_changes,
             i.factorisations,
             i.indefinite,
             i.compression_scaled,

@@ -62,8 +62,8 @@ pub use explicit::{
     StepTimes, TOUCHING,
 };
 pub use implicit::{
-    CarriedPair, Friction, ImplicitContact, ImplicitContactSettings, Increment, STICK_OVER_INERTIA,
-    SolveError, SolveStats,
+    CarriedPair, Friction, ImplicitContact, ImplicitContactSettings, Increment, REGULARISATION,
+    SLOTS_PER_PAIR, STICK_OVER_INERTIA, SolveError, SolveStats, SystemRow,
 };
 pub use mesh::{MeshError, MeshSurface};
 pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};

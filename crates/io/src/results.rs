@@ -192,6 +192,28 @@ pub struct RunInfo {
     pub mould_reason: Option<String>,
 }
 
+/// The implicit driver's contact solver in `summary.json`
+/// (`simulation.contact_solver`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactSolverName {
+    /// The condensed multiplier solve (also: a summary written before the
+    /// choice existed).
+    #[default]
+    Condensed,
+    /// The active-set saddle-point solve.
+    ActiveSet,
+}
+
+impl std::fmt::Display for ContactSolverName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ContactSolverName::Condensed => "condensed",
+            ContactSolverName::ActiveSet => "active_set",
+        })
+    }
+}
+
 /// The implicit driver's totals in `summary.json`.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct ImplicitRunInfo {
@@ -199,9 +221,15 @@ pub struct ImplicitRunInfo {
     pub newton_iterations: u64,
     /// Newton iterations of attempts that were cut back.
     pub wasted_iterations: u64,
-    /// Iterations of the condensed contact solves (one solve with the
-    /// factors each).
+    /// Solves with the factors of the contact solves (the condensed
+    /// solver's products, the active-set solver's solves and refinements).
     pub contact_iterations: u64,
+    /// Which contact solver.
+    #[serde(default)]
+    pub contact_solver: ContactSolverName,
+    /// Normal contact rows that entered or left the active set.
+    #[serde(default)]
+    pub active_set_changes: u64,
     /// Numeric factorisations of the tangent.
     pub factorisations: u64,
     /// Of which were not positive definite (LDLᵀ).

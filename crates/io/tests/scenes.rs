@@ -696,3 +696,21 @@ fn the_membrane_tangent_reaches_the_implicit_settings_and_a_bad_one_is_named() {
         "{message}"
     );
 }
+
+#[test]
+fn the_contact_solver_reaches_the_implicit_settings_and_a_bad_one_is_named() {
+    use drape_time::ContactSolver;
+    let scene = with_sets(GOOD, &[]).unwrap();
+    assert_eq!(scene.implicit.contact_solver, ContactSolver::Condensed);
+    for (value, choice) in [
+        ("condensed", ContactSolver::Condensed),
+        ("active_set", ContactSolver::ActiveSet),
+    ] {
+        let scene = with_sets(GOOD, &[("simulation.contact_solver", value)]).unwrap();
+        assert_eq!(scene.implicit.contact_solver, choice, "{value}");
+    }
+    let e = with_sets(GOOD, &[("simulation.contact_solver", "active-set")]).unwrap_err();
+    let message = e.to_string();
+    assert!(message.contains("contact_solver"), "{message}");
+    assert!(message.contains("active_set"), "{message}");
+}

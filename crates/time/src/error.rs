@@ -169,8 +169,14 @@ pub struct ImplicitTotals {
     /// Seconds in tangent assembly.
     pub assembly_seconds: f64,
     /// Seconds in the condensed contact solves (their solves with the
-    /// factors included).
+    /// factors included), or the active-set solves.
     pub contact_seconds: f64,
+    /// Normal contact rows that entered or left the active set, over the
+    /// converged and the cut attempts (active-set solver).
+    pub active_set_changes: u64,
+    /// The contact solver's name as the scene gives it (`condensed`,
+    /// `active_set`).
+    pub contact_solver: &'static str,
 }
 
 /// Why the implicit driver's attempts failed (each one cut the increment

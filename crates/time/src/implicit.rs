@@ -59,12 +59,17 @@
 //! reported as numerical dissipation, so the balance error is the
 //! equilibrium residual's work (checked like the explicit one).
 //!
+//! **Contact solvers** (`contact_solver`, see [`ContactSolver`]): the
+//! paper's condensed multiplier solve on the factorised K̂ (the reference),
+//! or the active-set saddle-point system ([`crate::saddle`]), one
+//! factorisation per Newton iteration; both in `implicit/contact_step.rs`.
+//!
 //! Not here: the tangent's assembly ([`crate::tangent`]), the contact solve
 //! (`drape_contact::ImplicitContact`).
 
 use std::time::Instant;
 
-use drape_contact::{ImplicitContact, ImplicitContactSettings, Increment, SolveError};
+use drape_contact::{ImplicitContact, ImplicitContactSettings, Increment, SolveError, SystemRow};
 use drape_model::{Model, State};
 use nalgebra::{Matrix3, Vector3};
 use rayon::prelude::*;
@@ -72,8 +77,12 @@ use rayon::prelude::*;
 use crate::energy::{chunked_sum, chunked_sums};
 use crate::guard::{self, Guard, GuardSettings};
 use crate::round_off::RoundOffFloor;
+use crate::saddle::{SaddleError, SaddleSystem};
 use crate::shared::{self, Constraints, ForcePass, PressurePass};
 use crate::tangent::{MembraneTangentChoice, SparseTangent};
+mod contact_step;
+pub use contact_step::ContactSolver;
+
 use crate::{
     Control, CutbackReasons, CutbackReport, DriverState, Energies, Frame, ImplicitCarry,
     ImplicitTotals, IncrementReport, Observer, Progress, RunError, RunSummary,
@@ -224,6 +233,9 @@ pub struct ImplicitSettings {
     /// no bending, and their wrinkled skirts differ by an element RMS of
     /// 0.15° (0/90) and 0.9° (±45), as between any two paths there.
     pub membrane_tangent: MembraneTangentChoice,
+    /// How each Newton iteration solves the contact (see
+    /// [`ContactSolver`]).
+    pub contact_solver: ContactSolver,
 }
 
 impl Default for ImplicitSettings {
@@ -248,6 +260,7 @@ impl Default for ImplicitSettings {
             mass_scaling: None,
             safety_factor: crate::ExplicitSettings::default().safety_factor,
             membrane_tangent: MembraneTangentChoice::Exact,
+            contact_solver: ContactSolver::default(),
         }
     }
 }
@@ -265,6 +278,9 @@ pub struct NewtonRecord {
     pub scale: f64,
     /// Largest component of the correction that led here (mm).
     pub correction: f64,
+    /// Normal contact rows that entered or left the active set in the
+    /// step that led here.
+    pub active_changes: usize,
 }
 
 /// Why an attempt failed, for the cutback count and the final diagnosis.
@@ -316,6 +332,10 @@ impl Cutback {
 /// What a converged attempt reports.
 struct Converged {
     newton: usize,
+    /// Normal rows that entered or left the active set.
+    active_changes: usize,
+    /// Factorisations (of K̂ or the saddle-point system).
+    factorisations: usize,
     /// Of which followed a change of friction states.
     switched: usize,
     contact_iterations: usize,
@@ -380,6 +400,13 @@ pub struct Implicit<'m> {
     /// The nodes' inertia (t): the model's mass, scaled as the explicit
     /// driver scales it when `mass_scaling` is set.
     mass: Vec<f64>,
+    /// The active-set solver's system, its held rows, right-hand side and
+    /// solution buffers.
+    saddle: SaddleSystem,
+    system_rows: Vec<SystemRow>,
+    rhs: Vec<f64>,
+    multipliers: Vec<f64>,
+    tool_steps: Vec<f64>,
 }
 
 impl<'m> Implicit<'m> {
@@ -535,6 +562,11 @@ impl<'m> Implicit<'m> {
             tool_touched: vec![false; model.tools.len()],
             node_blocks: vec![Matrix3::zeros(); n],
             mass,
+            saddle: SaddleSystem::new(),
+            system_rows: Vec::new(),
+            rhs: vec![0.0; 3 * n],
+            multipliers: Vec::new(),
+            tool_steps: Vec::new(),
             size: {
                 let lo = model
                     .x0
@@ -569,10 +601,14 @@ impl<'m> Implicit<'m> {
     /// cutbacks by reason say why it failed.
     pub fn totals(&self) -> ImplicitTotals {
         ImplicitTotals {
-            factorisations: self.tangent.factorisations,
-            indefinite: self.tangent.indefinite,
+            factorisations: self.tangent.factorisations + self.saddle.factorisations,
+            indefinite: self.tangent.indefinite + self.totals.indefinite,
             compression_scaled: self.tangent.compression_scaled,
-            factor_seconds: self.tangent.factor_seconds,
+            factor_seconds: self.tangent.factor_seconds + self.saddle.factor_seconds,
+            contact_solver: match self.settings.contact_solver {
+                ContactSolver::Condensed => "condensed",
+                ContactSolver::ActiveSet => "active_set",
+            },
             ..self.totals
         }
     }
@@ -911,6 +947,8 @@ impl<'m> Implicit<'m> {
                 increment: Some(IncrementReport {
                     newton: converged.newton,
                     contact_iterations: converged.contact_iterations,
+                    active_changes: converged.active_changes,
+                    factorisations: converged.factorisations,
                     cutbacks,
                     active,
                     stick,
@@ -1122,6 +1160,9 @@ impl<'m> Implicit<'m> {
         let mut newton = 0usize;
         self.tangent.begin_attempt();
         let mut contact_iterations = 0usize;
+        let mut active_changes = 0usize;
+        let mut step_changes = 0usize;
+        let factorisations_before = self.tangent.factorisations + self.saddle.factorisations;
         let mut switched = 0usize;
         // The residuals over their force scale of the last two iterations,
         // oldest first.
@@ -1227,6 +1268,7 @@ impl<'m> Implicit<'m> {
                     residual: res,
                     scale,
                     correction,
+                    active_changes: step_changes,
                 });
             }
             if let Some(contact) = &mut self.contact {
@@ -1270,6 +1312,9 @@ impl<'m> Implicit<'m> {
                 self.totals.contact_iterations += contact_iterations as u64;
                 return Ok(Converged {
                     newton,
+                    active_changes,
+                    factorisations: (self.tangent.factorisations + self.saddle.factorisations
+                        - factorisations_before) as usize,
                     switched,
                     contact_iterations,
                 });
@@ -1292,83 +1337,18 @@ impl<'m> Implicit<'m> {
                 );
             }
             // The Newton step.
-            // The contact pass's stick springs and the pressures' load
-            // stiffness go into every assembly the ladder of membrane
-            // tangents makes, before it factorises.
-            let contact = &self.contact;
-            let x_iterate = &self.x;
-            let factorised = self.tangent.assemble_and_factorise(
-                model,
-                &self.x,
-                &state.history,
-                h,
-                &self.mass,
-                mass_factor,
-                &mut |tangent: &mut SparseTangent| {
-                    if let Some(contact) = contact {
-                        contact.add_spring_stiffness(|i, b| tangent.add_node_block(i, b));
-                    }
-                    tangent.add_pressure_stiffness(model, x_iterate, t1);
-                },
-            );
-            match factorised {
-                Ok((_, assembly)) => self.totals.assembly_seconds += assembly,
-                Err(e) => {
-                    return fail(
-                        newton,
-                        &mut self.totals,
-                        Cutback::TangentFailure,
-                        e.to_string(),
-                    );
-                }
-            }
-            let fixed = &self.fixed;
-            let tangent = &mut self.tangent;
-            if let Some(contact) = &self.contact {
-                for i in contact.row_nodes() {
-                    let i = i as usize;
-                    self.node_blocks[i] =
-                        Matrix3::from_fn(|a, b| tangent.entry(3 * i + a, 3 * i + b));
-                }
-            }
-            let mut solve = |w: &mut [f64]| {
-                for (wi, &f) in w.iter_mut().zip(fixed) {
-                    if f {
-                        *wi = 0.0;
-                    }
-                }
-                tangent.solve(w);
-                for (wi, &f) in w.iter_mut().zip(fixed) {
-                    if f {
-                        *wi = 0.0;
-                    }
-                }
+            let step = match (&self.contact, settings.contact_solver) {
+                (Some(_), ContactSolver::ActiveSet) => self.active_set_step(state, h, mass_factor),
+                _ => self.condensed_step(state, h, mass_factor),
             };
-            match &mut self.contact {
-                Some(contact) => {
-                    let started = Instant::now();
-                    let blocks = &self.node_blocks;
-                    let solved = contact.solve_preconditioned(
-                        &self.r,
-                        &mut solve,
-                        Some(&|i: usize| blocks[i]),
-                        &mut self.dx,
-                    );
-                    self.totals.contact_seconds += started.elapsed().as_secs_f64();
-                    match solved {
-                        Ok(stats) => contact_iterations += stats.iterations,
-                        Err(e) => {
-                            let reason = match e {
-                                SolveError::Indefinite => Cutback::ContactIndefinite,
-                                SolveError::NoConvergence { .. } => Cutback::ContactNotConverged,
-                            };
-                            return fail(newton, &mut self.totals, reason, e.to_string());
-                        }
-                    }
+            match step {
+                Ok(counts) => {
+                    contact_iterations += counts.solves;
+                    active_changes += counts.active_changes;
+                    step_changes = counts.active_changes;
                 }
-                None => {
-                    self.dx.copy_from_slice(&self.r);
-                    solve(&mut self.dx);
+                Err((reason, message)) => {
+                    return fail(newton, &mut self.totals, reason, message);
                 }
             }
             // A residual not below `CYCLE` times the one two iterations

@@ -58,6 +58,7 @@ mod implicit;
 mod observer;
 pub mod profile;
 pub mod round_off;
+pub mod saddle;
 pub mod scaling;
 mod shared;
 pub mod tangent;
@@ -66,7 +67,7 @@ pub use energy::Energies;
 pub use error::{CutbackReasons, ImplicitTotals, RunError, RunSummary};
 pub use explicit::{Explicit, ExplicitSettings};
 pub use guard::{Guard, GuardSettings, Instability};
-pub use implicit::{ELASTIC_SLIP, Implicit, ImplicitSettings, NewtonRecord};
+pub use implicit::{ContactSolver, ELASTIC_SLIP, Implicit, ImplicitSettings, NewtonRecord};
 pub use observer::{
     Control, CutbackReport, DriverState, Frame, ImplicitCarry, IncrementReport, NoObserver,
     Observer, Progress,

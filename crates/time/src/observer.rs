@@ -49,6 +49,11 @@ pub struct IncrementReport {
     pub contact_iterations: usize,
     /// Attempts cut back before it converged.
     pub cutbacks: usize,
+    /// Normal contact rows that entered or left the active set over its
+    /// Newton iterations (both solvers).
+    pub active_changes: usize,
+    /// Factorisations of the converged attempt.
+    pub factorisations: usize,
     /// Contacts pressing at its end.
     pub active: usize,
     /// Of which sticking.

@@ -562,6 +562,40 @@ impl SparseTangent {
         mass_factor: f64,
         extra: &mut dyn FnMut(&mut SparseTangent),
     ) -> Result<(Factorisation, f64), TangentError> {
+        let mut kind = Factorisation::Cholesky;
+        let (_, assembly) = self.assemble_and_factorise_with(
+            model,
+            x,
+            history,
+            dt,
+            mass,
+            mass_factor,
+            extra,
+            &mut |tangent| {
+                kind = tangent.factorise().map_err(TangentError::ZeroPivot)?;
+                Ok(kind == Factorisation::Cholesky)
+            },
+        )?;
+        Ok((kind, assembly))
+    }
+
+    /// [`Self::assemble_and_factorise`] with the factorisation left to
+    /// `factor`, which says whether what it factorised was definite (the
+    /// contact saddle-point system's inertia, see [`crate::saddle`]); an
+    /// indefinite one climbs the same ladder of membrane tangents. Returns
+    /// the last answer of `factor` and the seconds spent assembling.
+    #[allow(clippy::too_many_arguments)]
+    pub fn assemble_and_factorise_with(
+        &mut self,
+        model: &Model,
+        x: &[Vector3<f64>],
+        history: &[Vec<f64>],
+        dt: f64,
+        mass: &[f64],
+        mass_factor: f64,
+        extra: &mut dyn FnMut(&mut SparseTangent),
+        factor: &mut dyn FnMut(&mut SparseTangent) -> Result<bool, TangentError>,
+    ) -> Result<(bool, f64), TangentError> {
         let when_indefinite =
             self.membrane_tangent == MembraneTangentChoice::TensionFieldWhenIndefinite;
         let mut assembly = 0.0;
@@ -580,13 +614,10 @@ impl SparseTangent {
             if level > 0 {
                 self.compression_scaled += 1;
             }
-            let kind = self.factorise().map_err(TangentError::ZeroPivot)?;
-            if kind == Factorisation::Cholesky
-                || !when_indefinite
-                || level == COMPRESSION_KEPT.len()
-            {
+            let definite = factor(self)?;
+            if definite || !when_indefinite || level == COMPRESSION_KEPT.len() {
                 self.kept_level = level;
-                return Ok((kind, assembly));
+                return Ok((definite, assembly));
             }
             level += 1;
         }

@@ -70,6 +70,9 @@ pub enum Driver {
     /// Newton increments with the condensed contact solve, default
     /// settings (end time, frames and damping from the explicit ones).
     Implicit,
+    /// The same with the active-set contact solver
+    /// (`simulation.contact_solver = "active_set"`).
+    ImplicitActiveSet,
 }
 
 /// Runs `model` from its initial state with `driver` and returns the end
@@ -88,12 +91,17 @@ pub(super) fn run(
                 .run(&mut state, observer)
                 .expect("run");
         }
-        Driver::Implicit => {
+        Driver::Implicit | Driver::ImplicitActiveSet => {
             let implicit = ImplicitSettings {
                 end_time: settings.end_time,
                 frames: settings.frames,
                 damping: settings.damping,
                 guard: settings.guard.clone(),
+                contact_solver: if driver == Driver::ImplicitActiveSet {
+                    drape_time::ContactSolver::ActiveSet
+                } else {
+                    drape_time::ContactSolver::Condensed
+                },
                 ..ImplicitSettings::default()
             };
             Implicit::new(model, implicit)

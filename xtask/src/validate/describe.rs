@@ -142,6 +142,30 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "the same agreement on a 10 × 10 blank, both orientations",
             "the explicit run, same tolerances",
         ),
+        "implicit/active-set-incline" => (
+            "contact/incline run by the implicit driver with the active-set contact solver",
+            "as contact/incline",
+        ),
+        "implicit/active-set-capstan" => (
+            "contact/capstan run by the implicit driver with the active-set contact solver",
+            "as contact/capstan",
+        ),
+        "implicit/active-set-no-penetration" => (
+            "contact/no-penetration run by the implicit driver with the active-set contact solver",
+            "as contact/no-penetration",
+        ),
+        "implicit/active-set-pinching" => (
+            "contact/pinching run by the implicit driver with the active-set contact solver",
+            "as contact/pinching",
+        ),
+        "implicit/active-set-determinism" => (
+            "implicit/determinism with the active-set contact solver",
+            "the one-thread run",
+        ),
+        "implicit/active-set-hemisphere-agreement-coarse" => (
+            "implicit/hemisphere-agreement-coarse with the active-set contact solver",
+            "the explicit run, same tolerances",
+        ),
         "implicit/hemisphere-shipped" => (
             "the shipped mass-scaled hemispheres by both drivers: same added mass, both complete; differences reported",
             "the explicit run (reported, not checked)",

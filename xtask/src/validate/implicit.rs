@@ -122,6 +122,38 @@ pub const CASES: &[Case] = &[
         quick: false,
         run: hemisphere_shipped,
     },
+    // The contact cases and the coarse agreement again with the active-set
+    // contact solver, same references and tolerances.
+    Case {
+        name: "implicit/active-set-incline",
+        quick: true,
+        run: || contact::incline_with(Driver::ImplicitActiveSet),
+    },
+    Case {
+        name: "implicit/active-set-capstan",
+        quick: true,
+        run: || contact::capstan_with(Driver::ImplicitActiveSet),
+    },
+    Case {
+        name: "implicit/active-set-no-penetration",
+        quick: true,
+        run: || contact::no_penetration_with(Driver::ImplicitActiveSet),
+    },
+    Case {
+        name: "implicit/active-set-pinching",
+        quick: true,
+        run: || contact::pinching_with(Driver::ImplicitActiveSet),
+    },
+    Case {
+        name: "implicit/active-set-determinism",
+        quick: true,
+        run: determinism_active_set,
+    },
+    Case {
+        name: "implicit/active-set-hemisphere-agreement-coarse",
+        quick: true,
+        run: hemisphere_agreement_coarse_active_set,
+    },
 ];
 
 fn incline() -> Vec<Check> {
@@ -250,6 +282,15 @@ const PHYSICAL_MASS: (&str, &str) = ("simulation.mass_scaling_dt", "1e-9");
 /// contact passes run on rayon; what they sum must not depend on how the
 /// work was split.
 fn determinism() -> Vec<Check> {
+    determinism_with("condensed")
+}
+
+fn determinism_active_set() -> Vec<Check> {
+    determinism_with("active_set")
+}
+
+/// [`determinism`] with the contact solver `solver`.
+fn determinism_with(solver: &str) -> Vec<Check> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .expect("xtask lives inside the workspace");
@@ -258,6 +299,7 @@ fn determinism() -> Vec<Check> {
         ("fabric.bending", "true"),
         ("simulation.end_time", "0.5"),
         ("simulation.solver", "\"implicit\""),
+        ("simulation.contact_solver", solver),
     ]
     .iter()
     .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
@@ -273,7 +315,7 @@ fn determinism() -> Vec<Check> {
             .install(|| {
                 drape::run_scene(
                     &scene,
-                    &out.join(format!("implicit-determinism-{threads}")),
+                    &out.join(format!("implicit-determinism-{solver}-{threads}")),
                     &mut |_| drape::RunControl::Continue,
                 )
                 .expect("the run writes its results")
@@ -351,6 +393,17 @@ fn hemisphere_agreement_coarse() -> Vec<Check> {
     checks
 }
 
+fn hemisphere_agreement_coarse_active_set() -> Vec<Check> {
+    let coarse = [
+        ("fabric.blank.cells", "[10, 10]"),
+        PHYSICAL_MASS,
+        ("simulation.contact_solver", "active_set"),
+    ];
+    let mut checks = agreement("hemisphere-0-90", &coarse, Gate::Checked);
+    checks.extend(agreement("hemisphere-45", &coarse, Gate::Checked));
+    checks
+}
+
 fn hemisphere_shipped() -> Vec<Check> {
     let mut checks = agreement("hemisphere-0-90", &[], Gate::Reported);
     checks.extend(agreement("hemisphere-45", &[], Gate::Reported));
@@ -407,7 +460,15 @@ fn agreement(name: &str, overrides: &[(&str, &str)], gate: Gate) -> Vec<Check> {
         drape::run_scene(&s, &out.join(dir), &mut |_| drape::RunControl::Continue)
             .expect("the run writes its results")
     };
-    let tag = format!("{name}-{cells}");
+    let solver_tag = if overrides
+        .iter()
+        .any(|(k, v)| k == "simulation.contact_solver" && v == "active_set")
+    {
+        "-active-set"
+    } else {
+        ""
+    };
+    let tag = format!("{name}-{cells}{solver_tag}");
     let explicit = run(Solver::Explicit, &format!("{tag}-explicit"));
     let implicit = run(Solver::Implicit, &format!("{tag}-implicit"));
     let completed = |r: &drape::RunReport| {

@@ -132,6 +132,7 @@ fn strip(driver: Driver) -> Vec<Check> {
     let name = match driver {
         Driver::Explicit => "explicit",
         Driver::Implicit => "implicit",
+        Driver::ImplicitActiveSet => "implicit (active set)",
     };
     vec![
         Check::rel(

@@ -1007,6 +1007,7 @@ pub(super) fn build(
         mass_scaling: sim.mass_scaling_dt,
         safety_factor: sim.safety_factor,
         membrane_tangent: sim.membrane_tangent.into(),
+        contact_solver: sim.contact_solver.into(),
         guard,
         ..ImplicitSettings::default()
     };

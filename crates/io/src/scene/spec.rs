@@ -50,6 +50,28 @@ impl From<MembraneTangentSpec> for MembraneTangentChoice {
     }
 }
 
+/// Implicit: how each Newton iteration solves the contact (see
+/// [`drape_time::ContactSolver`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactSolverSpec {
+    /// The paper's condensed multiplier solve (the reference).
+    #[default]
+    Condensed,
+    /// Semi-smooth Newton: one active set and one saddle-point
+    /// factorisation per Newton iteration.
+    ActiveSet,
+}
+
+impl From<ContactSolverSpec> for drape_time::ContactSolver {
+    fn from(spec: ContactSolverSpec) -> Self {
+        match spec {
+            ContactSolverSpec::Condensed => drape_time::ContactSolver::Condensed,
+            ContactSolverSpec::ActiveSet => drape_time::ContactSolver::ActiveSet,
+        }
+    }
+}
+
 /// The most output frames a run may ask for: each is a file of the whole
 /// blank, and a frame is written at most once per step anyway.
 pub const MAX_FRAMES: usize = 100_000;
@@ -135,6 +157,9 @@ pub struct SimulationSpec {
     /// Implicit: the resin membranes' tangent.
     #[serde(default)]
     pub membrane_tangent: MembraneTangentSpec,
+    /// Implicit: how each Newton iteration solves the contact.
+    #[serde(default)]
+    pub contact_solver: ContactSolverSpec,
 }
 
 fn default_force_tolerance() -> f64 {

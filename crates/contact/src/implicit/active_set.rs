@@ -1,0 +1,319 @@
+//! The contact side of `contact_solver = "active_set"`: normal contact as a
+//! primal–dual active set (Hüeber–Stadler–Wohlmuth), taken inside the
+//! driver's Newton iteration as a semi-smooth Newton method, so that each
+//! iteration solves one linear system, the saddle-point system
+//!
+//! ```text
+//! [K̂   Cᵀ] [ Δx]   [ r + springs' forces]
+//! [C  −D ] [−λ ] = [ −g                  ]
+//! ```
+//!
+//! over the rows held as equalities, with λ = 0 on the others. The driver
+//! assembles and factorises it (`drape_time::saddle`); this module decides
+//! which rows it holds and takes its solution back into the pairs.
+//!
+//! **The active set.** A normal row is held when λ − c·g > 0, with λ its
+//! signed multiplier from the last system and g its gap at the iterate
+//! (the semi-smooth Newton step on the complementarity function
+//! λ − max(0, λ − c·g)); c = 1/A_kk, A_kk ≈ nᵀ·K̂_ii⁻¹·n the row's
+//! compliance from the node's 3 × 3 block, so that λ and c·g are forces of
+//! the same size. A row whose multiplier came out negative leaves at the
+//! next iteration (its clamped λ_N = 0 leaves a residual the driver sees);
+//! a penetrating row enters. Where the set no longer changes, the
+//! iteration is Newton's on a smooth system, quadratic where the tangent
+//! is exact (see the driver's tests).
+//!
+//! **Friction** is the condensed solver's: the return mapping of
+//! `update_friction` between iterations, stick as the regularised springs
+//! in K̂ (or rigid rows: equalities here), slip as μ·λ_N from the last
+//! system with its turn row. That is the stick/slip active set of
+//! Hüeber–Stadler–Wohlmuth with the stick regularised, chosen over
+//! Alart–Curnier's augmented Lagrangian because the latter's generalised
+//! Jacobian couples the slip force to λ_N (μ·d·∂λ_N): not symmetric, so no
+//! LDLᵀ; here the slip force lags one iteration behind λ_N, as in the
+//! condensed solver, and a slipping pair converges linearly in that term.
+//!
+//! **A step that would jump a contact.** The semi-smooth step trusts the
+//! set of the last iterate; a force-driven holder with no row held moves
+//! by its force over its inertia alone, which can carry it metres through
+//! the blank in one step (deep drawing: 5.8 m at the first contact), and a
+//! node or tool that far past its contact is no longer a pair the next
+//! linearisation finds. When the step's linearised gaps put a row that was
+//! not held deeper than half the margin into its tool, the driver solves
+//! again on the same linearisation with the set those gaps ask for (a
+//! primal–dual active-set iteration, one factorisation each), so that the
+//! step never crosses what the margin can see.
+//!
+//! **Pinched nodes and the force-driven holder.** A node between the holder
+//! and the die holds two rows ±n; over several such nodes the rows are
+//! dependent (how the clamping force is shared among them is
+//! indeterminate), so [C 0] alone would make the system singular. Every
+//! rigid row gets a small compliance ε = [`REGULARISATION`]·A_kk on its
+//! diagonal, which makes the matrix quasi-definite (an LDLᵀ exists in any
+//! symmetric order, so the symbolic analysis is reused) and picks the
+//! least-squares share; the driver then removes ε's bias by iterative
+//! refinement against the unregularised system. That share is where this
+//! solver differs from the condensed one, whose warm start keeps the
+//! share of the last solve: with friction each row has its own cone, and
+//! on the deep-drawing scenes (holder and die pinching most of the flange)
+//! the active-set runs chatter between stick and slip and do not complete
+//! (measured 2026-11-28; a proximal regularisation towards the last
+//! multipliers got further but lost the clamp). A force-driven holder is
+//! one more unknown (its displacement along its axis, its inertia on the
+//! diagonal), coupled to every row of its pairs.
+//!
+//! **The pattern** is fixed per set of candidates (nodes inside a tool's
+//! grown box at the start of an increment): [`SLOTS_PER_PAIR`] slots per
+//! candidate (a normal row, two tangential), each coupled to its node's
+//! three components and its tool's unknown. A slot not held is a decoupled
+//! −1 on the diagonal.
+
+use super::*;
+
+/// Slots of the active-set system per candidate (node, tool): the normal
+/// row and at most two tangential rows (rigid stick, or a compliant row
+/// coupled to a force-driven tool; regularised stick rows of a node alone
+/// are springs in K̂).
+pub const SLOTS_PER_PAIR: usize = 3;
+
+/// The compliance given to a rigid row, relative to its own A_kk: small
+/// enough that the refinement removes its bias in one or two solves,
+/// large enough that the factorisation's pivots stay above round-off.
+pub const REGULARISATION: f64 = 1e-8;
+
+/// An equation of the active-set system: C's row on a node (and a tool),
+/// t·Δx + a·Δd − compliance·(−λ) = −target.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SystemRow {
+    /// Its slot (see [`ImplicitContact::slots`]).
+    pub slot: usize,
+    /// The pair it belongs to (for [`ImplicitContact::finish_active_set`]).
+    pub pair: u32,
+    /// Its node.
+    pub node: u32,
+    /// The row on the node's three components.
+    pub direction: Vector3<f64>,
+    /// Its tool.
+    pub tool: u32,
+    /// The row on the tool's displacement (force-driven tools only).
+    pub tool_coefficient: f64,
+    /// Its compliance (mm/N): 1/k_t of a regularised stick row, 0 for a
+    /// rigid one.
+    pub compliance: f64,
+    /// The regularisation added to the compliance in the factorised
+    /// matrix (see [`REGULARISATION`]), which the refinement removes.
+    pub regularisation: f64,
+    /// Its value at the iterate: a gap or a slip component (mm).
+    pub target: f64,
+    /// A normal row (λ ≥ 0).
+    pub bounded: bool,
+}
+
+impl ImplicitContact {
+    /// (tool, node, λ_N) of every pair of the last solve, condensed or
+    /// active-set, in the pairs' order.
+    pub fn normal_forces(&self) -> impl Iterator<Item = (u32, u32, f64)> + '_ {
+        self.pairs.iter().map(|p| (p.tool, p.node, p.lambda))
+    }
+
+    /// Changes whenever the candidates (and so the active-set system's
+    /// pattern) change.
+    pub fn candidate_generation(&self) -> u64 {
+        self.candidate_generation
+    }
+
+    /// The slots of the active-set system, in order: (node, tool) of each,
+    /// [`SLOTS_PER_PAIR`] per candidate, tool after tool.
+    pub fn slots(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.candidates.iter().enumerate().flat_map(|(t, c)| {
+            c.iter()
+                .flat_map(move |&i| std::iter::repeat_n((i, t as u32), SLOTS_PER_PAIR))
+        })
+    }
+
+    /// The stiffness and the residual of tool `t`'s unknown when it is
+    /// force-driven (its inertia, its applied force less its inertia
+    /// force), None for a tool that moves as prescribed.
+    pub fn tool_equation(&self, t: usize) -> Option<(f64, f64)> {
+        self.tools[t]
+            .is_force_driven()
+            .then(|| (self.tool_stiffness(t), self.tool_residual(t)))
+    }
+
+    /// Adds the springs' forces at the iterate (see
+    /// [`Self::set_springs_in_tangent`]) to the residual `r` (3·N).
+    pub fn add_spring_forces(&self, r: &mut [f64]) {
+        for row in &self.springs {
+            let i = 3 * self.pairs[row.pair as usize].node as usize;
+            let force = -row.target / row.compliance;
+            for c in 0..3 {
+                r[i + c] += row.direction[c] * force;
+            }
+        }
+    }
+
+    /// The rows the next system holds as equalities, into `out`: every
+    /// tangential row left in C, and the normal rows whose λ − c·g > 0
+    /// (see the module's documentation); `block(i)` is K̂'s 3 × 3 block at
+    /// node i (with the springs). With `linearised`, g is the linearised
+    /// gap after the last system instead of the gap at the iterate: a
+    /// primal–dual active-set iteration on one linearisation, which ends
+    /// at the condensed solve's answer (the tests' reference). Changes
+    /// nothing in the pass.
+    pub fn active_set_rows(
+        &self,
+        block: &dyn Fn(usize) -> Matrix3<f64>,
+        linearised: bool,
+        out: &mut Vec<SystemRow>,
+    ) {
+        out.clear();
+        let slot_of = |pair: &Pair| -> usize {
+            let t = pair.tool as usize;
+            let before: usize = self.candidates[..t].iter().map(Vec::len).sum();
+            let c = self.candidates[t]
+                .binary_search(&pair.node)
+                .expect("a pair's node is a candidate of its tool");
+            SLOTS_PER_PAIR * (before + c)
+        };
+        let mut last: Option<(u32, usize, usize, Matrix3<f64>)> = None;
+        for row in &self.rows {
+            let pair = &self.pairs[row.pair as usize];
+            // The pair's first row is its normal one; the tangential ones
+            // follow in the next slots.
+            let (base, k, inverse) = match last {
+                Some((p, base, k, b)) if p == row.pair => (base, k + 1, b),
+                _ => (
+                    slot_of(pair),
+                    0,
+                    block(pair.node as usize)
+                        .try_inverse()
+                        .unwrap_or_else(Matrix3::zeros),
+                ),
+            };
+            last = Some((row.pair, base, k, inverse));
+            debug_assert!(k < SLOTS_PER_PAIR);
+            let t = pair.tool as usize;
+            let tool = match self.tool_equation(t) {
+                Some((stiffness, _)) => row.tool_coefficient * row.tool_coefficient / stiffness,
+                None => 0.0,
+            };
+            let a_kk = row.direction.dot(&(inverse * row.direction)) + tool;
+            let a_kk = if a_kk.is_finite() && a_kk > 0.0 {
+                a_kk
+            } else {
+                1.0
+            };
+            let gap = if linearised {
+                pair.predicted
+            } else {
+                row.target
+            };
+            let held = !row.bounded || pair.multiplier - gap / a_kk > 0.0;
+            if !held {
+                continue;
+            }
+            out.push(SystemRow {
+                slot: base + k,
+                pair: row.pair,
+                node: pair.node,
+                direction: row.direction,
+                tool: pair.tool,
+                tool_coefficient: row.tool_coefficient,
+                compliance: row.compliance,
+                regularisation: if row.compliance > 0.0 {
+                    0.0
+                } else {
+                    REGULARISATION * a_kk
+                },
+                target: row.target,
+                bounded: row.bounded,
+            });
+        }
+    }
+
+    /// The deepest linearised penetration (mm, ≥ 0) after the last
+    /// active-set system among the normal rows it did not hold: how far
+    /// the step would carry a node into a tool whose row was left out.
+    pub fn unheld_penetration(&self) -> f64 {
+        self.pairs
+            .iter()
+            .filter(|p| !p.active)
+            .map(|p| -p.predicted)
+            .fold(0.0, f64::max)
+    }
+
+    /// Takes the system's solution back: Δx in `dx` (3·N, its springs'
+    /// forces from it), the multipliers `lambda` of `rows` (λ, not −λ),
+    /// each tool's Δd in `tool_step` (zero for a prescribed one). Returns
+    /// the solve's counts, `active_changes` being the normal rows that
+    /// entered or left the set against the last system.
+    pub fn finish_active_set(
+        &mut self,
+        rows: &[SystemRow],
+        lambda: &[f64],
+        tool_step: &[f64],
+        dx: &[f64],
+    ) -> SolveStats {
+        let mut changes = 0usize;
+        let mut held = std::mem::take(&mut self.scratch.bounded);
+        held.clear();
+        held.resize(self.pairs.len(), false);
+        for row in rows.iter().filter(|r| r.bounded) {
+            held[row.pair as usize] = true;
+        }
+        for (pair, &h) in self.pairs.iter_mut().zip(&held) {
+            if pair.active != h {
+                changes += 1;
+            }
+            pair.active = h;
+            pair.lambda = 0.0;
+            pair.multiplier = 0.0;
+            pair.stick = Vector3::zeros();
+        }
+        self.scratch.bounded = held;
+        for (row, &l) in rows.iter().zip(lambda) {
+            let pair = &mut self.pairs[row.pair as usize];
+            if row.bounded {
+                pair.multiplier = l;
+                pair.lambda = l.max(0.0);
+            } else {
+                pair.stick += row.direction * l;
+            }
+        }
+        for row in &self.springs {
+            let pair = &mut self.pairs[row.pair as usize];
+            let i = 3 * pair.node as usize;
+            let t = row.direction;
+            let along = t.x * dx[i] + t.y * dx[i + 1] + t.z * dx[i + 2];
+            pair.stick -= t * ((row.target + along) / row.compliance);
+        }
+        for pair in &mut self.pairs {
+            let tool = &self.tools[pair.tool as usize];
+            let i = 3 * pair.node as usize;
+            let n = pair.normal;
+            let along = n.x * dx[i] + n.y * dx[i + 1] + n.z * dx[i + 2];
+            let moved = if tool.is_force_driven() {
+                -n.dot(&tool.motion.direction()) * tool_step[pair.tool as usize]
+            } else {
+                0.0
+            };
+            pair.predicted = pair.gap + along + moved;
+        }
+        for (t, step) in self.tool_step.iter_mut().enumerate() {
+            *step = if self.tools[t].is_force_driven() {
+                tool_step[t]
+            } else {
+                0.0
+            };
+        }
+        let stats = SolveStats {
+            iterations: 1,
+            rows: rows.len(),
+            active: self.pairs.iter().filter(|p| p.lambda > 0.0).count(),
+            active_changes: changes,
+            ..SolveStats::default()
+        };
+        self.solve_totals.add(&stats);
+        stats
+    }
+}

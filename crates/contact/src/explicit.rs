@@ -18,6 +18,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::phases::{ContactPhase, PhaseTimer};
+use crate::plies::{PlyContact, Support};
 use crate::tool::{Tool, ToolMotion, ToolState};
 
 /// The gap, as a fraction of the contact offset (the fabric's half
@@ -279,6 +280,10 @@ pub struct ExplicitContact {
     touched: Vec<u32>,
     scratch: Scratch,
     phases: Option<PhaseTimer>,
+    /// Contact between the plies of a laminate (none for one ply).
+    plies: Option<PlyContact>,
+    /// The tool contacts handed to the ply pass as supports.
+    supports: Vec<Support>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -355,7 +360,22 @@ impl ExplicitContact {
                 ..Scratch::default()
             },
             phases: None,
+            plies: None,
+            supports: Vec::new(),
         }
+    }
+
+    /// Adds contact between the plies of a laminate (see [`PlyContact`]):
+    /// solved after the tools' normal constraints, with the nodes on a tool
+    /// held there, before the tools' friction and its own.
+    pub fn set_plies(&mut self, plies: PlyContact) {
+        self.supports = Vec::with_capacity(self.force.len());
+        self.plies = Some(plies);
+    }
+
+    /// The ply–ply contact, when the model is a laminate.
+    pub fn plies(&self) -> Option<&PlyContact> {
+        self.plies.as_ref()
     }
 
     /// The pass's outputs, as a frame shows them.
@@ -550,6 +570,10 @@ impl ExplicitContact {
             self.per_node[i as usize] = 0;
         }
         self.touched.clear();
+        if self.plies.is_some() {
+            // The ply pass puts forces on nodes of its own.
+            self.force.iter_mut().for_each(|f| *f = Vector3::zeros());
+        }
         self.tool_force.iter_mut().for_each(|f| *f = 0.0);
         self.refresh_candidates(x);
         PhaseTimer::lap(&mut self.phases, ContactPhase::BroadPhase);
@@ -659,6 +683,7 @@ impl ExplicitContact {
         }
         PhaseTimer::lap(&mut self.phases, ContactPhase::Projection);
         if self.constraints.is_empty() {
+            self.ply_pass(x, v, mass, movable, dt, tau);
             return Ok(ContactStep::default());
         }
         let mut step = ContactStep::default();
@@ -731,11 +756,93 @@ impl ExplicitContact {
         }
 
         PhaseTimer::lap(&mut self.phases, ContactPhase::Multipliers);
+        if self.plies.is_some() {
+            // The ply pass leaves the tool friction for the friction pass
+            // below, which reads the supports' added multipliers.
+            self.ply_normal(x, v, mass, movable, dt, tau);
+        }
         if self.has_friction() {
             self.friction(x, v, mass, dt, tau);
             PhaseTimer::lap(&mut self.phases, ContactPhase::Friction);
         }
+        if let Some(plies) = &mut self.plies {
+            plies.friction(x, v, mass, movable, dt, tau, &mut self.force);
+        }
         Ok(step)
+    }
+
+    /// The ply pass of a step without tool constraints.
+    fn ply_pass(
+        &mut self,
+        x: &mut [Vector3<f64>],
+        v: &mut [Vector3<f64>],
+        mass: &[f64],
+        movable: &[bool],
+        dt: f64,
+        tau: f64,
+    ) {
+        if self.plies.is_some() {
+            self.ply_normal(x, v, mass, movable, dt, tau);
+            if let Some(plies) = &mut self.plies {
+                plies.friction(x, v, mass, movable, dt, tau, &mut self.force);
+            }
+        }
+    }
+
+    /// The plies' normal constraints with the active tool constraints as
+    /// supports; what a support needs is added to its tool constraint's
+    /// multiplier, force and the tool's reaction.
+    fn ply_normal(
+        &mut self,
+        x: &mut [Vector3<f64>],
+        v: &mut [Vector3<f64>],
+        mass: &[f64],
+        movable: &[bool],
+        dt: f64,
+        tau: f64,
+    ) {
+        let Some(plies) = &mut self.plies else {
+            return;
+        };
+        self.supports.clear();
+        self.supports.extend(
+            self.constraints
+                .iter()
+                .filter(|c| c.mu > 0.0)
+                .map(|c| Support {
+                    node: c.node,
+                    normal: c.normal,
+                    mu: 0.0,
+                }),
+        );
+        plies.normal(
+            x,
+            v,
+            mass,
+            movable,
+            dt,
+            tau,
+            &mut self.supports,
+            &mut self.force,
+        );
+        let lambda_scale = 1.0 / (dt * tau);
+        let mut k = 0;
+        for c in self.constraints.iter_mut().filter(|c| c.mu > 0.0) {
+            let nu = self.supports[k].mu;
+            k += 1;
+            if nu == 0.0 {
+                continue;
+            }
+            c.mu += nu;
+            let lambda = nu * lambda_scale;
+            self.force[c.node as usize] += c.normal * lambda;
+            let axis = self.tools[c.tool as usize].motion.direction();
+            self.tool_force[c.tool as usize] += if axis == Vector3::zeros() {
+                lambda
+            } else {
+                c.normal.dot(&axis) * lambda
+            };
+        }
     }
 
     /// Adds to the constraint set every (node, tool) pair of the candidates

@@ -47,6 +47,8 @@ mod placement;
 mod set_path;
 mod shape;
 mod spec;
+mod stack;
+pub use stack::{MAX_PLIES, PlySpec, StackSpec};
 
 use build::{build, finite3, positive, unit};
 use locate::{Locator, Override, field_at, line_at, plain};
@@ -223,6 +225,9 @@ impl Scene {
         if let Some(mesh) = &mut spec.fabric.blank.mesh {
             *mesh = absolute(mesh);
         }
+        if let Some(stack) = &mut spec.stack {
+            stack::absolute_meshes(stack, absolute);
+        }
         for tool in &mut spec.tools {
             if let GeometrySpec::Mesh { file, .. } = &mut tool.geometry {
                 *file = absolute(file);
@@ -239,6 +244,11 @@ impl Scene {
             .blank
             .mesh
             .iter()
+            .chain(spec.stack.iter().flat_map(|s| {
+                s.ply
+                    .iter()
+                    .filter_map(|p| p.blank.as_ref().and_then(|b| b.mesh.as_ref()))
+            }))
             .chain(spec.tools.iter().filter_map(|t| match &t.geometry {
                 GeometrySpec::Mesh { file, .. } => Some(file),
                 _ => None,

@@ -18,7 +18,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::phases::{ContactPhase, PhaseTimer};
-use crate::plies::{PlyContact, Support};
+use crate::plies::{PlyContact, Support, ToolFriction};
 use crate::tool::{Tool, ToolMotion, ToolState};
 
 /// The gap, as a fraction of the contact offset (the fabric's half
@@ -284,6 +284,9 @@ pub struct ExplicitContact {
     plies: Option<PlyContact>,
     /// The tool contacts handed to the ply pass as supports.
     supports: Vec<Support>,
+    /// The tool contacts' friction handed to the ply pass, and what it was.
+    tool_friction: Vec<ToolFriction>,
+    tool_old: Vec<Vector3<f64>>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -362,6 +365,8 @@ impl ExplicitContact {
             phases: None,
             plies: None,
             supports: Vec::new(),
+            tool_friction: Vec::new(),
+            tool_old: Vec::new(),
         }
     }
 
@@ -370,6 +375,8 @@ impl ExplicitContact {
     /// held there, before the tools' friction and its own.
     pub fn set_plies(&mut self, plies: PlyContact) {
         self.supports = Vec::with_capacity(self.force.len());
+        self.tool_friction = Vec::with_capacity(self.force.len());
+        self.tool_old = Vec::with_capacity(self.force.len());
         self.plies = Some(plies);
     }
 
@@ -765,8 +772,8 @@ impl ExplicitContact {
             self.friction(x, v, mass, dt, tau);
             PhaseTimer::lap(&mut self.phases, ContactPhase::Friction);
         }
-        if let Some(plies) = &mut self.plies {
-            plies.friction(x, v, mass, movable, dt, tau, &mut self.force);
+        if self.plies.is_some() {
+            self.ply_friction(x, v, mass, movable, dt, tau);
         }
         Ok(step)
     }
@@ -783,9 +790,75 @@ impl ExplicitContact {
     ) {
         if self.plies.is_some() {
             self.ply_normal(x, v, mass, movable, dt, tau);
-            if let Some(plies) = &mut self.plies {
-                plies.friction(x, v, mass, movable, dt, tau, &mut self.force);
+            self.ply_friction(x, v, mass, movable, dt, tau);
+        }
+    }
+
+    /// The plies' friction solved with the tools' on the nodes that touch
+    /// both (see [`PlyContact::friction`]); the tools' forces and statuses
+    /// updated by what the joint solve changed.
+    fn ply_friction(
+        &mut self,
+        x: &mut [Vector3<f64>],
+        v: &mut [Vector3<f64>],
+        mass: &[f64],
+        movable: &[bool],
+        dt: f64,
+        tau: f64,
+    ) {
+        let Some(plies) = &mut self.plies else {
+            return;
+        };
+        let lambda_scale = 1.0 / (dt * tau);
+        self.tool_friction.clear();
+        let mut applied = self.scratch.applied.iter().peekable();
+        for (k, c) in self.constraints.iter().enumerate() {
+            let tool = &self.tools[c.tool as usize];
+            let f = match applied.peek() {
+                Some(&&(a, f)) if a as usize == k => {
+                    applied.next();
+                    f
+                }
+                _ => Vector3::zeros(),
+            };
+            if tool.friction == 0.0 || c.mu <= 0.0 {
+                continue;
             }
+            self.tool_friction.push(ToolFriction {
+                node: c.node,
+                normal: c.normal,
+                tool_velocity: tool.motion.direction() * self.tool_state[c.tool as usize].velocity,
+                cap: tool.friction * c.mu * lambda_scale,
+                force: f,
+            });
+        }
+        let before = self.tool_friction.len();
+        self.tool_old.clear();
+        self.tool_old
+            .extend(self.tool_friction.iter().map(|t| t.force));
+        plies.friction(
+            x,
+            v,
+            mass,
+            movable,
+            dt,
+            tau,
+            &mut self.tool_friction,
+            &mut self.force,
+        );
+        debug_assert_eq!(before, self.tool_friction.len());
+        for (t, old) in self.tool_friction.iter().zip(&self.tool_old) {
+            let d = t.force - old;
+            if d == Vector3::zeros() {
+                continue;
+            }
+            let i = t.node as usize;
+            self.force[i] += d;
+            self.status[i] = if t.force.norm() >= t.cap * (1.0 - 1e-12) {
+                ContactStatus::Slip
+            } else {
+                ContactStatus::Stick
+            };
         }
     }
 

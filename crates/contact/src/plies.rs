@@ -77,6 +77,22 @@ pub struct Support {
     pub mu: f64,
 }
 
+/// A node's friction on a tool, for the joint friction solve: what the
+/// tool pass applied and may apply (its cap, μ_tool·λ).
+#[derive(Debug, Clone, Copy)]
+pub struct ToolFriction {
+    /// The node.
+    pub node: u32,
+    /// The tool's normal.
+    pub normal: Vector3<f64>,
+    /// The tool's velocity.
+    pub tool_velocity: Vector3<f64>,
+    /// μ·λ of the contact (N).
+    pub cap: f64,
+    /// The tangential force on the node (N).
+    pub force: Vector3<f64>,
+}
+
 /// A slave node's closest face.
 #[derive(Debug, Clone, Copy)]
 struct Hit {
@@ -144,7 +160,8 @@ pub struct PlyStep {
     pub active: usize,
     /// Gauss–Seidel sweeps.
     pub sweeps: usize,
-    /// Largest linearised gap violation left (mm).
+    /// Largest linearised gap violation left (mm): at most 1e-8 of the
+    /// largest at the start unless the sweeps ran out.
     pub residual: f64,
 }
 
@@ -159,7 +176,8 @@ pub struct PlyContact {
     reference_x: Vec<Vector3<f64>>,
     constraints: Vec<Constraint>,
     dx: Vec<Vector3<f64>>,
-    applied: Vec<(u32, Vector3<f64>)>,
+    /// Each constraint's tangential force in the friction solve.
+    f_t: Vec<Vector3<f64>>,
     /// Each node's reference area (for the pressure).
     area: Vec<f64>,
     /// Accumulated tangential slip of each node on the ply below (mm).
@@ -208,12 +226,12 @@ impl PlyContact {
             layers,
             searches,
             margin,
-            tolerance: 1e-9,
+            tolerance: 1e-8,
             max_sweeps: 500,
             reference_x: Vec::new(),
             constraints: Vec::with_capacity(2 * n),
             dx: vec![Vector3::zeros(); n],
-            applied: Vec::with_capacity(2 * n),
+            f_t: Vec::with_capacity(2 * n),
             area,
             slip: vec![0.0; n],
             pressure: vec![0.0; n],
@@ -387,6 +405,11 @@ impl PlyContact {
             self.dx[s.node as usize] = Vector3::zeros();
             s.mu = 0.0;
         }
+        // Converged when what is left of every violation is 1e-8 of the
+        // largest one at the start (an absolute tolerance would be most of
+        // a slow step's penetration, dt²·a).
+        let start = self.constraints.iter().map(|c| -c.gap).fold(0.0, f64::max);
+        let tolerance = self.tolerance * start;
         let dx = &mut self.dx;
         for sweep in 1..=self.max_sweeps {
             let mut worst: f64 = 0.0;
@@ -425,7 +448,7 @@ impl PlyContact {
             }
             step.sweeps = sweep;
             step.residual = worst;
-            if worst <= self.tolerance {
+            if worst <= tolerance {
                 break;
             }
         }
@@ -465,10 +488,17 @@ impl PlyContact {
         step
     }
 
-    /// Coulomb friction on the constraints of the last normal pass: the
-    /// tangential force that makes the node stick to the face over the
-    /// step, capped at μλ; adds it to `force` and the slip it leaves to
-    /// [`Self::slip`].
+    /// Coulomb friction on the constraints of the last normal pass and on
+    /// the nodes' tool contacts `tools` (with the friction the tool pass
+    /// applied already), solved together: projected Gauss–Seidel on each
+    /// constraint's tangential force, the force that stops the relative
+    /// sliding over the step projected on the disc of radius μλ, until no
+    /// force changes by more than 1e-10 of the largest cap. Together,
+    /// because a ply that sticks to the one below drags it on the tool:
+    /// friction solved one contact after the other would let a sticking
+    /// stack creep. Adds the plies' forces to `force` (the tools' are
+    /// returned in `tools`) and the slip they leave to [`Self::slip`].
+    #[allow(clippy::too_many_arguments)]
     pub fn friction(
         &mut self,
         x: &mut [Vector3<f64>],
@@ -477,6 +507,7 @@ impl PlyContact {
         movable: &[bool],
         dt: f64,
         tau: f64,
+        tools: &mut [ToolFriction],
         force: &mut [Vector3<f64>],
     ) {
         let inv = |i: u32| {
@@ -495,36 +526,79 @@ impl PlyContact {
                     .sum::<Vector3<f64>>();
             rel - c.normal * c.normal.dot(&rel)
         };
-        self.applied.clear();
-        for (k, c) in self.constraints.iter().enumerate() {
-            let mu_f = self.searches[c.search as usize].friction;
-            if mu_f == 0.0 || c.mu <= 0.0 {
+        let lambda_scale = 1.0 / (dt * tau);
+        self.f_t.clear();
+        self.f_t.resize(self.constraints.len(), Vector3::zeros());
+        let mut largest: f64 = tools.iter().map(|t| t.cap).fold(0.0, f64::max);
+        for c in &self.constraints {
+            largest = largest.max(self.searches[c.search as usize].friction * c.mu * lambda_scale);
+        }
+        if largest == 0.0 {
+            return;
+        }
+        let project = |trial: Vector3<f64>, cap: f64| {
+            let n = trial.norm();
+            if n > cap { trial * (cap / n) } else { trial }
+        };
+        for _ in 0..self.max_sweeps {
+            let mut change: f64 = 0.0;
+            for (k, c) in self.constraints.iter().enumerate() {
+                let mu_f = self.searches[c.search as usize].friction;
+                if mu_f == 0.0 || c.mu <= 0.0 {
+                    continue;
+                }
+                let v_t = relative(v, c);
+                let new = project(
+                    self.f_t[k] - v_t * (c.mass / tau),
+                    mu_f * c.mu * lambda_scale,
+                );
+                let d = new - self.f_t[k];
+                if d == Vector3::zeros() {
+                    continue;
+                }
+                change = change.max(d.norm());
+                self.f_t[k] = new;
+                let dv = d * (tau * inv(c.slave));
+                v[c.slave as usize] += dv;
+                x[c.slave as usize] += dv * dt;
+                for (&j, w) in c.masters.iter().zip(&c.w) {
+                    let dv = d * (-w * tau * inv(j));
+                    v[j as usize] += dv;
+                    x[j as usize] += dv * dt;
+                }
+            }
+            for t in tools.iter_mut() {
+                let m_inv = inv(t.node);
+                if m_inv == 0.0 {
+                    continue;
+                }
+                let i = t.node as usize;
+                let rel = v[i] - t.tool_velocity;
+                let v_t = rel - t.normal * t.normal.dot(&rel);
+                let new = project(t.force - v_t / (m_inv * tau), t.cap);
+                let d = new - t.force;
+                if d == Vector3::zeros() {
+                    continue;
+                }
+                change = change.max(d.norm());
+                t.force = new;
+                let dv = d * (tau * m_inv);
+                v[i] += dv;
+                x[i] += dv * dt;
+            }
+            if change <= 1e-10 * largest {
+                break;
+            }
+        }
+        for (c, f_t) in self.constraints.iter().zip(&self.f_t) {
+            if *f_t == Vector3::zeros() {
                 continue;
             }
-            let v_t = relative(v, c);
-            let speed = v_t.norm();
-            if speed == 0.0 {
-                continue;
-            }
-            let lambda = c.mu / (dt * tau);
-            let magnitude = (c.mass * speed / tau).min(mu_f * lambda);
-            let f_t = -v_t / speed * magnitude;
-            let dv = f_t * (tau * inv(c.slave));
-            v[c.slave as usize] += dv;
-            x[c.slave as usize] += dv * dt;
             force[c.slave as usize] += f_t;
             for (&j, w) in c.masters.iter().zip(&c.w) {
-                let dv = f_t * (-w * tau * inv(j));
-                v[j as usize] += dv;
-                x[j as usize] += dv * dt;
                 force[j as usize] -= f_t * *w;
             }
-            self.applied.push((k as u32, f_t));
-        }
-        for &(k, f_t) in &self.applied {
-            let c = &self.constraints[k as usize];
-            let slip = relative(v, c);
-            self.friction_dissipation -= f_t.dot(&slip) * dt;
+            self.friction_dissipation -= f_t.dot(&relative(v, c)) * dt;
         }
         // The slip of each node on the ply below: the upper ply's nodes
         // of the downward searches, at the velocities all forces left.
@@ -840,7 +914,7 @@ mod tests {
             let (dt, tau) = (1e-3, 1e-3);
             contact.normal(&mut x, &mut v, &mass, &fixed, dt, tau, &mut [], &mut force);
             let normal: f64 = force[4..].iter().map(|f| f.z).sum();
-            contact.friction(&mut x, &mut v, &mass, &fixed, dt, tau, &mut force);
+            contact.friction(&mut x, &mut v, &mass, &fixed, dt, tau, &mut [], &mut force);
             let tangential: f64 = force[4..].iter().map(|f| f.x).sum();
             if sticks {
                 assert!(v[4..].iter().all(|v| v.x.abs() < 1e-12));

@@ -395,6 +395,7 @@ impl ExplicitContact {
             tool_of: &self.tool_of,
             tool_force: &self.tool_force,
             friction_dissipation: self.friction_dissipation,
+            plies: self.plies.as_ref(),
         }
     }
 

@@ -11,10 +11,13 @@ use std::ops::Range;
 use drape_contact::{PlyInterface, PlyLayer};
 use nalgebra::Vector3;
 
-use crate::{Model, ModelError};
+use serde::Serialize;
+
+use crate::measures::{self, DrawIn};
+use crate::{BlankInfo, ElementFields, Model, ModelError};
 
 /// One ply of a laminate.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Ply {
     /// Its name (node sets `NAME` and `NAME.SET`, results, exports).
     pub name: String,
@@ -30,6 +33,23 @@ pub struct Ply {
     pub orientation_deg: f64,
     /// Coulomb coefficient against the ply below (0 for the bottom ply).
     pub friction_below: f64,
+    /// Its rectangle's edges and corners (for its draw-in), if it is one.
+    pub blank: Option<BlankInfo>,
+}
+
+/// What summary.json reports of each ply at a state.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlyMeasures {
+    /// The ply's name.
+    pub name: String,
+    /// Largest |shear angle| of its elements (degrees).
+    pub max_shear_deg: f64,
+    /// Its wrinkle indicator: the largest element waviness (degrees)...
+    pub max_waviness_deg: f64,
+    /// ...and the area above the threshold (mm²).
+    pub wrinkle_area_mm2: f64,
+    /// Its draw-in, for a rectangle.
+    pub draw_in: Option<DrawIn>,
 }
 
 /// A ply to stack: its model (built alone, in its own blank plane) and
@@ -111,6 +131,12 @@ impl Model {
             }
             let end = out.x0.len() as u32;
             out.node_sets.insert(name.clone(), (shift..end).collect());
+            let blank = model.blank.map(|mut b| {
+                b.frame.center += normal * lift;
+                b.midpoints.iter_mut().for_each(|n| *n += shift);
+                b.corners.iter_mut().for_each(|n| *n += shift);
+                b
+            });
             out.contact_offset = out.contact_offset.max(0.5 * thickness);
             out.plies.push(Ply {
                 name,
@@ -120,6 +146,7 @@ impl Model {
                 thickness,
                 orientation_deg,
                 friction_below: if p == 0 { 0.0 } else { friction_below },
+                blank,
             });
             elements += count;
         }
@@ -144,6 +171,33 @@ impl Model {
         }
         let len = n.norm();
         if len > 0.0 { n / len } else { Vector3::z() }
+    }
+
+    /// Each ply's peaks at positions `x` with the element `fields` there:
+    /// largest shear, wrinkle indicator and draw-in (empty for one ply).
+    pub fn ply_measures(&self, x: &[Vector3<f64>], fields: &ElementFields) -> Vec<PlyMeasures> {
+        self.plies
+            .iter()
+            .map(|ply| {
+                let e = ply.elements.clone();
+                let max_shear_deg = fields.shear[e.clone()]
+                    .iter()
+                    .fold(0.0f64, |m, g| m.max(g.abs()))
+                    .to_degrees();
+                let (max_waviness_deg, wrinkle_area_mm2) =
+                    measures::wrinkle_indicator(&fields.waviness[e.clone()], &fields.area[e]);
+                PlyMeasures {
+                    name: ply.name.clone(),
+                    max_shear_deg,
+                    max_waviness_deg,
+                    wrinkle_area_mm2,
+                    draw_in: ply
+                        .blank
+                        .as_ref()
+                        .map(|b| measures::draw_in(&b.frame, &self.x0, x, b.midpoints, b.corners)),
+                }
+            })
+            .collect()
     }
 
     /// The ply each node belongs to (0 for every node of a one-ply model).

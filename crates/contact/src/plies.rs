@@ -36,6 +36,11 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+/// Sweeps allowed to the friction solve: a stack sticking on a tool
+/// needs its friction to 1e-10 (no creep), which node-on-node meshes
+/// (both searches on one gap) reach slowly.
+const FRICTION_SWEEPS: usize = 500;
+
 /// Slave nodes projected per rayon task.
 const NODES_PER_TASK: usize = 256;
 
@@ -170,6 +175,9 @@ pub struct PlyStep {
 pub struct PlyContact {
     layers: Vec<PlyLayer>,
     searches: Vec<Search>,
+    /// Per layer and face, which of its features lie on the ply's free
+    /// outline: bits 0–2 the edges ab, bc, ca, bits 3–5 the vertices.
+    outline: Vec<Vec<u8>>,
     margin: f64,
     tolerance: f64,
     max_sweeps: usize,
@@ -222,12 +230,17 @@ impl PlyContact {
                 });
             }
         }
+        let outline = layers.iter().map(|l| outline_of(&l.faces)).collect();
         Self {
+            outline,
             layers,
             searches,
             margin,
             tolerance: 1e-8,
-            max_sweeps: 500,
+            // Where two meshes meet node on node, both searches constrain
+            // the same gap and the sweeps share it out slowly; by 200 what
+            // is left is ~1e-9 mm.
+            max_sweeps: 200,
             reference_x: Vec::new(),
             constraints: Vec::with_capacity(2 * n),
             dx: vec![Vector3::zeros(); n],
@@ -303,6 +316,7 @@ impl PlyContact {
         for (k, s) in self.searches.iter_mut().enumerate() {
             let slave = &layers[s.slave];
             let faces = &layers[s.master].faces;
+            let outline = &self.outline[s.master];
             let (ptr, cand) = (&s.cand_ptr, &s.cand);
             let (side, offset, reach) = (s.side, s.offset, s.offset + self.margin);
             s.hits
@@ -328,24 +342,37 @@ impl PlyContact {
                         }
                         let nf = (b - a).cross(&(c - a));
                         let len = nf.norm();
-                        if len == 0.0 {
+                        if len == 0.0 || dist == 0.0 {
                             continue;
                         }
-                        let normal = nf * (side / len);
-                        let gap = d.dot(&normal) - offset;
-                        // A face the node is behind by more than the two
-                        // plies' thickness is another part of the ply (a
-                        // fold), not the one it rests on.
-                        if gap < -2.0 * offset || gap > reach {
+                        let up = nf * (side / len);
+                        let along = d.dot(&up);
+                        // A node behind the face's mid-surface came round
+                        // the ply's edge or from another part of it (a
+                        // fold): no step moves a node that deep into its
+                        // neighbour, and pushing it through would throw it
+                        // by the plies' thickness in one step. A node
+                        // beside the face (past the ply's free edge, its
+                        // offset mostly sideways) is not on it either.
+                        if along <= 0.0 || (d - up * along).norm_squared() > offset * offset {
                             continue;
                         }
-                        // A node beside the face (past the master ply's
-                        // free edge) is not on it: its closest point is on
-                        // the edge with the offset mostly sideways. Over a
-                        // convex kink of the ply the sideways part stays
-                        // below the offset.
-                        let sideways = d - normal * d.dot(&normal);
-                        if sideways.norm_squared() > offset * offset {
+                        // The distance to the closest point and its
+                        // direction: continuous across the kinks between
+                        // faces (a face's own normal would turn by the
+                        // kink as the node passes a vertex and push it
+                        // each time), the face's normal inside a face. On
+                        // the ply's free outline the face's normal: the
+                        // ply ends there square, not rounded, so a ply
+                        // sliding past the edge of the one below is not
+                        // pushed sideways.
+                        let (normal, gap) = if on_outline(outline[f as usize], &w) {
+                            (up, along - offset)
+                        } else {
+                            let r = dist.sqrt();
+                            (d / r, r - offset)
+                        };
+                        if gap > reach {
                             continue;
                         }
                         best = dist;
@@ -540,7 +567,7 @@ impl PlyContact {
             let n = trial.norm();
             if n > cap { trial * (cap / n) } else { trial }
         };
-        for _ in 0..self.max_sweeps {
+        for _ in 0..FRICTION_SWEEPS {
             let mut change: f64 = 0.0;
             for (k, c) in self.constraints.iter().enumerate() {
                 let mu_f = self.searches[c.search as usize].friction;
@@ -630,11 +657,14 @@ impl PlyContact {
                     }
                     let d = p - q;
                     let n = nf.normalize() * s.side;
-                    let gap = d.dot(&n) - s.offset;
-                    let sideways = d - n * d.dot(&n);
-                    if gap < -2.0 * s.offset || sideways.norm_squared() > s.offset * s.offset {
+                    let along = d.dot(&n);
+                    let sideways = d - n * along;
+                    if along < -s.offset || sideways.norm_squared() > s.offset * s.offset {
                         continue;
                     }
+                    // As the narrow phase measures it: the distance to
+                    // the closest point, negative behind the mid-surface.
+                    let gap = d.norm().copysign(along) - s.offset;
                     if d.norm_squared() < best.0 {
                         best = (d.norm_squared(), gap);
                     }
@@ -643,6 +673,60 @@ impl PlyContact {
             }
         }
         worst
+    }
+}
+
+/// Which features of each face are on the outline of the layer: an edge
+/// that no other face shares, and its two vertices.
+fn outline_of(faces: &[[u32; 3]]) -> Vec<u8> {
+    let mut count = std::collections::HashMap::new();
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    for f in faces {
+        for k in 0..3 {
+            *count.entry(key(f[k], f[(k + 1) % 3])).or_insert(0u32) += 1;
+        }
+    }
+    let mut vertex = std::collections::HashSet::new();
+    for (&(a, b), &n) in &count {
+        if n == 1 {
+            vertex.insert(a);
+            vertex.insert(b);
+        }
+    }
+    faces
+        .iter()
+        .map(|f| {
+            let mut bits = 0u8;
+            for k in 0..3 {
+                if count[&key(f[k], f[(k + 1) % 3])] == 1 {
+                    bits |= 1 << k;
+                }
+                if vertex.contains(&f[k]) {
+                    bits |= 1 << (3 + k);
+                }
+            }
+            bits
+        })
+        .collect()
+}
+
+/// Whether the closest point of barycentric weights `w` lies on a face's
+/// outline feature (`bits` as [`outline_of`] gives them).
+fn on_outline(bits: u8, w: &[f64; 3]) -> bool {
+    if bits == 0 {
+        return false;
+    }
+    let zero = w.map(|w| w == 0.0);
+    match zero {
+        // A vertex: the one whose weight is 1.
+        [true, true, false] => bits & (1 << 5) != 0,
+        [true, false, true] => bits & (1 << 4) != 0,
+        [false, true, true] => bits & (1 << 3) != 0,
+        // An edge: the one opposite the zero weight (ab is bit 0).
+        [false, false, true] => bits & 1 != 0,
+        [true, false, false] => bits & 2 != 0,
+        [false, true, false] => bits & 4 != 0,
+        _ => false,
     }
 }
 

@@ -146,6 +146,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
                 fields: &results.fields,
                 contact_force: None,
                 contact_status: None,
+                plies: None,
             },
         )?;
     }
@@ -245,6 +246,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             })
             .into_iter()
             .collect(),
+        plies: Vec::new(),
     };
     dir.write_summary(&summary)?;
     Ok(KinematicReport {

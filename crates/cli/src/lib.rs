@@ -271,6 +271,8 @@ struct Recorder<'a> {
     frame_tools: Vec<f64>,
     /// Which tools the blank came near (`reach`) at some frame.
     reached: ToolReach,
+    /// A laminate's plies at the last frame.
+    plies: Vec<drape_io::results::PlySummary>,
 }
 
 /// Which tools the blank has come near: within the contact margin plus
@@ -358,6 +360,14 @@ impl Observer for Recorder<'_> {
             .fold(0.0f64, |m, g| m.max(g.abs()))
             .to_degrees();
         self.peaks.observe(frame.model, frame.state, &fields);
+        if frame.model.plies.len() > 1 {
+            self.plies = drape_io::results::PlySummary::of(
+                frame.model,
+                &frame.state.x,
+                &fields,
+                frame.contact.and_then(|c| c.plies),
+            );
+        }
         if self.write_frames && self.error.is_none() {
             let data = FrameData {
                 model: frame.model,
@@ -365,6 +375,7 @@ impl Observer for Recorder<'_> {
                 fields: &fields,
                 contact_force: frame.contact.map(|c| c.force),
                 contact_status: frame.contact.map(|c| c.status),
+                plies: frame.contact.and_then(|c| c.plies),
             };
             let (index, time) = (frame.index, frame.state.time);
             let moved = tool_displacements(frame.contact);
@@ -609,6 +620,7 @@ pub fn run_in(
             // run makes no claim about it.
             driver.is_some(),
         ),
+        plies: Vec::new(),
     };
     let started = std::time::Instant::now();
     let solver = scene.spec.simulation.solver;
@@ -827,7 +839,9 @@ pub fn run_in(
             }),
         },
         warnings,
+        plies: Vec::new(),
     };
+    summary.plies = std::mem::take(&mut recorder.plies);
     let results = &recorder.results;
     // Every file is tried, the first failure kept: the summary comes last
     // and says what is missing.

@@ -192,7 +192,7 @@ enum ExportUnit {
 }
 
 /// Templates shipped with the binary: name, what it is, the scene.
-const TEMPLATES: [(&str, &str, &str); 4] = [
+const TEMPLATES: [(&str, &str, &str); 5] = [
     (
         "hemisphere",
         "carbon prepreg laid up on a hemispherical punch (El Hami et al. 2009, §5.1)",
@@ -212,6 +212,11 @@ const TEMPLATES: [(&str, &str, &str); 4] = [
         "bias-extension",
         "bias-extension test of a ±45 glass fabric strip",
         include_str!("../../../scenes/bias-extension.toml"),
+    ),
+    (
+        "stack",
+        "two plies (0/90 under ±45) formed together on a hemisphere, ply–ply friction",
+        include_str!("../../../scenes/hemisphere-stack.toml"),
     ),
 ];
 

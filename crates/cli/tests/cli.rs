@@ -74,6 +74,7 @@ fn new_writes_templates_that_load() {
         "deep-drawing",
         "picture-frame",
         "bias-extension",
+        "stack",
     ] {
         let path = dir.join(format!("{t}.toml"));
         let o = drape(&["new", t, path.to_str().unwrap()]);

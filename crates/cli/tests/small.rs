@@ -111,6 +111,7 @@ fn new_without_a_template_lists_them() {
         "deep-drawing",
         "picture-frame",
         "bias-extension",
+        "stack",
     ] {
         assert!(err.contains(&format!("\n  {name} ")), "{name}: {err}");
     }

@@ -18,6 +18,9 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::phases::{ContactPhase, PhaseTimer};
+use crate::plies::{PlyContact, Support, ToolFriction};
+
+mod ply_link;
 use crate::tool::{Tool, ToolMotion, ToolState};
 
 /// The gap, as a fraction of the contact offset (the fabric's half
@@ -279,6 +282,13 @@ pub struct ExplicitContact {
     touched: Vec<u32>,
     scratch: Scratch,
     phases: Option<PhaseTimer>,
+    /// Contact between the plies of a laminate (none for one ply).
+    plies: Option<PlyContact>,
+    /// The tool contacts handed to the ply pass as supports.
+    supports: Vec<Support>,
+    /// The tool contacts' friction handed to the ply pass, and what it was.
+    tool_friction: Vec<ToolFriction>,
+    tool_old: Vec<Vector3<f64>>,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -355,7 +365,26 @@ impl ExplicitContact {
                 ..Scratch::default()
             },
             phases: None,
+            plies: None,
+            supports: Vec::new(),
+            tool_friction: Vec::new(),
+            tool_old: Vec::new(),
         }
+    }
+
+    /// Adds contact between the plies of a laminate (see [`PlyContact`]):
+    /// solved after the tools' normal constraints, with the nodes on a tool
+    /// held there, before the tools' friction and its own.
+    pub fn set_plies(&mut self, plies: PlyContact) {
+        self.supports = Vec::with_capacity(self.force.len());
+        self.tool_friction = Vec::with_capacity(self.force.len());
+        self.tool_old = Vec::with_capacity(self.force.len());
+        self.plies = Some(plies);
+    }
+
+    /// The ply–ply contact, when the model is a laminate.
+    pub fn plies(&self) -> Option<&PlyContact> {
+        self.plies.as_ref()
     }
 
     /// The pass's outputs, as a frame shows them.
@@ -368,6 +397,7 @@ impl ExplicitContact {
             tool_of: &self.tool_of,
             tool_force: &self.tool_force,
             friction_dissipation: self.friction_dissipation,
+            plies: self.plies.as_ref(),
         }
     }
 
@@ -550,6 +580,10 @@ impl ExplicitContact {
             self.per_node[i as usize] = 0;
         }
         self.touched.clear();
+        if self.plies.is_some() {
+            // The ply pass puts forces on nodes of its own.
+            self.force.iter_mut().for_each(|f| *f = Vector3::zeros());
+        }
         self.tool_force.iter_mut().for_each(|f| *f = 0.0);
         self.refresh_candidates(x);
         PhaseTimer::lap(&mut self.phases, ContactPhase::BroadPhase);
@@ -659,6 +693,7 @@ impl ExplicitContact {
         }
         PhaseTimer::lap(&mut self.phases, ContactPhase::Projection);
         if self.constraints.is_empty() {
+            self.ply_pass(x, v, mass, movable, dt, tau);
             return Ok(ContactStep::default());
         }
         let mut step = ContactStep::default();
@@ -731,9 +766,17 @@ impl ExplicitContact {
         }
 
         PhaseTimer::lap(&mut self.phases, ContactPhase::Multipliers);
+        if self.plies.is_some() {
+            // The ply pass leaves the tool friction for the friction pass
+            // below, which reads the supports' added multipliers.
+            self.ply_normal(x, v, mass, movable, dt, tau);
+        }
         if self.has_friction() {
             self.friction(x, v, mass, dt, tau);
             PhaseTimer::lap(&mut self.phases, ContactPhase::Friction);
+        }
+        if self.plies.is_some() {
+            self.ply_friction(x, v, mass, movable, dt, tau);
         }
         Ok(step)
     }

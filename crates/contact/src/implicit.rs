@@ -659,6 +659,7 @@ impl ImplicitContact {
             tool_of: &self.tool_of,
             tool_force: &self.tool_force,
             friction_dissipation: self.friction_dissipation,
+            plies: None,
         }
     }
 

@@ -25,4 +25,7 @@ pub struct ContactView<'a> {
     pub tool_force: &'a [f64],
     /// Friction dissipated so far (mJ).
     pub friction_dissipation: f64,
+    /// The contact between the plies of a laminate (slip, pressure), if
+    /// the model is one and the pass has it.
+    pub plies: Option<&'a crate::PlyContact>,
 }

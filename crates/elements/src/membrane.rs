@@ -417,6 +417,16 @@ impl MembraneBatch {
         &self.nodes[e * n..(e + 1) * n]
     }
 
+    /// Renumbers the batch's nodes by `by`, for a batch built on its own
+    /// nodes and then placed behind others' in one model (a laminate's
+    /// plies): the reference data are relative to the nodes, so nothing
+    /// else changes.
+    pub fn shift_nodes(&mut self, by: u32) {
+        for n in &mut self.nodes {
+            *n += by;
+        }
+    }
+
     /// The reference area each node of element `e` represents (∫Nₐ dA), for
     /// lumping mass and loads.
     pub fn nodal_areas(&self, e: usize) -> &[f64] {

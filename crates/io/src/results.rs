@@ -103,6 +103,9 @@ pub struct FrameData<'a> {
     pub contact_force: Option<&'a [Vector3<f64>]>,
     /// Contact status per node, when the model has tools.
     pub contact_status: Option<&'a [ContactStatus]>,
+    /// The contact between the plies of a laminate (its slip and
+    /// pressure are point fields), when the model is one.
+    pub plies: Option<&'a drape_contact::PlyContact>,
 }
 
 /// One row of the energy history.
@@ -307,6 +310,65 @@ impl CutbackReasonsInfo {
     }
 }
 
+/// One ply of a laminate in `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlySummary {
+    /// Its name.
+    pub name: String,
+    /// Largest |shear angle| of its elements (degrees).
+    pub max_shear_deg: f64,
+    /// Its wrinkle indicator: largest waviness (degrees)...
+    pub max_waviness_deg: f64,
+    /// ...and the area above the threshold (mm²).
+    pub wrinkle_area_mm2: f64,
+    /// Its draw-in (null for a blank from a mesh file).
+    pub draw_in_mm: DrawInMm,
+    /// Largest accumulated slip of its nodes on the ply below (mm; 0 for
+    /// the bottom ply).
+    pub max_slip_mm: f64,
+    /// Largest contact pressure of a neighbouring ply on its nodes (MPa).
+    pub max_pressure_mpa: f64,
+}
+
+impl PlySummary {
+    /// Each ply of `model` at the frame of `x`, `fields` and the ply
+    /// contact `plies` (slip and pressure zero without).
+    pub fn of(
+        model: &Model,
+        x: &[Vector3<f64>],
+        fields: &ElementFields,
+        plies: Option<&drape_contact::PlyContact>,
+    ) -> Vec<Self> {
+        model
+            .ply_measures(x, fields)
+            .into_iter()
+            .zip(&model.plies)
+            .map(|(m, ply)| {
+                let nodes = ply.nodes.start as usize..ply.nodes.end as usize;
+                let peak = |v: &[f64]| v[nodes.clone()].iter().fold(0.0f64, |a, &b| a.max(b));
+                let d = m.draw_in.unwrap_or(drape_model::measures::DrawIn {
+                    dx: f64::NAN,
+                    dy: f64::NAN,
+                    dd: f64::NAN,
+                });
+                Self {
+                    name: m.name,
+                    max_shear_deg: m.max_shear_deg,
+                    max_waviness_deg: m.max_waviness_deg,
+                    wrinkle_area_mm2: m.wrinkle_area_mm2,
+                    draw_in_mm: DrawInMm {
+                        dx: d.dx,
+                        dy: d.dy,
+                        dd: d.dd,
+                    },
+                    max_slip_mm: plies.map_or(0.0, |p| peak(&p.slip)),
+                    max_pressure_mpa: plies.map_or(0.0, |p| peak(&p.pressure)),
+                }
+            })
+            .collect()
+    }
+}
+
 /// `summary.json`.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct Summary {
@@ -364,6 +426,9 @@ pub struct Summary {
     /// warnings).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub warnings: Vec<String>,
+    /// Each ply of a laminate at the last frame (none for one ply).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub plies: Vec<PlySummary>,
 }
 
 /// An output directory being filled by a run.

@@ -47,7 +47,9 @@ mod placement;
 mod set_path;
 mod shape;
 mod spec;
+mod stack;
 mod yarn_buckling;
+pub use stack::{MAX_PLIES, PlySpec, StackSpec};
 
 use build::{build, finite3, positive, unit};
 use locate::{Locator, Override, field_at, line_at, plain};
@@ -224,6 +226,9 @@ impl Scene {
         if let Some(mesh) = &mut spec.fabric.blank.mesh {
             *mesh = absolute(mesh);
         }
+        if let Some(stack) = &mut spec.stack {
+            stack::absolute_meshes(stack, absolute);
+        }
         for tool in &mut spec.tools {
             if let GeometrySpec::Mesh { file, .. } = &mut tool.geometry {
                 *file = absolute(file);
@@ -240,6 +245,11 @@ impl Scene {
             .blank
             .mesh
             .iter()
+            .chain(spec.stack.iter().flat_map(|s| {
+                s.ply
+                    .iter()
+                    .filter_map(|p| p.blank.as_ref().and_then(|b| b.mesh.as_ref()))
+            }))
             .chain(spec.tools.iter().filter_map(|t| match &t.geometry {
                 GeometrySpec::Mesh { file, .. } => Some(file),
                 _ => None,

@@ -59,6 +59,7 @@ fn frame<'a>(model: &'a Model, state: &'a State, fields: &'a ElementFields) -> F
         fields,
         contact_force: None,
         contact_status: None,
+        plies: None,
     }
 }
 

@@ -264,6 +264,7 @@ fn frame<'a>(
         fields,
         contact_force: contact.map(|c| c.0),
         contact_status: contact.map(|c| c.1),
+        plies: None,
     }
 }
 

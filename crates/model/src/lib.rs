@@ -39,6 +39,7 @@ pub mod blank;
 pub mod folds;
 pub mod measures;
 pub mod pressure;
+pub mod stack;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -351,6 +352,9 @@ pub struct Model {
     /// Distance of the fabric's mid-surface from a tool at contact: half
     /// its thickness (mm).
     pub contact_offset: f64,
+    /// The plies of a laminate, bottom to top (empty for one ply, see
+    /// [`stack`]).
+    pub plies: Vec<stack::Ply>,
 }
 
 /// The evolving state of a model.
@@ -487,6 +491,7 @@ impl Model {
             blank: None,
             tools: Vec::new(),
             contact_offset: 0.5 * material.thickness,
+            plies: Vec::new(),
         })
     }
 

@@ -154,6 +154,32 @@ impl<'m> Explicit<'m> {
                 },
             )
         });
+        // A laminate: the plies' contact rides on the tools' pass (which
+        // may then have no tool at all).
+        let contact = match contact {
+            None if model.plies.len() > 1 => Some(ExplicitContact::new(
+                Vec::new(),
+                n,
+                ContactSettings {
+                    offset: model.contact_offset,
+                    margin: settings.contact_margin,
+                    ..ContactSettings::default()
+                },
+            )),
+            other => other,
+        }
+        .map(|mut c| {
+            if model.plies.len() > 1 {
+                let (layers, interfaces) = model.ply_layers();
+                c.set_plies(drape_contact::PlyContact::new(
+                    layers,
+                    &interfaces,
+                    model.nodal_area(),
+                    settings.contact_margin,
+                ));
+            }
+            c
+        });
         let guard = Guard::new(model, settings.guard.clone(), settings.end_time);
         let mut driver = Self {
             model,

@@ -414,6 +414,12 @@ impl<'m> Implicit<'m> {
     /// the tangent's pattern and symbolic factorisation, the contact pass.
     pub fn new(model: &'m Model, settings: ImplicitSettings) -> Result<Self, RunError> {
         shared::check_model(model, settings.end_time)?;
+        if model.plies.len() > 1 {
+            return Err(RunError::Setup(format!(
+                "a stack of {} plies needs ply–ply contact, which the implicit driver does not                  have (its condensed solve knows rigid tools only): run it with the explicit driver",
+                model.plies.len()
+            )));
+        }
         let positive = |name: &str, v: f64| -> Result<(), RunError> {
             if v.is_finite() && v > 0.0 {
                 Ok(())

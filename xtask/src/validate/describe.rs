@@ -6,6 +6,22 @@
 /// (what the case checks, its reference) for a case name.
 pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
     Some(match name {
+        "plies/sled" => (
+            "a ply pulled over a held ply under a normal load N (μ = 0.1, 0.3): sticks below μN, slides at μN",
+            "F below μN: no slide, friction = F; beyond: friction μN and the slide of the net pull, (2μN/TM)(t − T/2)³/6",
+        ),
+        "plies/incline" => (
+            "a two-ply stack on an incline 1 % below and above the critical slope, μ_tool < μ_ply and μ_ply < μ_tool",
+            "the friction angle atan(min μ); the stack (or the top ply alone) slides ½g(sin α − μ cos α)t²",
+        ),
+        "plies/hemisphere-friction" => (
+            "two-ply hemisphere [0/90 + ±45] against μ_ply = 0, 0.2, 0.5, 1 (a table), and a four-ply [0/45/90/−45] run",
+            "runs complete; the top ply's slip at μ_ply = 1 below that at 0; run times against one ply (a note)",
+        ),
+        "plies/hemisphere-overlap" => (
+            "two plies (0/90 under ±45, μ_ply = 0.2) formed together on the hemisphere: no interpenetration",
+            "the plies' distance computed from the positions: largest overlap ≤ 1 % of the ply thickness",
+        ),
         "kinematics/polar-decomposition" => (
             "F = R·U on sampled deformation gradients: R orthogonal, U symmetric positive, their product F",
             "exact constructions and nalgebra's SVD (within its own measured error)",

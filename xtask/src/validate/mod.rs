@@ -34,6 +34,7 @@ mod kinematics;
 mod locking;
 mod page;
 mod paper;
+mod plies;
 mod pressure;
 mod scenes;
 mod tray;
@@ -56,6 +57,7 @@ pub fn registry() -> Vec<Case> {
         paper::CASES,
         pressure::CASES,
         cao2008::CASES,
+        plies::CASES,
     ]
     .concat()
 }

@@ -150,6 +150,16 @@ pub(super) fn frame_vtu(time: f64, frame: &FrameData<'_>) -> Result<String, Size
         &status,
         |b, &s| b.push(s),
     );
+    if model.plies.len() > 1 {
+        // A laminate's inter-ply slip and pressure (only then, so a
+        // one-ply frame keeps its bytes).
+        let zeros = vec![0.0; n_points];
+        let (slip, pressure) = frame
+            .plies
+            .map_or((&zeros[..], &zeros[..]), |p| (&p.slip[..], &p.pressure[..]));
+        scalars(&mut xml, "ply_slip", slip);
+        scalars(&mut xml, "ply_pressure", pressure);
+    }
     xml.push_str("      </PointData>\n");
 
     xml.push_str("      <CellData Scalars=\"shear_angle_deg\">\n");
@@ -196,6 +206,13 @@ pub(super) fn frame_vtu(time: f64, frame: &FrameData<'_>) -> Result<String, Size
     );
     scalars(&mut xml, "thickness", &fields.thickness);
     scalars(&mut xml, "waviness", &fields.waviness);
+    if model.plies.len() > 1 {
+        // Which ply each cell is: ParaView's Threshold on it shows one ply.
+        let ply: Vec<i32> = model.element_plies().iter().map(|&p| p as i32).collect();
+        data_array(&mut xml, "Int32", "ply", ONE, &ply, |b, p| {
+            b.extend(p.to_le_bytes())
+        });
+    }
     xml.push_str("      </CellData>\n");
 
     xml.push_str("      <Points>\n");

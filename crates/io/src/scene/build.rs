@@ -269,8 +269,22 @@ fn nodes(
 
 /// The model of a rectangular blank, and its bottom-left corner (the
 /// default pin of a picture frame).
+/// The model of a blank, a rectangle or a mesh file, for `table`.
+pub(super) fn fabric_blank(
+    at: &Locator<'_>,
+    table: &str,
+    fabric: &FabricSpec,
+    material: &Material,
+) -> Result<(Model, Vector3<f64>), SceneError> {
+    match &fabric.blank.mesh {
+        Some(file) => mesh_blank(at, table, fabric, file, material),
+        None => rectangle_blank(at, table, fabric, material),
+    }
+}
+
 fn rectangle_blank(
     at: &Locator<'_>,
+    table: &str,
     fabric: &FabricSpec,
     material: &Material,
 ) -> Result<(Model, Vector3<f64>), SceneError> {
@@ -284,7 +298,7 @@ fn rectangle_blank(
     ];
     if let Some((key, _)) = mesh_keys.iter().find(|(_, given)| *given) {
         return Err(at.error(
-            &format!("fabric.blank.{key}"),
+            &format!("{table}.blank.{key}"),
             format!(
                 "`{key}` places a blank read from a mesh file (`mesh = \"file.msh\"`); a \
                  rectangle is placed by `center`"
@@ -294,21 +308,25 @@ fn rectangle_blank(
     let (Some(width), Some(height)) = (b.width, b.height) else {
         let missing = if b.width.is_none() { "width" } else { "height" };
         return Err(at.error(
-            "fabric.blank",
+            &format!("{table}.blank"),
             format!(
                 "`{missing}` is missing: give `width`, `height` and `cells` (or `element_size`) \
                  for a rectangle, or `mesh = \"file.msh\"` (or .inp) for a meshed blank"
             ),
         ));
     };
-    limits::length(at, "fabric.blank.width", width)?;
-    limits::length(at, "fabric.blank.height", height)?;
+    limits::length(at, &format!("{table}.blank.width"), width)?;
+    limits::length(at, &format!("{table}.blank.height"), height)?;
     let meshing = match (b.cells, b.element_size) {
         (Some(c), None) => Meshing::Cells(c),
-        (None, Some(h)) => Meshing::Size(limits::length(at, "fabric.blank.element_size", h)?),
+        (None, Some(h)) => Meshing::Size(limits::length(
+            at,
+            &format!("{table}.blank.element_size"),
+            h,
+        )?),
         _ => {
             return Err(at.error(
-                "fabric.blank",
+                &format!("{table}.blank"),
                 "give exactly one of `cells = [nx, ny]` and `element_size`",
             ));
         }
@@ -316,7 +334,11 @@ fn rectangle_blank(
     let blank = RectangleBlank {
         width,
         height,
-        center: limits::position(at, "fabric.blank.center", b.center.unwrap_or_default())?,
+        center: limits::position(
+            at,
+            &format!("{table}.blank.center"),
+            b.center.unwrap_or_default(),
+        )?,
         orientation_deg: fabric.orientation_deg,
         element: b.element.unwrap_or(ElementKind::Quad),
         meshing,
@@ -329,13 +351,13 @@ fn rectangle_blank(
             expected,
         }) => {
             let path = match field {
-                "orientation_deg" => "fabric.orientation_deg".to_owned(),
-                "meshing" => "fabric.blank.cells".to_owned(),
-                f => format!("fabric.blank.{f}"),
+                "orientation_deg" => format!("{table}.orientation_deg"),
+                "meshing" => format!("{table}.blank.cells"),
+                f => format!("{table}.blank.{f}"),
             };
             at.error(&path, format!("{value} is not allowed: {expected}"))
         }
-        other => at.error("fabric", other.to_string()),
+        other => at.error(table, other.to_string()),
     })?;
     let corner = blank.center - Vector3::new(0.5 * blank.width, 0.5 * blank.height, 0.0);
     Ok((model, corner))
@@ -347,6 +369,7 @@ fn rectangle_blank(
 /// default pin of a picture frame).
 fn mesh_blank(
     at: &Locator<'_>,
+    table: &str,
     fabric: &FabricSpec,
     file: &str,
     material: &Material,
@@ -362,7 +385,7 @@ fn mesh_blank(
     ];
     if let Some((key, _)) = rectangle_keys.iter().find(|(_, given)| *given) {
         return Err(at.error(
-            &format!("fabric.blank.{key}"),
+            &format!("{table}.blank.{key}"),
             format!(
                 "`{key}` describes a rectangle and cannot be combined with `mesh`: a blank is \
                  either a rectangle (`width`, `height`, `cells` or `element_size`) or a mesh file"
@@ -371,25 +394,35 @@ fn mesh_blank(
     }
     if fabric.fibres != FibreRepresentation::Embedded {
         return Err(at.error(
-            "fabric.fibres",
+            &format!("{table}.fibres"),
             "a blank from a mesh file needs `fibres = \"embedded\"`: trusses need the \
              fibre-aligned lattice that drape meshes itself",
         ));
     }
     if !fabric.orientation_deg.is_finite() {
-        return Err(at.error("fabric.orientation_deg", "must be a finite angle"));
+        return Err(at.error(
+            &format!("{table}.orientation_deg"),
+            "must be a finite angle",
+        ));
     }
-    let placement = Placement::new(at, "fabric.blank", b.units, b.scale, b.rotate, b.offset)?;
+    let placement = Placement::new(
+        at,
+        &format!("{table}.blank"),
+        b.units,
+        b.scale,
+        b.rotate,
+        b.offset,
+    )?;
     let path = at.file.parent().unwrap_or(Path::new(".")).join(file);
     let (mut mesh, turned) = if b.reorient == Some(true) {
         crate::mesh_import::read_mesh_reoriented(&path)
     } else {
         crate::mesh_import::read_mesh(&path).map(|m| (m, 0))
     }
-    .map_err(|e| at.error("fabric.blank.mesh", e.to_string()))?;
+    .map_err(|e| at.error(&format!("{table}.blank.mesh"), e.to_string()))?;
     if turned > 0 {
         at.warn(
-            "fabric.blank.reorient",
+            &format!("{table}.blank.reorient"),
             format!(
                 "{}: turned {turned} element{} over to the node order of their neighbours",
                 path.display(),
@@ -397,10 +430,10 @@ fn mesh_blank(
             ),
         );
     }
-    placement.check(at, "fabric.blank", "mesh", &mesh.x0)?;
+    placement.check(at, &format!("{table}.blank"), "mesh", &mesh.x0)?;
     limits::mesh_size(
         at,
-        "fabric.blank.mesh",
+        &format!("{table}.blank.mesh"),
         mesh.quad_labels.len() + mesh.triangle_labels.len(),
         "element",
         limits::BLANK_BYTES_PER_ELEMENT,
@@ -421,11 +454,11 @@ fn mesh_blank(
     let size = (high - low).norm();
     if !(1.0..=10_000.0).contains(&size) {
         at.warn(
-            "fabric.blank.mesh",
+            &format!("{table}.blank.mesh"),
             format!(
                 "{}: the blank is {size:.3e} mm across, after `units`/`scale`: drape's lengths \
                  are in mm; if the file is in another unit, give `units = \"m\"` (or \"cm\", \
-                 \"in\") or `scale` in [fabric.blank]",
+                 \"in\") or `scale` in [{table}.blank]",
                 path.display()
             ),
         );
@@ -456,13 +489,60 @@ fn mesh_blank(
             }
             _ => format!("{}: {e}", path.display()),
         };
-        at.error("fabric.blank.mesh", message)
+        at.error(&format!("{table}.blank.mesh"), message)
     })?;
     let low = mesh
         .x0
         .iter()
         .fold(Vector3::repeat(f64::INFINITY), |m, x| m.inf(x));
     Ok((model, low))
+}
+
+/// The material of `table` (`fabric` or a ply): a preset, a card file
+/// beside the scene, or a table of values; validated.
+pub(super) fn material(
+    at: &Locator<'_>,
+    table: &str,
+    spec: &MaterialSpec,
+    yarn_buckling: Option<bool>,
+) -> Result<Material, SceneError> {
+    let material = match spec {
+        // A card file (`drape fit … --out card.toml`), beside the scene.
+        MaterialSpec::Preset(name) if name.ends_with(".toml") => {
+            let path = at.file.parent().unwrap_or(Path::new(".")).join(name);
+            let text = std::fs::read_to_string(&path).map_err(|e| {
+                at.error(
+                    &format!("{table}.material"),
+                    format!("material card {}: {e}", path.display()),
+                )
+            })?;
+            toml::from_str::<Material>(&text).map_err(|e| {
+                at.error(
+                    &format!("{table}.material"),
+                    format!("material card {}: {}", path.display(), e.message()),
+                )
+            })?
+        }
+        MaterialSpec::Preset(name) => Material::preset(name).ok_or_else(|| {
+            at.error(
+                &format!("{table}.material"),
+                format!(
+                    "unknown preset `{name}`: expected one of {}, a material card \
+                     (`card.toml`, beside the scene) or a table of values",
+                    drape_constitutive::PRESET_NAMES.join(", ")
+                ),
+            )
+        })?,
+        MaterialSpec::Inline(m) => m.clone(),
+    };
+    let material = super::yarn_buckling::apply(yarn_buckling, material, at)?;
+    material.validate().map_err(|e| {
+        at.error(
+            &format!("{table}.material.{}", e.field),
+            format!("{} is not allowed: expected {}", e.value, e.expected),
+        )
+    })?;
+    Ok(material)
 }
 
 pub(super) fn build(
@@ -539,45 +619,10 @@ pub(super) fn build(
     }
 
     let fabric = &spec.fabric;
-    let material = match &fabric.material {
-        // A card file (`drape fit … --out card.toml`), beside the scene.
-        MaterialSpec::Preset(name) if name.ends_with(".toml") => {
-            let path = at.file.parent().unwrap_or(Path::new(".")).join(name);
-            let text = std::fs::read_to_string(&path).map_err(|e| {
-                at.error(
-                    "fabric.material",
-                    format!("material card {}: {e}", path.display()),
-                )
-            })?;
-            toml::from_str::<Material>(&text).map_err(|e| {
-                at.error(
-                    "fabric.material",
-                    format!("material card {}: {}", path.display(), e.message()),
-                )
-            })?
-        }
-        MaterialSpec::Preset(name) => Material::preset(name).ok_or_else(|| {
-            at.error(
-                "fabric.material",
-                format!(
-                    "unknown preset `{name}`: expected one of {}, a material card \
-                     (`card.toml`, beside the scene) or a table of values",
-                    drape_constitutive::PRESET_NAMES.join(", ")
-                ),
-            )
-        })?,
-        MaterialSpec::Inline(m) => m.clone(),
-    };
-    let material = super::yarn_buckling::apply(fabric.yarn_buckling, material, at)?;
-    material.validate().map_err(|e| {
-        at.error(
-            &format!("fabric.material.{}", e.field),
-            format!("{} is not allowed: expected {}", e.value, e.expected),
-        )
-    })?;
-    let (mut model, default_pin) = match &fabric.blank.mesh {
-        Some(file) => mesh_blank(at, fabric, file, &material)?,
-        None => rectangle_blank(at, fabric, &material)?,
+    let material = material(at, "fabric", &fabric.material, fabric.yarn_buckling)?;
+    let (mut model, default_pin) = match &spec.stack {
+        Some(stack) => super::stack::build(at, spec, stack, &material)?,
+        None => fabric_blank(at, "fabric", fabric, &material)?,
     };
 
     for (i, t) in spec.tools.iter().enumerate() {
@@ -950,7 +995,11 @@ pub(super) fn build(
         model.pressure.push(load);
     }
     // After the boundary conditions: lines are clamped at the fixed nodes.
-    if let Some(rigidity) = yarn_bending(fabric, &material, &model, at)? {
+    let bending = match &spec.stack {
+        Some(_) => super::stack::no_bending(at, fabric)?,
+        None => yarn_bending(fabric, &material, &model, at)?,
+    };
+    if let Some(rigidity) = bending {
         let theta = fabric.orientation_deg.to_radians();
         let warp = Vector3::new(theta.cos(), theta.sin(), 0.0);
         model

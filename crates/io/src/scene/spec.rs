@@ -738,4 +738,7 @@ pub struct SceneFile {
     /// `[kinematic]`: the pin-jointed net of `drape kinematic`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kinematic: Option<KinematicSpec>,
+    /// `[stack]`: a laminate of plies instead of `[fabric]`'s one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stack: Option<super::StackSpec>,
 }

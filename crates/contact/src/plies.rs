@@ -1,0 +1,1012 @@
+//! Contact between the deformable plies of a laminate, for the explicit
+//! pass: node-to-face constraints between neighbouring plies, enforced
+//! by forward-increment Lagrange multipliers like the tools' (SPEC §6),
+//! with Coulomb friction by return mapping.
+//!
+//! Each interface (a ply and the one below it) is searched both ways: the
+//! upper ply's nodes against the lower ply's triangles and the lower
+//! ply's nodes against the upper's, so neither ply's nodes pass through
+//! the other's faces when the meshes differ. A constraint keeps a node
+//! half a thickness of each ply (the sum of the two half thicknesses) from
+//! the face's mid-surface: g = (xₛ − Σ wⱼxⱼ)·n − (hₐ + h_b)/2 ≥ 0, with wⱼ
+//! the barycentric weights of the closest point.
+//!
+//! Stick is exact, not regularised: the normal multipliers make the gap
+//! zero at the end of the step and the friction multiplier makes the
+//! relative tangential velocity zero unless that needs more than μλ (as
+//! for the tools): a penalty would need a stiffness that either limits the
+//! stable step or lets a sticking ply creep, and the sled and incline
+//! validations would then test the penalty, not Coulomb's law.
+//!
+//! The constraints of a step couple (a node pressed by the ply above into
+//! the ply below, a ply between two tools), so the multipliers are found
+//! by projected Gauss–Seidel sweeps over the constraints in a fixed order
+//! (results independent of the thread count), with the nodes that touch a
+//! tool this step held on the tool by a support constraint whose
+//! multiplier goes to that tool's contact ([`Support`]).
+//!
+//! Broad phase: per search direction, a uniform grid of the master ply's
+//! faces grown by the reach; each slave node lists the faces whose grown
+//! box holds it. The lists are rebuilt when a node of either ply has moved
+//! half the margin, so a stack pays only near where plies meet.
+//!
+//! What it is not: tool contact ([`crate::ExplicitContact`] holds both and
+//! calls this pass), nor an implicit ply contact.
+
+use nalgebra::Vector3;
+use rayon::prelude::*;
+
+/// Sweeps allowed to the friction solve: a stack sticking on a tool
+/// needs its friction to 1e-10 (no creep), which node-on-node meshes
+/// (both searches on one gap) reach slowly.
+const FRICTION_SWEEPS: usize = 500;
+
+/// Slave nodes projected per rayon task.
+const NODES_PER_TASK: usize = 256;
+
+/// A ply as the contact sees it: its nodes (a contiguous range), its
+/// triangles (quads split in two), wound so that their normal points up
+/// the stack, and half its thickness.
+#[derive(Debug, Clone)]
+pub struct PlyLayer {
+    /// First node.
+    pub first_node: u32,
+    /// Number of nodes.
+    pub node_count: u32,
+    /// Triangles, normal up the stack.
+    pub faces: Vec<[u32; 3]>,
+    /// Half the ply's thickness (mm).
+    pub half_thickness: f64,
+}
+
+/// Two neighbouring plies and the friction coefficient between them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlyInterface {
+    /// The lower ply (index into the layers).
+    pub lower: usize,
+    /// The upper ply.
+    pub upper: usize,
+    /// Coulomb coefficient.
+    pub friction: f64,
+}
+
+/// A node held on a tool this step: the ply pass may not push it into the
+/// tool along `normal`; the multiplier it needs is the tool's.
+#[derive(Debug, Clone, Copy)]
+pub struct Support {
+    /// The node.
+    pub node: u32,
+    /// The tool's normal at the node (towards the fabric).
+    pub normal: Vector3<f64>,
+    /// The support's multiplier found by the last solve (μ = λ·Δt·τ).
+    pub mu: f64,
+}
+
+/// A node's friction on a tool, for the joint friction solve: what the
+/// tool pass applied and may apply (its cap, μ_tool·λ).
+#[derive(Debug, Clone, Copy)]
+pub struct ToolFriction {
+    /// The node.
+    pub node: u32,
+    /// The tool's normal.
+    pub normal: Vector3<f64>,
+    /// The tool's velocity.
+    pub tool_velocity: Vector3<f64>,
+    /// μ·λ of the contact (N).
+    pub cap: f64,
+    /// The tangential force on the node (N).
+    pub force: Vector3<f64>,
+}
+
+/// A slave node's closest face.
+#[derive(Debug, Clone, Copy)]
+struct Hit {
+    gap: f64,
+    normal: Vector3<f64>,
+    nodes: [u32; 3],
+    w: [f64; 3],
+    found: bool,
+}
+
+impl Hit {
+    const NONE: Self = Self {
+        gap: f64::INFINITY,
+        normal: Vector3::new(0.0, 0.0, 0.0),
+        nodes: [0; 3],
+        w: [0.0; 3],
+        found: false,
+    };
+}
+
+/// One search direction of an interface.
+#[derive(Debug, Clone, Default)]
+struct Search {
+    slave: usize,
+    master: usize,
+    /// +1 when the slave ply is above the master, −1 below.
+    side: f64,
+    friction: f64,
+    /// Sum of the two half thicknesses (mm).
+    offset: f64,
+    /// Candidate faces of each slave node (CSR over the slave's nodes).
+    cand_ptr: Vec<u32>,
+    cand: Vec<u32>,
+    hits: Vec<Hit>,
+    /// The master faces' grown boxes, and the grid of them.
+    boxes: Vec<[f64; 6]>,
+    cell_ptr: Vec<u32>,
+    cell_faces: Vec<u32>,
+    fill: Vec<u32>,
+}
+
+impl Default for Hit {
+    fn default() -> Self {
+        Self::NONE
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Constraint {
+    slave: u32,
+    masters: [u32; 3],
+    w: [f64; 3],
+    normal: Vector3<f64>,
+    gap: f64,
+    mu: f64,
+    /// 1/(1/mₛ + Σ wⱼ²/mⱼ) with the fixed nodes' inverse mass 0.
+    mass: f64,
+    search: u32,
+}
+
+/// What the last step of the ply pass did.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PlyStep {
+    /// Active node-to-face constraints.
+    pub active: usize,
+    /// Gauss–Seidel sweeps.
+    pub sweeps: usize,
+    /// Largest linearised gap violation left (mm): at most 1e-8 of the
+    /// largest at the start unless the sweeps ran out.
+    pub residual: f64,
+}
+
+/// The ply–ply contact pass.
+#[derive(Debug, Clone)]
+pub struct PlyContact {
+    layers: Vec<PlyLayer>,
+    searches: Vec<Search>,
+    /// Per layer and face, which of its features lie on the ply's free
+    /// outline: bits 0–2 the edges ab, bc, ca, bits 3–5 the vertices.
+    outline: Vec<Vec<u8>>,
+    margin: f64,
+    tolerance: f64,
+    max_sweeps: usize,
+    reference_x: Vec<Vector3<f64>>,
+    constraints: Vec<Constraint>,
+    dx: Vec<Vector3<f64>>,
+    /// Each constraint's tangential force in the friction solve.
+    f_t: Vec<Vector3<f64>>,
+    /// Each node's reference area (for the pressure).
+    area: Vec<f64>,
+    /// Accumulated tangential slip of each node on the ply below (mm).
+    pub slip: Vec<f64>,
+    /// Contact pressure of the ply below or above on each node at the last
+    /// step (MPa): the node's normal multiplier over its area.
+    pub pressure: Vec<f64>,
+    /// Nodes whose pressure was set at the last step.
+    touched: Vec<u32>,
+    /// Friction dissipated between plies so far (mJ).
+    pub friction_dissipation: f64,
+    /// The last step.
+    pub last: PlyStep,
+}
+
+impl PlyContact {
+    /// A pass over `node_count` nodes of the `layers` with their
+    /// `interfaces`; `area` is each node's reference area (mm²), `margin`
+    /// the broad phase's (mm).
+    pub fn new(
+        layers: Vec<PlyLayer>,
+        interfaces: &[PlyInterface],
+        area: Vec<f64>,
+        margin: f64,
+    ) -> Self {
+        let n = area.len();
+        let mut searches = Vec::new();
+        for i in interfaces {
+            let offset = layers[i.lower].half_thickness + layers[i.upper].half_thickness;
+            for (slave, master, side) in [(i.upper, i.lower, 1.0), (i.lower, i.upper, -1.0)] {
+                let count = layers[slave].node_count as usize;
+                searches.push(Search {
+                    slave,
+                    master,
+                    side,
+                    friction: i.friction,
+                    offset,
+                    cand_ptr: vec![0; count + 1],
+                    hits: vec![Hit::NONE; count],
+                    boxes: vec![[0.0; 6]; layers[master].faces.len()],
+                    ..Search::default()
+                });
+            }
+        }
+        let outline = layers.iter().map(|l| outline_of(&l.faces)).collect();
+        Self {
+            outline,
+            layers,
+            searches,
+            margin,
+            tolerance: 1e-8,
+            // Where two meshes meet node on node, both searches constrain
+            // the same gap and the sweeps share it out slowly; by 200 what
+            // is left is ~1e-9 mm.
+            max_sweeps: 200,
+            reference_x: Vec::new(),
+            constraints: Vec::with_capacity(2 * n),
+            dx: vec![Vector3::zeros(); n],
+            f_t: Vec::with_capacity(2 * n),
+            area,
+            slip: vec![0.0; n],
+            pressure: vec![0.0; n],
+            touched: Vec::with_capacity(n),
+            friction_dissipation: 0.0,
+            last: PlyStep::default(),
+        }
+    }
+
+    /// The layers.
+    pub fn layers(&self) -> &[PlyLayer] {
+        &self.layers
+    }
+
+    /// Number of candidate (node, face) pairs of the broad phase.
+    pub fn candidate_pairs(&self) -> usize {
+        self.searches.iter().map(|s| s.cand.len()).sum()
+    }
+
+    /// Rebuilds the candidate lists once a node has moved half the margin.
+    fn refresh(&mut self, x: &[Vector3<f64>]) {
+        let half = 0.5 * self.margin;
+        let moved = self.reference_x.len() != x.len()
+            || x.par_iter()
+                .zip(&self.reference_x)
+                .with_min_len(4096)
+                .any(|(a, b)| (a - b).norm_squared() > half * half);
+        if !moved {
+            return;
+        }
+        for s in &mut self.searches {
+            let reach = s.offset + self.margin;
+            build_candidates(s, &self.layers, x, reach);
+        }
+        self.reference_x.clear();
+        self.reference_x.extend_from_slice(x);
+    }
+
+    /// The ply constraints' normal pass on the predicted `x`, `v`: finds
+    /// the constraints, solves their multipliers together with the tools'
+    /// `supports`, and corrects `x` and `v`; adds each ply's normal force to
+    /// `force`. `tau` as in [`crate::ExplicitContact::enforce_step`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn normal(
+        &mut self,
+        x: &mut [Vector3<f64>],
+        v: &mut [Vector3<f64>],
+        mass: &[f64],
+        movable: &[bool],
+        dt: f64,
+        tau: f64,
+        supports: &mut [Support],
+        force: &mut [Vector3<f64>],
+    ) -> PlyStep {
+        for &i in &self.touched {
+            self.pressure[i as usize] = 0.0;
+        }
+        self.touched.clear();
+        self.constraints.clear();
+        self.refresh(x);
+        let inv = |i: u32| {
+            if movable[i as usize] {
+                1.0 / mass[i as usize]
+            } else {
+                0.0
+            }
+        };
+        let layers = &self.layers;
+        for (k, s) in self.searches.iter_mut().enumerate() {
+            let slave = &layers[s.slave];
+            let faces = &layers[s.master].faces;
+            let outline = &self.outline[s.master];
+            let (ptr, cand) = (&s.cand_ptr, &s.cand);
+            let (side, offset, reach) = (s.side, s.offset, s.offset + self.margin);
+            s.hits
+                .par_iter_mut()
+                .enumerate()
+                .with_min_len(NODES_PER_TASK)
+                .for_each(|(local, hit)| {
+                    *hit = Hit::NONE;
+                    let range = ptr[local] as usize..ptr[local + 1] as usize;
+                    if range.is_empty() {
+                        return;
+                    }
+                    let p = x[slave.first_node as usize + local];
+                    let mut best = f64::INFINITY;
+                    for &f in &cand[range] {
+                        let tri = faces[f as usize];
+                        let [a, b, c] = tri.map(|n| x[n as usize]);
+                        let (q, w) = closest_on_triangle(&p, &a, &b, &c);
+                        let d = p - q;
+                        let dist = d.norm_squared();
+                        if dist >= best {
+                            continue;
+                        }
+                        let nf = (b - a).cross(&(c - a));
+                        let len = nf.norm();
+                        if len == 0.0 || dist == 0.0 {
+                            continue;
+                        }
+                        let up = nf * (side / len);
+                        let along = d.dot(&up);
+                        // A node behind the face's mid-surface came round
+                        // the ply's edge or from another part of it (a
+                        // fold): no step moves a node that deep into its
+                        // neighbour, and pushing it through would throw it
+                        // by the plies' thickness in one step. A node
+                        // beside the face (past the ply's free edge, its
+                        // offset mostly sideways) is not on it either.
+                        if along <= 0.0 || (d - up * along).norm_squared() > offset * offset {
+                            continue;
+                        }
+                        // The distance to the closest point and its
+                        // direction: continuous across the kinks between
+                        // faces (a face's own normal would turn by the
+                        // kink as the node passes a vertex and push it
+                        // each time), the face's normal inside a face. On
+                        // the ply's free outline the face's normal: the
+                        // ply ends there square, not rounded, so a ply
+                        // sliding past the edge of the one below is not
+                        // pushed sideways.
+                        let (normal, gap) = if on_outline(outline[f as usize], &w) {
+                            (up, along - offset)
+                        } else {
+                            let r = dist.sqrt();
+                            (d / r, r - offset)
+                        };
+                        if gap > reach {
+                            continue;
+                        }
+                        best = dist;
+                        *hit = Hit {
+                            gap,
+                            normal,
+                            nodes: tri,
+                            w,
+                            found: true,
+                        };
+                    }
+                });
+            for (local, hit) in s.hits.iter().enumerate() {
+                if !hit.found || hit.gap >= 0.0 {
+                    continue;
+                }
+                let node = slave.first_node + local as u32;
+                let m_inv = inv(node)
+                    + hit
+                        .nodes
+                        .iter()
+                        .zip(&hit.w)
+                        .map(|(&j, w)| w * w * inv(j))
+                        .sum::<f64>();
+                if m_inv == 0.0 {
+                    continue;
+                }
+                self.constraints.push(Constraint {
+                    slave: node,
+                    masters: hit.nodes,
+                    w: hit.w,
+                    normal: hit.normal,
+                    gap: hit.gap,
+                    mu: 0.0,
+                    mass: 1.0 / m_inv,
+                    search: k as u32,
+                });
+            }
+        }
+        let mut step = PlyStep {
+            active: self.constraints.len(),
+            ..PlyStep::default()
+        };
+        if self.constraints.is_empty() {
+            self.last = step;
+            return step;
+        }
+        // Projected Gauss–Seidel on the linearised gaps, the increments
+        // summed per node in `dx`.
+        for c in &self.constraints {
+            self.dx[c.slave as usize] = Vector3::zeros();
+            for &j in &c.masters {
+                self.dx[j as usize] = Vector3::zeros();
+            }
+        }
+        for s in supports.iter_mut() {
+            self.dx[s.node as usize] = Vector3::zeros();
+            s.mu = 0.0;
+        }
+        // Converged when what is left of every violation is 1e-8 of the
+        // largest one at the start (an absolute tolerance would be most of
+        // a slow step's penetration, dt²·a).
+        let start = self.constraints.iter().map(|c| -c.gap).fold(0.0, f64::max);
+        let tolerance = self.tolerance * start;
+        let dx = &mut self.dx;
+        for sweep in 1..=self.max_sweeps {
+            let mut worst: f64 = 0.0;
+            for c in &mut self.constraints {
+                let rel = dx[c.slave as usize]
+                    - c.masters
+                        .iter()
+                        .zip(&c.w)
+                        .map(|(&j, w)| dx[j as usize] * *w)
+                        .sum::<Vector3<f64>>();
+                let g = c.gap + c.normal.dot(&rel);
+                let mu = (c.mu - g * c.mass).max(0.0);
+                let d = mu - c.mu;
+                if d != 0.0 {
+                    worst = worst.max(if mu > 0.0 { g.abs() } else { -g });
+                    c.mu = mu;
+                    dx[c.slave as usize] += c.normal * (d * inv(c.slave));
+                    for (&j, w) in c.masters.iter().zip(&c.w) {
+                        dx[j as usize] -= c.normal * (d * w * inv(j));
+                    }
+                }
+            }
+            for s in supports.iter_mut() {
+                let m_inv = inv(s.node);
+                if m_inv == 0.0 {
+                    continue;
+                }
+                let g = s.normal.dot(&dx[s.node as usize]);
+                let mu = (s.mu - g / m_inv).max(0.0);
+                let d = mu - s.mu;
+                if d != 0.0 {
+                    worst = worst.max(if mu > 0.0 { g.abs() } else { -g });
+                    s.mu = mu;
+                    dx[s.node as usize] += s.normal * (d * m_inv);
+                }
+            }
+            step.sweeps = sweep;
+            step.residual = worst;
+            if worst <= tolerance {
+                break;
+            }
+        }
+        let lambda_scale = 1.0 / (dt * tau);
+        for c in &self.constraints {
+            for i in std::iter::once(c.slave).chain(c.masters) {
+                let i = i as usize;
+                if dx[i] != Vector3::zeros() {
+                    x[i] += dx[i];
+                    v[i] += dx[i] / dt;
+                    dx[i] = Vector3::zeros();
+                }
+            }
+            if c.mu > 0.0 {
+                let f = c.normal * (c.mu * lambda_scale);
+                force[c.slave as usize] += f;
+                for (&j, w) in c.masters.iter().zip(&c.w) {
+                    force[j as usize] -= f * *w;
+                }
+                let p = c.mu * lambda_scale;
+                let s = c.slave as usize;
+                if self.pressure[s] == 0.0 {
+                    self.touched.push(c.slave);
+                }
+                self.pressure[s] += p / self.area[s].max(f64::MIN_POSITIVE);
+            }
+        }
+        for s in supports.iter() {
+            let i = s.node as usize;
+            if dx[i] != Vector3::zeros() {
+                x[i] += dx[i];
+                v[i] += dx[i] / dt;
+                dx[i] = Vector3::zeros();
+            }
+        }
+        self.last = step;
+        step
+    }
+
+    /// Coulomb friction on the constraints of the last normal pass and on
+    /// the nodes' tool contacts `tools` (with the friction the tool pass
+    /// applied already), solved together: projected Gauss–Seidel on each
+    /// constraint's tangential force, the force that stops the relative
+    /// sliding over the step projected on the disc of radius μλ, until no
+    /// force changes by more than 1e-10 of the largest cap. Together,
+    /// because a ply that sticks to the one below drags it on the tool:
+    /// friction solved one contact after the other would let a sticking
+    /// stack creep. Adds the plies' forces to `force` (the tools' are
+    /// returned in `tools`) and the slip they leave to [`Self::slip`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn friction(
+        &mut self,
+        x: &mut [Vector3<f64>],
+        v: &mut [Vector3<f64>],
+        mass: &[f64],
+        movable: &[bool],
+        dt: f64,
+        tau: f64,
+        tools: &mut [ToolFriction],
+        force: &mut [Vector3<f64>],
+    ) {
+        let inv = |i: u32| {
+            if movable[i as usize] {
+                1.0 / mass[i as usize]
+            } else {
+                0.0
+            }
+        };
+        let relative = |v: &[Vector3<f64>], c: &Constraint| {
+            let rel = v[c.slave as usize]
+                - c.masters
+                    .iter()
+                    .zip(&c.w)
+                    .map(|(&j, w)| v[j as usize] * *w)
+                    .sum::<Vector3<f64>>();
+            rel - c.normal * c.normal.dot(&rel)
+        };
+        let lambda_scale = 1.0 / (dt * tau);
+        self.f_t.clear();
+        self.f_t.resize(self.constraints.len(), Vector3::zeros());
+        let mut largest: f64 = tools.iter().map(|t| t.cap).fold(0.0, f64::max);
+        for c in &self.constraints {
+            largest = largest.max(self.searches[c.search as usize].friction * c.mu * lambda_scale);
+        }
+        if largest == 0.0 {
+            return;
+        }
+        let project = |trial: Vector3<f64>, cap: f64| {
+            let n = trial.norm();
+            if n > cap { trial * (cap / n) } else { trial }
+        };
+        for _ in 0..FRICTION_SWEEPS {
+            let mut change: f64 = 0.0;
+            for (k, c) in self.constraints.iter().enumerate() {
+                let mu_f = self.searches[c.search as usize].friction;
+                if mu_f == 0.0 || c.mu <= 0.0 {
+                    continue;
+                }
+                let v_t = relative(v, c);
+                let new = project(
+                    self.f_t[k] - v_t * (c.mass / tau),
+                    mu_f * c.mu * lambda_scale,
+                );
+                let d = new - self.f_t[k];
+                if d == Vector3::zeros() {
+                    continue;
+                }
+                change = change.max(d.norm());
+                self.f_t[k] = new;
+                let dv = d * (tau * inv(c.slave));
+                v[c.slave as usize] += dv;
+                x[c.slave as usize] += dv * dt;
+                for (&j, w) in c.masters.iter().zip(&c.w) {
+                    let dv = d * (-w * tau * inv(j));
+                    v[j as usize] += dv;
+                    x[j as usize] += dv * dt;
+                }
+            }
+            for t in tools.iter_mut() {
+                let m_inv = inv(t.node);
+                if m_inv == 0.0 {
+                    continue;
+                }
+                let i = t.node as usize;
+                let rel = v[i] - t.tool_velocity;
+                let v_t = rel - t.normal * t.normal.dot(&rel);
+                let new = project(t.force - v_t / (m_inv * tau), t.cap);
+                let d = new - t.force;
+                if d == Vector3::zeros() {
+                    continue;
+                }
+                change = change.max(d.norm());
+                t.force = new;
+                let dv = d * (tau * m_inv);
+                v[i] += dv;
+                x[i] += dv * dt;
+            }
+            if change <= 1e-10 * largest {
+                break;
+            }
+        }
+        for (c, f_t) in self.constraints.iter().zip(&self.f_t) {
+            if *f_t == Vector3::zeros() {
+                continue;
+            }
+            force[c.slave as usize] += f_t;
+            for (&j, w) in c.masters.iter().zip(&c.w) {
+                force[j as usize] -= f_t * *w;
+            }
+            self.friction_dissipation -= f_t.dot(&relative(v, c)) * dt;
+        }
+        // The slip of each node on the ply below: the upper ply's nodes
+        // of the downward searches, at the velocities all forces left.
+        for c in &self.constraints {
+            if self.searches[c.search as usize].side > 0.0 && c.mu > 0.0 {
+                self.slip[c.slave as usize] += relative(v, c).norm() * dt;
+            }
+        }
+    }
+
+    /// The largest overlap of any node of one ply into its neighbour (mm,
+    /// ≥ 0): how far inside the two half thicknesses the closest face is,
+    /// at `x`, over the candidates of the last broad phase.
+    pub fn max_overlap(&self, x: &[Vector3<f64>]) -> f64 {
+        let mut worst: f64 = 0.0;
+        for s in &self.searches {
+            let slave = &self.layers[s.slave];
+            let faces = &self.layers[s.master].faces;
+            for local in 0..slave.node_count as usize {
+                let p = x[slave.first_node as usize + local];
+                let range = s.cand_ptr[local] as usize..s.cand_ptr[local + 1] as usize;
+                let mut best = (f64::INFINITY, 0.0);
+                for &f in &s.cand[range] {
+                    let [a, b, c] = faces[f as usize].map(|n| x[n as usize]);
+                    let (q, _) = closest_on_triangle(&p, &a, &b, &c);
+                    let nf = (b - a).cross(&(c - a));
+                    if nf.norm() == 0.0 {
+                        continue;
+                    }
+                    let d = p - q;
+                    let n = nf.normalize() * s.side;
+                    let along = d.dot(&n);
+                    let sideways = d - n * along;
+                    if along < -s.offset || sideways.norm_squared() > s.offset * s.offset {
+                        continue;
+                    }
+                    // As the narrow phase measures it: the distance to
+                    // the closest point, negative behind the mid-surface.
+                    let gap = d.norm().copysign(along) - s.offset;
+                    if d.norm_squared() < best.0 {
+                        best = (d.norm_squared(), gap);
+                    }
+                }
+                worst = worst.max(-best.1);
+            }
+        }
+        worst
+    }
+}
+
+/// Which features of each face are on the outline of the layer: an edge
+/// that no other face shares, and its two vertices.
+fn outline_of(faces: &[[u32; 3]]) -> Vec<u8> {
+    let mut count = std::collections::HashMap::new();
+    let key = |a: u32, b: u32| (a.min(b), a.max(b));
+    for f in faces {
+        for k in 0..3 {
+            *count.entry(key(f[k], f[(k + 1) % 3])).or_insert(0u32) += 1;
+        }
+    }
+    let mut vertex = std::collections::HashSet::new();
+    for (&(a, b), &n) in &count {
+        if n == 1 {
+            vertex.insert(a);
+            vertex.insert(b);
+        }
+    }
+    faces
+        .iter()
+        .map(|f| {
+            let mut bits = 0u8;
+            for k in 0..3 {
+                if count[&key(f[k], f[(k + 1) % 3])] == 1 {
+                    bits |= 1 << k;
+                }
+                if vertex.contains(&f[k]) {
+                    bits |= 1 << (3 + k);
+                }
+            }
+            bits
+        })
+        .collect()
+}
+
+/// Whether the closest point of barycentric weights `w` lies on a face's
+/// outline feature (`bits` as [`outline_of`] gives them).
+fn on_outline(bits: u8, w: &[f64; 3]) -> bool {
+    if bits == 0 {
+        return false;
+    }
+    let zero = w.map(|w| w == 0.0);
+    match zero {
+        // A vertex: the one whose weight is 1.
+        [true, true, false] => bits & (1 << 5) != 0,
+        [true, false, true] => bits & (1 << 4) != 0,
+        [false, true, true] => bits & (1 << 3) != 0,
+        // An edge: the one opposite the zero weight (ab is bit 0).
+        [false, false, true] => bits & 1 != 0,
+        [true, false, false] => bits & 2 != 0,
+        [false, true, false] => bits & 4 != 0,
+        _ => false,
+    }
+}
+
+/// The candidate faces of every slave node of `s`: a uniform grid of the
+/// master's face boxes grown by `reach`, each node looking in its cell.
+fn build_candidates(s: &mut Search, layers: &[PlyLayer], x: &[Vector3<f64>], reach: f64) {
+    let faces = &layers[s.master].faces;
+    let slave = &layers[s.slave];
+    let mut low = [f64::INFINITY; 3];
+    let mut high = [f64::NEG_INFINITY; 3];
+    let mut size: f64 = 0.0;
+    for (b, f) in s.boxes.iter_mut().zip(faces) {
+        let p = f.map(|n| x[n as usize]);
+        for k in 0..3 {
+            let lo = p[0][k].min(p[1][k]).min(p[2][k]) - reach;
+            let hi = p[0][k].max(p[1][k]).max(p[2][k]) + reach;
+            b[k] = lo;
+            b[k + 3] = hi;
+            low[k] = low[k].min(lo);
+            high[k] = high[k].max(hi);
+            size = size.max(hi - lo);
+        }
+    }
+    s.cand.clear();
+    s.cand_ptr.iter_mut().for_each(|p| *p = 0);
+    if faces.is_empty() {
+        return;
+    }
+    // Cells at least as large as a grown face, so a face lies in at most
+    // two cells along each axis; fewer cells than 8 per face.
+    let extent = [high[0] - low[0], high[1] - low[1], high[2] - low[2]];
+    let mut cell = size.max(f64::MIN_POSITIVE);
+    let dims = |cell: f64| extent.map(|e| ((e / cell).floor() as usize + 1).max(1));
+    while dims(cell).iter().product::<usize>() > 8 * faces.len() + 8 {
+        cell *= 1.5;
+    }
+    let d = dims(cell);
+    let index = |p: [f64; 3]| -> [usize; 3] {
+        [0, 1, 2].map(|k| (((p[k] - low[k]) / cell).floor().max(0.0) as usize).min(d[k] - 1))
+    };
+    let cells = d[0] * d[1] * d[2];
+    s.cell_ptr.clear();
+    s.cell_ptr.resize(cells + 1, 0);
+    let each_cell = |b: &[f64; 6], f: &mut dyn FnMut(usize)| {
+        let lo = index([b[0], b[1], b[2]]);
+        let hi = index([b[3], b[4], b[5]]);
+        for i in lo[0]..=hi[0] {
+            for j in lo[1]..=hi[1] {
+                for k in lo[2]..=hi[2] {
+                    f((k * d[1] + j) * d[0] + i);
+                }
+            }
+        }
+    };
+    for b in &s.boxes {
+        each_cell(b, &mut |c| s.cell_ptr[c + 1] += 1);
+    }
+    for c in 0..cells {
+        s.cell_ptr[c + 1] += s.cell_ptr[c];
+    }
+    s.fill.clear();
+    s.fill.extend_from_slice(&s.cell_ptr[..cells]);
+    s.cell_faces.clear();
+    s.cell_faces.resize(s.cell_ptr[cells] as usize, 0);
+    for (f, b) in s.boxes.iter().enumerate() {
+        let (fill, out) = (&mut s.fill, &mut s.cell_faces);
+        each_cell(b, &mut |c| {
+            out[fill[c] as usize] = f as u32;
+            fill[c] += 1;
+        });
+    }
+    for local in 0..slave.node_count as usize {
+        let p = x[slave.first_node as usize + local];
+        let inside = (0..3).all(|k| p[k] >= low[k] && p[k] <= high[k]);
+        if inside {
+            let [i, j, k] = index([p.x, p.y, p.z]);
+            let c = (k * d[1] + j) * d[0] + i;
+            for &f in &s.cell_faces[s.cell_ptr[c] as usize..s.cell_ptr[c + 1] as usize] {
+                let b = &s.boxes[f as usize];
+                if (0..3).all(|k| p[k] >= b[k] && p[k] <= b[k + 3]) {
+                    s.cand.push(f);
+                }
+            }
+        }
+        s.cand_ptr[local + 1] = s.cand.len() as u32;
+    }
+}
+
+/// The closest point of triangle abc to p and its barycentric weights
+/// (Ericson, Real-Time Collision Detection, §5.1.5).
+fn closest_on_triangle(
+    p: &Vector3<f64>,
+    a: &Vector3<f64>,
+    b: &Vector3<f64>,
+    c: &Vector3<f64>,
+) -> (Vector3<f64>, [f64; 3]) {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(&ap);
+    let d2 = ac.dot(&ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (*a, [1.0, 0.0, 0.0]);
+    }
+    let bp = p - b;
+    let d3 = ab.dot(&bp);
+    let d4 = ac.dot(&bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return (*b, [0.0, 1.0, 0.0]);
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let t = d1 / (d1 - d3);
+        return (a + ab * t, [1.0 - t, t, 0.0]);
+    }
+    let cp = p - c;
+    let d5 = ab.dot(&cp);
+    let d6 = ac.dot(&cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return (*c, [0.0, 0.0, 1.0]);
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let t = d2 / (d2 - d6);
+        return (a + ac * t, [1.0 - t, 0.0, t]);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (b + (c - b) * t, [0.0, 1.0 - t, t]);
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (s, t) = (vb * denom, vc * denom);
+    (a + ab * s + ac * t, [1.0 - s - t, s, t])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two unit squares (two triangles each) 0.9 apart with offsets of 0.5
+    /// each: every node 0.1 mm inside.
+    fn two_squares(dz: f64) -> (Vec<Vector3<f64>>, PlyContact) {
+        let sq = |z: f64| {
+            [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
+        };
+        let mut x = sq(0.0).to_vec();
+        x.extend(sq(dz));
+        let layer = |first: u32| PlyLayer {
+            first_node: first,
+            node_count: 4,
+            faces: vec![[first, first + 1, first + 2], [first, first + 2, first + 3]],
+            half_thickness: 0.5,
+        };
+        let contact = PlyContact::new(
+            vec![layer(0), layer(4)],
+            &[PlyInterface {
+                lower: 0,
+                upper: 1,
+                friction: 0.5,
+            }],
+            vec![0.25; 8],
+            1.0,
+        );
+        (x, contact)
+    }
+
+    #[test]
+    fn closest_point_weights_reproduce_the_point() {
+        let (a, b, c) = (
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(2.0, 0.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.5),
+        );
+        for p in [
+            Vector3::new(0.3, 0.2, 1.0),
+            Vector3::new(-1.0, -1.0, 0.0),
+            Vector3::new(3.0, 0.1, 0.0),
+            Vector3::new(1.0, 1.0, 0.0),
+            Vector3::new(-0.5, 0.5, 0.2),
+        ] {
+            let (q, w) = closest_on_triangle(&p, &a, &b, &c);
+            let back = a * w[0] + b * w[1] + c * w[2];
+            assert!((q - back).norm() < 1e-14);
+            assert!(w.iter().all(|&w| (-1e-15..=1.0 + 1e-15).contains(&w)));
+            // No point of the triangle (a grid of them) is closer.
+            for i in 0..=20 {
+                for j in 0..=(20 - i) {
+                    let r = a + (b - a) * (i as f64 / 20.0) + (c - a) * (j as f64 / 20.0);
+                    assert!((p - r).norm() >= (p - q).norm() - 1e-12);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn overlapping_plies_are_pushed_apart_by_mass() {
+        let (mut x, mut contact) = two_squares(0.9);
+        let mut v = vec![Vector3::zeros(); 8];
+        // The lower ply three times heavier: it moves a quarter of 0.1.
+        let mut mass = vec![3.0; 4];
+        mass.extend([1.0; 4]);
+        let mut force = vec![Vector3::zeros(); 8];
+        let step = contact.normal(
+            &mut x,
+            &mut v,
+            &mass,
+            &[true; 8],
+            1e-3,
+            1e-3,
+            &mut [],
+            &mut force,
+        );
+        assert!(step.active > 0 && step.residual <= 1e-9);
+        for i in 0..4 {
+            assert!((x[i].z + 0.025).abs() < 1e-9, "{}", x[i].z);
+            assert!((x[i + 4].z - 0.975).abs() < 1e-9, "{}", x[i + 4].z);
+        }
+        assert!(contact.max_overlap(&x) < 1e-9);
+        // Equal and opposite forces.
+        let total: Vector3<f64> = force.iter().sum();
+        assert!(total.norm() < 1e-9 * force[4].norm());
+    }
+
+    #[test]
+    fn a_supported_lower_ply_sends_the_push_to_the_upper() {
+        let (mut x, mut contact) = two_squares(0.9);
+        let mut v = vec![Vector3::zeros(); 8];
+        let mass = vec![1.0; 8];
+        let mut force = vec![Vector3::zeros(); 8];
+        let mut supports: Vec<Support> = (0..4)
+            .map(|n| Support {
+                node: n,
+                normal: Vector3::z(),
+                mu: 0.0,
+            })
+            .collect();
+        contact.normal(
+            &mut x,
+            &mut v,
+            &mass,
+            &[true; 8],
+            1e-3,
+            1e-3,
+            &mut supports,
+            &mut force,
+        );
+        for i in 0..4 {
+            assert!(x[i].z.abs() < 1e-9);
+            assert!((x[i + 4].z - 1.0).abs() < 1e-9);
+        }
+        // The tool carries the whole push: Σν = Σμ of the ply constraints,
+        // each of the four within the solve's 1e-9 mm (unit masses).
+        let nu: f64 = supports.iter().map(|s| s.mu).sum();
+        assert!((nu - 0.4).abs() < 4e-9, "{nu}");
+    }
+
+    #[test]
+    fn friction_sticks_below_the_cone_and_slides_on_it() {
+        for (speed, sticks) in [(1e-3, true), (1000.0, false)] {
+            let (mut x, mut contact) = two_squares(0.9);
+            let mut v = vec![Vector3::zeros(); 8];
+            for vi in &mut v[4..] {
+                vi.x = speed;
+            }
+            let mass = vec![1.0; 8];
+            let fixed: Vec<bool> = (0..8).map(|i| i >= 4).collect();
+            let mut force = vec![Vector3::zeros(); 8];
+            let (dt, tau) = (1e-3, 1e-3);
+            contact.normal(&mut x, &mut v, &mass, &fixed, dt, tau, &mut [], &mut force);
+            let normal: f64 = force[4..].iter().map(|f| f.z).sum();
+            contact.friction(&mut x, &mut v, &mass, &fixed, dt, tau, &mut [], &mut force);
+            let tangential: f64 = force[4..].iter().map(|f| f.x).sum();
+            if sticks {
+                assert!(v[4..].iter().all(|v| v.x.abs() < 1e-12));
+                assert!(-tangential < 0.5 * normal);
+            } else {
+                assert!((-tangential - 0.5 * normal).abs() < 1e-9 * normal);
+                assert!(contact.slip[4] > 0.0 && contact.friction_dissipation > 0.0);
+            }
+        }
+    }
+}

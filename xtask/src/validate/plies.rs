@@ -1,0 +1,491 @@
+//! Validation of laminates: contact and Coulomb friction between the
+//! plies of a stack through the explicit driver: a ply pulled over another
+//! under a normal load (the sled), a two-ply stack on an incline (which
+//! interface slides first), and no interpenetration of two plies formed
+//! together over the hemisphere.
+//!
+//! References come from closed formulas evaluated here (μN, the rigid
+//! slide of a constant or ramped force, the friction angle atan μ) and,
+//! for the overlap, from a distance computed here from the positions
+//! alone, never from the contact crate.
+
+use drape_constitutive::Material;
+use drape_contact::Surface;
+use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
+use drape_model::stack::PlyModel;
+use drape_model::{Amplitude, BoundaryCondition, Model, NodalLoad, Tool, ToolMotion};
+use drape_time::{Explicit, ExplicitSettings, Frame, Observer};
+use nalgebra::{Matrix3, Vector3};
+
+use super::{Case, Check, note};
+
+/// The cases of this module.
+pub const CASES: &[Case] = &[
+    Case {
+        name: "plies/sled",
+        quick: true,
+        run: sled,
+    },
+    Case {
+        name: "plies/incline",
+        quick: true,
+        run: incline,
+    },
+    Case {
+        name: "plies/hemisphere-overlap",
+        quick: true,
+        run: hemisphere_overlap,
+    },
+    Case {
+        name: "plies/hemisphere-friction",
+        quick: false,
+        run: hemisphere_friction,
+    },
+];
+
+/// Gravity (mm/s²).
+const G: f64 = 9810.0;
+
+struct Frames<F: FnMut(&Frame<'_>)>(F);
+impl<F: FnMut(&Frame<'_>)> Observer for Frames<F> {
+    fn frame(&mut self, frame: &Frame<'_>) {
+        (self.0)(frame)
+    }
+}
+
+/// Two square glass plies `sides` mm across (bottom, top) of 10 mm quads
+/// (embedded fibres) stacked on a plane through the origin whose normal
+/// is `rot`·z, the bottom ply's mid-surface half a thickness above it.
+fn two_plies(rot: Matrix3<f64>, friction: f64, sides: [f64; 2]) -> Model {
+    let material = Material::preset("glass-serge-4x3").expect("preset");
+    let h = material.thickness;
+    let ply = |name: &str, side: f64| {
+        let cells = (side / 10.0).round() as usize;
+        let blank = RectangleBlank {
+            width: side,
+            height: side,
+            center: Vector3::new(0.0, 0.0, 0.5 * h),
+            orientation_deg: 0.0,
+            element: ElementKind::Quad,
+            meshing: Meshing::Cells([cells, cells]),
+            fibres: FibreRepresentation::Embedded,
+        };
+        let mut mesh = blank.mesh().expect("mesh");
+        for x in &mut mesh.x0 {
+            *x = rot * *x;
+        }
+        mesh.warp = rot * mesh.warp;
+        PlyModel {
+            model: Model::from_mesh(&mesh, &material, FibreRepresentation::Embedded)
+                .expect("model"),
+            name: name.into(),
+            thickness: h,
+            orientation_deg: 0.0,
+            friction_below: friction,
+        }
+    };
+    Model::stack(vec![ply("bottom", sides[0]), ply("top", sides[1])]).expect("stack")
+}
+
+/// Mean displacement of a ply's nodes along `along`.
+fn mean_along(model: &Model, x: &[Vector3<f64>], ply: usize, along: Vector3<f64>) -> f64 {
+    let nodes = model.plies[ply].nodes.clone();
+    let n = nodes.len() as f64;
+    nodes
+        .map(|i| (x[i as usize] - model.x0[i as usize]).dot(&along))
+        .sum::<f64>()
+        / n
+}
+
+/// The sled: the bottom ply held, the top ply pressed on it by N = 1 N
+/// and pulled along x by F(t) = 2μN·t/T, both spread over its nodes by
+/// their areas (so every node carries the same F/N and the ply moves as a
+/// rigid body, with no stress to blur the onset). It sticks while F < μN;
+/// once F passes μN it slides with the friction at μN, and its slide is
+/// the pull beyond the stick phase, x(t) = (2μN/(T·M))·(t − t_s)³/6 with
+/// t_s = T/2 (M the ply's mass).
+///
+/// Tolerances: while sticking the slide is 0 to 1e-9 mm and the friction
+/// equals F to 1e-6 and the sliding friction μN to 1e-6 (the issue asks
+/// 1 %; the multipliers are exact to the solve's 1e-8); the slide to 1e-5
+/// (central differences integrate the cubic exactly but for the onset
+/// falling inside a step, an error of order (Δt/T)², Δt/T ≈ 2e-4).
+fn sled() -> Vec<Check> {
+    let mut checks = Vec::new();
+    for mu in [0.1, 0.3] {
+        // The bottom ply twice as wide, so the top one slides on it.
+        let mut model = two_plies(Matrix3::identity(), mu, [40.0, 20.0]);
+        let bottom: Vec<u32> = model.plies[0].nodes.clone().collect();
+        model.boundary.push(BoundaryCondition::fixed(bottom));
+        let area = model.nodal_area();
+        let top = model.plies[1].nodes.clone();
+        let total: f64 = top.clone().map(|i| area[i as usize]).sum();
+        let (normal, period) = (1.0, 0.01);
+        for i in top.clone() {
+            let share = area[i as usize] / total;
+            model.loads.push(NodalLoad {
+                nodes: vec![i],
+                force: Vector3::new(0.0, 0.0, -normal * share),
+                amplitude: Amplitude::Constant,
+            });
+            model.loads.push(NodalLoad {
+                nodes: vec![i],
+                force: Vector3::new(2.0 * mu * normal * share, 0.0, 0.0),
+                amplitude: Amplitude::Ramp { duration: period },
+            });
+        }
+        let mass: f64 = top.clone().map(|i| model.mass[i as usize]).sum();
+        let frames = 100;
+        // (time, slide, friction along x) at each frame.
+        let mut rows = Vec::new();
+        let mut observer = Frames(|f: &Frame<'_>| {
+            let force = f.contact.expect("ply contact").force;
+            let friction: f64 = top.clone().map(|i| force[i as usize].x).sum();
+            rows.push((
+                f.state.time,
+                mean_along(f.model, &f.state.x, 1, Vector3::x()),
+                -friction,
+            ));
+        });
+        let settings = ExplicitSettings {
+            end_time: period,
+            frames,
+            ..ExplicitSettings::default()
+        };
+        let mut state = model.initial_state();
+        let mut driver = Explicit::new(&model, settings).expect("driver");
+        // The ply moves rigidly, so the step stays the first one.
+        let dt = driver.stable_time_step(&model.x0);
+        driver.run(&mut state, &mut observer).expect("run");
+        let label = format!("μ = {mu}");
+        // The last frame before the onset: F = 0.98·μN. Its friction
+        // balanced the load of the step's start, t − Δt.
+        let (t, slide, friction) = rows[49];
+        let pull = 2.0 * mu * normal * (t - dt) / period;
+        checks.push(Check::abs(
+            format!(
+                "{label}, F = {:.3}·μN: slide while sticking (mm)",
+                pull / (mu * normal)
+            ),
+            0.0,
+            slide,
+            1e-9,
+        ));
+        checks.push(Check::rel(
+            format!("{label}, sticking: friction = F (N)"),
+            pull,
+            friction,
+            1e-6,
+        ));
+        let (t, slide, friction) = rows[frames];
+        checks.push(Check::rel(
+            format!("{label}, F = 2μN: sliding friction = μN (N)"),
+            mu * normal,
+            friction,
+            1e-6,
+        ));
+        let onset = 0.5 * period;
+        let reference = 2.0 * mu * normal / (period * mass) * (t - onset).powi(3) / 6.0;
+        checks.push(Check::rel(
+            format!("{label}: slide = pull beyond the stick phase (mm)"),
+            reference,
+            slide,
+            1e-5,
+        ));
+    }
+    checks
+}
+
+/// A stack of two plies on a plane tilted by α about y, gravity straight
+/// down, friction μ_tool between the plane and the bottom ply, μ_ply
+/// between the plies; mean slides (bottom, top) down the slope after
+/// `time`.
+fn incline_run(alpha: f64, mu_tool: f64, mu_ply: f64, time: f64) -> (f64, f64) {
+    let (s, c) = alpha.sin_cos();
+    let rot = Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c);
+    let mut model = two_plies(rot, mu_ply, [20.0, 20.0]);
+    model.gravity = Vector3::new(0.0, 0.0, -G);
+    model.tools.push(Tool {
+        name: "slope".into(),
+        surface: Surface::plane(Vector3::zeros(), rot * Vector3::z()).expect("plane"),
+        motion: ToolMotion::Fixed,
+        friction: mu_tool,
+    });
+    let settings = ExplicitSettings {
+        end_time: time,
+        frames: 4,
+        ..ExplicitSettings::default()
+    };
+    let mut state = model.initial_state();
+    Explicit::new(&model, settings)
+        .expect("driver")
+        .run(&mut state, &mut Frames(|_: &Frame<'_>| {}))
+        .expect("run");
+    let downhill = rot * Vector3::x();
+    (
+        mean_along(&model, &state.x, 0, downhill),
+        mean_along(&model, &state.x, 1, downhill),
+    )
+}
+
+/// The stack on an incline at 1 % of tan α below and above the critical
+/// slope. With μ_tool < μ_ply the critical slope is tan α = μ_tool, and
+/// beyond it the stack slides as one, ½·g(sin α − μ_tool cos α)·t²; with
+/// μ_ply < μ_tool it is tan α = μ_ply, and beyond it the top ply slides
+/// off the bottom one, ½·g(sin α − μ_ply cos α)·t², the bottom ply held
+/// by the tool (μ_tool·2W cos α > W sin α + μ_ply·W cos α).
+///
+/// Tolerances: a sticking ply's slide 0 to 1e-9 mm (the joint friction
+/// solve holds it to 1e-10 of the friction per step); a sliding one's to
+/// 1e-6 relative (every node has the same acceleration, which central
+/// differences integrate exactly; the friction solve's 1e-10 is below).
+fn incline() -> Vec<Check> {
+    let time = 0.02;
+    let mut checks = Vec::new();
+    for (mu_tool, mu_ply) in [(0.2, 0.4), (0.4, 0.2)] {
+        let critical = f64::min(mu_tool, mu_ply);
+        for factor in [0.99, 1.01] {
+            let alpha = (factor * critical).atan();
+            let (bottom, top) = incline_run(alpha, mu_tool, mu_ply, time);
+            let label =
+                format!("μ_tool = {mu_tool}, μ_ply = {mu_ply}, tan α = {factor}·{critical}");
+            let slide = |mu: f64| 0.5 * G * (alpha.sin() - mu * alpha.cos()) * time * time;
+            if factor < 1.0 {
+                checks.push(Check::abs(
+                    format!("{label}: bottom slide (mm)"),
+                    0.0,
+                    bottom,
+                    1e-9,
+                ));
+                checks.push(Check::abs(
+                    format!("{label}: top slide (mm)"),
+                    0.0,
+                    top,
+                    1e-9,
+                ));
+            } else if mu_tool < mu_ply {
+                let reference = slide(mu_tool);
+                checks.push(Check::rel(
+                    format!("{label}: bottom slides ½g(sin α − μ_tool cos α)t² (mm)"),
+                    reference,
+                    bottom,
+                    1e-6,
+                ));
+                checks.push(Check::rel(
+                    format!("{label}: top slides with it (mm)"),
+                    reference,
+                    top,
+                    1e-6,
+                ));
+            } else {
+                checks.push(Check::abs(
+                    format!("{label}: bottom held by the tool (mm)"),
+                    0.0,
+                    bottom,
+                    1e-9,
+                ));
+                checks.push(Check::rel(
+                    format!("{label}: top slides off, ½g(sin α − μ_ply cos α)t² (mm)"),
+                    slide(mu_ply),
+                    top,
+                    1e-6,
+                ));
+            }
+        }
+    }
+    checks
+}
+
+/// Signed distance of `p` from the triangles `faces` of `x` along their
+/// normal (wound up the stack, `up` = +1 for the ply above them), over the
+/// triangles whose plane projection of `p` falls inside them; None when
+/// it falls inside none (past the ply's edge).
+fn distance_over(p: &Vector3<f64>, x: &[Vector3<f64>], faces: &[[u32; 3]], up: f64) -> Option<f64> {
+    let mut best: Option<f64> = None;
+    for f in faces {
+        let [a, b, c] = f.map(|i| x[i as usize]);
+        let n = (b - a).cross(&(c - a));
+        let area2 = n.norm_squared();
+        if area2 == 0.0 {
+            continue;
+        }
+        // Barycentric coordinates of the projection.
+        let w_a = (b - p).cross(&(c - p)).dot(&n) / area2;
+        let w_b = (c - p).cross(&(a - p)).dot(&n) / area2;
+        let w_c = 1.0 - w_a - w_b;
+        if w_a < -1e-9 || w_b < -1e-9 || w_c < -1e-9 {
+            continue;
+        }
+        let d = (p - a).dot(&n) / area2.sqrt() * up;
+        if best.is_none_or(|q| d.abs() < q.abs()) {
+            best = Some(d);
+        }
+    }
+    best
+}
+
+/// The largest overlap of either ply into the other: thickness − the
+/// distance of each node from the other ply's mid-surface.
+fn overlap(model: &Model, x: &[Vector3<f64>]) -> f64 {
+    let faces = |p: usize| -> Vec<[u32; 3]> {
+        let mut out = Vec::new();
+        for b in &model.membranes[model.plies[p].membranes.clone()] {
+            for e in 0..b.len() {
+                let n = b.element_nodes(e);
+                for k in 1..n.len() - 1 {
+                    out.push([n[0], n[k], n[k + 1]]);
+                }
+            }
+        }
+        out
+    };
+    let offset = 0.5 * (model.plies[0].thickness + model.plies[1].thickness);
+    let mut worst: f64 = 0.0;
+    for (slave, master, up) in [(1usize, 0usize, 1.0), (0, 1, -1.0)] {
+        let f = faces(master);
+        for i in model.plies[slave].nodes.clone() {
+            if let Some(d) = distance_over(&x[i as usize], x, &f, up) {
+                // A node more than both plies' thickness away is over
+                // another part of the blank, not on it.
+                if d.abs() < 4.0 * offset {
+                    worst = worst.max(offset - d);
+                }
+            }
+        }
+    }
+    worst
+}
+
+/// The shipped hemisphere scene (`scenes/hemisphere-0-90.toml`) as two
+/// plies, 0/90 under ±45 (μ_ply = 0.2), at 16 × 16 cells: the largest
+/// overlap of one ply into the other over every frame, at most 1 % of
+/// the ply thickness (the issue's bound).
+fn hemisphere_overlap() -> Vec<Check> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let path = root.join("scenes/hemisphere-0-90.toml");
+    let text = std::fs::read_to_string(&path)
+        .expect("scene")
+        .replace("cells = [40, 40]", "cells = [16, 16]");
+    let text = format!(
+        "{text}\n[stack]\nfriction = 0.2\n[[stack.ply]]\nname = \"p0\"\n[[stack.ply]]\nname = \"p45\"\norientation_deg = 45\n"
+    );
+    let scene = drape_io::scene::Scene::parse(&text, &path, &[]).expect("scene");
+    let model = &scene.model;
+    let mut worst: f64 = 0.0;
+    let mut frames = 0;
+    let mut observer = Frames(|f: &Frame<'_>| {
+        worst = worst.max(overlap(f.model, &f.state.x));
+        frames += 1;
+    });
+    let mut state = model.initial_state();
+    Explicit::new(model, scene.settings.clone())
+        .expect("driver")
+        .run(&mut state, &mut observer)
+        .expect("run");
+    let h = model.plies[0].thickness;
+    note(format!(
+        "Two-ply hemisphere (16 × 16 cells, 0/90 under ±45, μ_ply = 0.2): largest overlap {:.3e} mm = {:.3e} of the ply thickness over {frames} frames.",
+        worst,
+        worst / h
+    ));
+    vec![Check::abs(
+        "largest overlap / ply thickness over the frames (≤ 1 %)",
+        0.0,
+        worst / h,
+        1e-2,
+    )]
+}
+
+/// The shipped `scenes/hemisphere-stack.toml` with its plies replaced by
+/// `plies` (name, orientation) and the friction between them `mu`; the
+/// end state's per-ply summary and the wall time of the run (s).
+fn stack_run(plies: &[(&str, f64)], mu: f64) -> (Vec<drape_io::results::PlySummary>, f64) {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let path = root.join("scenes/hemisphere-stack.toml");
+    let text = std::fs::read_to_string(&path).expect("scene");
+    let head = &text[..text.find("[[stack.ply]]").expect("plies")];
+    let tail = &text[text.find("[[tools]]").expect("tools")..];
+    let mut body = String::new();
+    for (name, theta) in plies {
+        body.push_str(&format!(
+            "[[stack.ply]]\nname = \"{name}\"\norientation_deg = {theta}\n"
+        ));
+    }
+    let head = head.replace(
+        "friction = 0.2                            # Coulomb μ between neighbouring plies",
+        &format!("friction = {mu}"),
+    );
+    let text = format!("{head}{body}\n{tail}");
+    let scene = drape_io::scene::Scene::parse(&text, &path, &[]).expect("scene");
+    let model = &scene.model;
+    let mut last = Vec::new();
+    let mut observer = Frames(|f: &Frame<'_>| {
+        if let Ok(fields) = f.model.element_fields(f.state) {
+            last = drape_io::results::PlySummary::of(
+                f.model,
+                &f.state.x,
+                &fields,
+                f.contact.and_then(|c| c.plies),
+            );
+        }
+    });
+    let mut state = model.initial_state();
+    let start = std::time::Instant::now();
+    Explicit::new(model, scene.settings.clone())
+        .expect("driver")
+        .run(&mut state, &mut observer)
+        .expect("run");
+    (last, start.elapsed().as_secs_f64())
+}
+
+/// The two-ply hemisphere [0/90 + ±45] (`scenes/hemisphere-stack.toml`,
+/// 24 × 24 cells) at μ_ply = 0, 0.2, 0.5, 1: a table of each ply's
+/// largest shear, the top ply's largest slip on the bottom one and each
+/// ply's wrinkle indicator; then a four-ply [0/45/90/−45] run and a one-ply
+/// run of the same scene, timed in this process on the same threads.
+///
+/// Checks: every run completes (a failed run panics the case); the top
+/// ply slips less on the bottom one at μ_ply = 1 than at 0 (the issue's
+/// "the inter-ply slip falls as μ_ply grows", end points only: the slip
+/// accumulates the to and fro of a dynamic run as well).
+fn hemisphere_friction() -> Vec<Check> {
+    let mut table = String::from(
+        "| μ_ply | max shear 0/90 (°) | max shear ±45 (°) | top ply's max slip (mm) | waviness 0/90 (°) | waviness ±45 (°) | wrinkle area 0/90 / ±45 (mm²) | run (s) |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    let mut slips = Vec::new();
+    for mu in [0.0, 0.2, 0.5, 1.0] {
+        let (p, seconds) = stack_run(&[("p0", 0.0), ("p45", 45.0)], mu);
+        table.push_str(&format!(
+            "| {mu} | {:.2} | {:.2} | {:.2} | {:.1} | {:.1} | {:.0} / {:.0} | {seconds:.1} |\n",
+            p[0].max_shear_deg,
+            p[1].max_shear_deg,
+            p[1].max_slip_mm,
+            p[0].max_waviness_deg,
+            p[1].max_waviness_deg,
+            p[0].wrinkle_area_mm2,
+            p[1].wrinkle_area_mm2,
+        ));
+        slips.push(p[1].max_slip_mm);
+    }
+    let (_, one) = stack_run(&[("p0", 0.0)], 0.2);
+    let (four, four_s) = stack_run(
+        &[("p0", 0.0), ("p45", 45.0), ("p90", 90.0), ("m45", -45.0)],
+        0.2,
+    );
+    let shears: Vec<String> = four
+        .iter()
+        .map(|p| format!("{} {:.2}°", p.name, p.max_shear_deg))
+        .collect();
+    note(format!(
+        "Two-ply hemisphere [0/90 + ±45], 24 × 24 cells, {} threads (a shared, loaded machine: times are indicative):\n\n{table}\nFour plies [0/45/90/−45] at μ_ply = 0.2: completed in {four_s:.1} s against {one:.1} s for one ply ({:.1}×); max shear per ply {}.",
+        rayon::current_num_threads(),
+        four_s / one,
+        shears.join(", ")
+    ));
+    vec![Check::abs(
+        "top ply's largest slip at μ_ply = 1 below that at μ_ply = 0 (1 = yes)",
+        1.0,
+        f64::from(u8::from(slips[3] < slips[0])),
+        0.0,
+    )]
+}

@@ -55,6 +55,30 @@ fn data(file: &str) -> PathBuf {
         .join(file)
 }
 
+/// The benchmark's 230 × 115 mm bias-extension curves (their file and
+/// text), the specimen and the `twintex-plain` preset: what the three
+/// bias-extension cases start from.
+struct BiasData {
+    path: PathBuf,
+    text: String,
+    specimen: drape::fit_bias::Specimen,
+    preset: drape_constitutive::Material,
+}
+
+fn bias_data() -> BiasData {
+    let path = data("bias_extension_plain_230x115_force.csv");
+    let text = std::fs::read_to_string(&path).expect("the benchmark's data are in the repository");
+    BiasData {
+        path,
+        text,
+        specimen: drape::fit_bias::Specimen {
+            height: 230.0,
+            width: 115.0,
+        },
+        preset: drape_constitutive::Material::preset("twintex-plain").expect("preset"),
+    }
+}
+
 /// (angle, the labs' values at it) from the normalised CSV, 0 < γ ≤ 40°.
 fn lab_rows(text: &str) -> Vec<(f64, Vec<f64>)> {
     text.lines()
@@ -149,14 +173,13 @@ fn picture_frame() -> Vec<Check> {
 /// 13° and 22°); the checks stay as they are, failing, until a better
 /// form or the inverse fit by simulation passes them.
 fn bias_extension() -> Vec<Check> {
-    use drape::fit_bias::{Specimen, fit_three_zone, read_bias_curves};
-    let path = data("bias_extension_plain_230x115_force.csv");
-    let text = std::fs::read_to_string(&path).expect("the benchmark's data are in the repository");
-    let specimen = Specimen {
-        height: 230.0,
-        width: 115.0,
-    };
-    let preset = drape_constitutive::Material::preset("twintex-plain").expect("preset");
+    use drape::fit_bias::{fit_three_zone, read_bias_curves};
+    let BiasData {
+        path,
+        text,
+        specimen,
+        preset,
+    } = bias_data();
     let h = preset.thickness;
     let curves = read_bias_curves(std::slice::from_ref(&path), specimen, 40.0).expect("readable");
     let fit = fit_three_zone(curves, specimen, h, 3).expect("the fit succeeds");
@@ -260,15 +283,14 @@ fn range(v: &[f64]) -> (f64, f64) {
 /// term: with three, the fit's c₅ goes negative and the law softens
 /// beyond the data until the card's check (tangent ≥ 0 to 85°) stops it.
 fn bias_extension_inverse() -> Vec<Check> {
-    use drape::fit_bias::{Specimen, read_bias_curves};
+    use drape::fit_bias::read_bias_curves;
     use drape::fit_inverse::{InverseOptions, LawForm, fit};
-    let path = data("bias_extension_plain_230x115_force.csv");
-    let text = std::fs::read_to_string(&path).expect("the benchmark's data are in the repository");
-    let specimen = Specimen {
-        height: 230.0,
-        width: 115.0,
-    };
-    let base = drape_constitutive::Material::preset("twintex-plain").expect("preset");
+    let BiasData {
+        path,
+        text,
+        specimen,
+        preset: base,
+    } = bias_data();
     let curves =
         read_bias_curves(std::slice::from_ref(&path), specimen, MAX_ANGLE).expect("readable");
     let options = InverseOptions {
@@ -341,14 +363,12 @@ fn bias_extension_inverse() -> Vec<Check> {
 /// (the idealisation the frames' normalisation shares).
 fn bias_extension_frame_law() -> Vec<Check> {
     use drape::bias_sim::VirtualTest;
-    use drape::fit_bias::Specimen;
-    let path = data("bias_extension_plain_230x115_force.csv");
-    let text = std::fs::read_to_string(&path).expect("the benchmark's data are in the repository");
-    let specimen = Specimen {
-        height: 230.0,
-        width: 115.0,
-    };
-    let base = drape_constitutive::Material::preset("twintex-plain").expect("preset");
+    let BiasData {
+        path,
+        text,
+        specimen,
+        preset: base,
+    } = bias_data();
     let law = base
         .resin
         .shear_locking

@@ -94,6 +94,24 @@ pub enum RunError {
         /// Which setting to change.
         advice: String,
     },
+    /// A laminate's run reached its end time with one ply inside its
+    /// neighbour deeper than the physical tolerance: not a formed stack.
+    #[error(
+        "step {step}, t = {time:.6e} s: at the end one ply is {overlap:.4e} mm inside its \
+         neighbour (tolerance {tolerance:.3e} mm, the lesser of a tenth of the thickness and a \
+         hundredth of the shortest element edge): the ply–ply contact was not resolved; lower \
+         `simulation.safety_factor` or `simulation.time_step`"
+    )]
+    PlyOverlap {
+        /// The last step.
+        step: u64,
+        /// Its time.
+        time: f64,
+        /// The largest overlap (mm).
+        overlap: f64,
+        /// The tolerance (mm).
+        tolerance: f64,
+    },
     /// The settings or the model cannot run.
     #[error("cannot run: {0}")]
     Setup(String),
@@ -109,7 +127,8 @@ impl RunError {
             | Self::Unstable { step, time, .. }
             | Self::NoConvergence { step, time, .. }
             | Self::ContactFault { step, time, .. }
-            | Self::Penetration { step, time, .. } => Some((*step, *time)),
+            | Self::Penetration { step, time, .. }
+            | Self::PlyOverlap { step, time, .. } => Some((*step, *time)),
             Self::Setup(_) => None,
         }
     }

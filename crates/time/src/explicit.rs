@@ -910,6 +910,10 @@ impl<'m> Explicit<'m> {
                 c.tool_state.iter().map(|t| t.displacement).collect()
             });
             crate::completion::check_at_end(model, state, &u, None)?;
+            if let Some(plies) = self.contact.as_ref().and_then(|c| c.plies()) {
+                let tolerance = crate::completion::penetration_tolerance(model);
+                crate::completion::check_plies_at_end(plies, state, tolerance)?;
+            }
         }
         for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {
             if tool.is_force_driven() && !touched && !stopped {

@@ -235,6 +235,26 @@ impl FoldCheck {
     /// not): what, where, and what to change; `bending` says whether the
     /// run had yarn bending.
     pub fn warning(&self, bending: bool) -> Option<String> {
+        self.warning_advising(if bending {
+            "Yarn bending was on: refine the mesh there, hold the blank more (holder force, \
+             springs), or check the material's bending_rigidity"
+        } else {
+            "Yarn bending was off, so the membrane folded at no cost: turn it on \
+             (fabric.bending = true, with the material's bending_rigidity = [warp, weft] in \
+             N·mm), or hold the blank more (holder force, springs) and refine the mesh"
+        })
+    }
+
+    /// [`Self::warning`] for a stack of plies, where yarn bending cannot be
+    /// turned on yet: the advice leaves it out.
+    pub fn warning_in_stack(&self) -> Option<String> {
+        self.warning_advising(
+            "Yarn bending is not available in a stack of plies yet, so the membranes fold at \
+             no cost: hold the stack more (holder force, springs) and refine the mesh",
+        )
+    }
+
+    fn warning_advising(&self, advice: &str) -> Option<String> {
         if !self.folded {
             return None;
         }
@@ -288,14 +308,7 @@ impl FoldCheck {
             ". Shear and draw-in there are not those of a formed ply (see waviness in the \
              VTU frames). ",
         );
-        text.push_str(if bending {
-            "Yarn bending was on: refine the mesh there, hold the blank more (holder force, \
-             springs), or check the material's bending_rigidity"
-        } else {
-            "Yarn bending was off, so the membrane folded at no cost: turn it on \
-             (fabric.bending = true, with the material's bending_rigidity = [warp, weft] in \
-             N·mm), or hold the blank more (holder force, springs) and refine the mesh"
-        });
+        text.push_str(advice);
         Some(text)
     }
 }
@@ -422,6 +435,12 @@ mod tests {
             "{text}"
         );
         assert!(c.warning(true).unwrap().contains("refine the mesh"));
+        // In a stack bending cannot be turned on: not advised.
+        let stack = c.warning_in_stack().unwrap();
+        assert!(
+            stack.contains("element 5") && !stack.contains("fabric.bending = true"),
+            "{stack}"
+        );
     }
 
     #[test]

@@ -78,8 +78,9 @@ impl VirtualTest {
         [along.max(1), self.cells.max(1)]
     }
 
-    /// The scene of the test with `material` (a file `drape run` reads).
-    pub fn scene_text(&self, material: &Material) -> Result<String, String> {
+    /// Whether the specimen has square ±45° cells with `cells` across its
+    /// width (an input error of the fit's options when it has not).
+    pub fn check_mesh(&self) -> Result<(), String> {
         let s = self.specimen;
         let [nx, ny] = self.mesh();
         if ((s.height / nx as f64) - (s.width / ny as f64)).abs() > 1e-9 * s.height {
@@ -89,6 +90,14 @@ impl VirtualTest {
                 s.height, s.width, self.cells
             ));
         }
+        Ok(())
+    }
+
+    /// The scene of the test with `material` (a file `drape run` reads).
+    pub fn scene_text(&self, material: &Material) -> Result<String, String> {
+        self.check_mesh()?;
+        let s = self.specimen;
+        let [nx, ny] = self.mesh();
         let card = toml::to_string(material).map_err(|e| e.to_string())?;
         let frames = self.frames();
         // Each table of the card goes under fabric.material.

@@ -330,11 +330,13 @@ pub fn run(
     base: &Material,
     options: &BiasOptions,
     out: &Path,
-) -> Result<String, FitInputError> {
-    let bad = |m: String| FitInputError {
-        file: String::new(),
-        line: None,
-        message: m,
+) -> Result<String, BiasFitError> {
+    let bad = |m: String| {
+        BiasFitError::Input(FitInputError {
+            file: String::new(),
+            line: None,
+            message: m,
+        })
     };
     if !(specimen.width > 0.0 && specimen.height >= 2.0 * specimen.width) {
         return Err(bad(format!(
@@ -348,10 +350,23 @@ pub fn run(
     if options.cells == 0 {
         return Err(bad("--cells must be at least 1".to_owned()));
     }
+    if options.method == Method::Inverse {
+        // Checked here, not by the first simulation: a mesh the options
+        // cannot make is bad input (exit 2), not a failed fit. Twice the
+        // cells (--mesh-check) are square when these are.
+        crate::bias_sim::VirtualTest {
+            specimen,
+            cells: options.cells,
+            u_max: 1.0,
+            step: 1.0,
+        }
+        .check_mesh()
+        .map_err(|e| bad(format!("--cells {}: {e}", options.cells)))?;
+    }
     let max_angle_deg = options.max_angle;
     let curves = read_bias_curves(files, specimen, max_angle_deg)?;
     if let Some(c) = curves.iter().find(|c| c.points.len() < 2) {
-        return Err(FitInputError {
+        return Err(BiasFitError::Input(FitInputError {
             file: c.file.clone(),
             line: None,
             message: format!(
@@ -359,7 +374,7 @@ pub fn run(
                 c.name,
                 c.points.len()
             ),
-        });
+        }));
     }
     if !options.weights.is_empty() {
         if options.weights.len() != curves.len() {
@@ -428,7 +443,7 @@ pub fn run(
                     mesh_check: options.mesh_check,
                 },
             )
-            .map_err(bad)?;
+            .map_err(|e| BiasFitError::Failed(format!("the inverse fit failed: {e}")))?;
             let fitted = fit
                 .curve
                 .u
@@ -450,8 +465,9 @@ pub fn run(
     material.resin.shear_locking = Some(law);
     material
         .validate()
-        .map_err(|e| bad(format!("the fitted law is not usable: {e}")))?;
-    let body = toml::to_string(&material).map_err(|e| bad(e.to_string()))?;
+        .map_err(|e| BiasFitError::Failed(format!("the fitted law is not usable: {e}")))?;
+    let failed = |e: String| BiasFitError::Failed(e);
+    let body = toml::to_string(&material).map_err(|e| failed(e.to_string()))?;
     let card = format!(
         "# Material card: {what} bias-extension fit ({} × {} mm, to {max_angle_deg}° of \
          central shear), by `drape fit bias-extension`.\n{body}",
@@ -474,11 +490,40 @@ pub fn run(
         &measured,
         &fitted,
     )
-    .map_err(|e| bad(e.to_string()))?;
-    write_whole(&out.with_extension("residuals.csv"), &residuals).map_err(bad)?;
-    write_whole(out, &card).map_err(bad)?;
+    .map_err(|e| failed(e.to_string()))?;
+    write_whole(&out.with_extension("residuals.csv"), &residuals).map_err(failed)?;
+    write_whole(out, &card).map_err(failed)?;
     Ok(report)
 }
+
+/// Why a bias-extension fit stopped: the input (exit 2), or a fit that
+/// failed on good input (an inner simulation that did not complete, a
+/// law the least squares left unusable, an output it could not write:
+/// exit 1, as a failed run).
+#[derive(Debug)]
+pub enum BiasFitError {
+    /// A file, a line or an option is wrong.
+    Input(FitInputError),
+    /// The fit could not be done on this input.
+    Failed(String),
+}
+
+impl From<FitInputError> for BiasFitError {
+    fn from(e: FitInputError) -> Self {
+        Self::Input(e)
+    }
+}
+
+impl std::fmt::Display for BiasFitError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Input(e) => write!(f, "{e}"),
+            Self::Failed(m) => write!(f, "{m}"),
+        }
+    }
+}
+
+impl std::error::Error for BiasFitError {}
 
 #[cfg(test)]
 mod tests {

@@ -168,7 +168,7 @@ pub fn run(test: FitTest, bad: fn(String) -> anyhow::Error) -> Result<ExitCode> 
                 mesh_check,
             };
             let report = drape::fit_bias::run(&csv, specimen, &base, &options, &out)
-                .map_err(|e| bad(e.to_string()))?;
+                .map_err(|e| bias_fit_error(e, bad))?;
             print!("{report}");
             println!(
                 "wrote {} (material card), .fit.png and .residuals.csv beside it",
@@ -176,5 +176,57 @@ pub fn run(test: FitTest, bad: fn(String) -> anyhow::Error) -> Result<ExitCode> 
             );
             Ok(ExitCode::SUCCESS)
         }
+    }
+}
+
+/// A bias-extension fit's error as the command reports it: bad input
+/// through `bad` (exit 2); a fit that failed on good input (an inner
+/// simulation, an unusable law, an output not written) as a failed run
+/// (exit 1), so a sweep or a script can tell the two apart.
+fn bias_fit_error(
+    e: drape::fit_bias::BiasFitError,
+    bad: fn(String) -> anyhow::Error,
+) -> anyhow::Error {
+    match e {
+        drape::fit_bias::BiasFitError::Input(e) => bad(e.to_string()),
+        failed => anyhow::anyhow!(failed),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use drape::fit::FitInputError;
+    use drape::fit_bias::BiasFitError;
+
+    #[derive(Debug)]
+    struct Bad;
+    impl std::fmt::Display for Bad {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            write!(f, "bad")
+        }
+    }
+    impl std::error::Error for Bad {}
+
+    /// Only an input error takes the bad-input path.
+    #[test]
+    fn a_failed_fit_is_not_bad_input() {
+        let bad: fn(String) -> anyhow::Error = |m| anyhow::Error::new(Bad).context(m);
+        let input = bias_fit_error(
+            BiasFitError::Input(FitInputError {
+                file: "a.csv".into(),
+                line: Some(3),
+                message: "NaN".into(),
+            }),
+            bad,
+        );
+        assert!(input.downcast_ref::<Bad>().is_some());
+        assert_eq!(input.to_string(), "a.csv: line 3: NaN");
+        let failed = bias_fit_error(
+            BiasFitError::Failed("the inverse fit failed: diverged".into()),
+            bad,
+        );
+        assert!(failed.downcast_ref::<Bad>().is_none());
+        assert_eq!(failed.to_string(), "the inverse fit failed: diverged");
     }
 }

@@ -431,3 +431,30 @@ fn bad_inverse_options_exit_2() {
     assert!(run(&["--weights", "1,2"]).contains("--weights: 2 values for 3 curves"));
     assert!(run(&["--weights", "1,-1,1"]).contains("--weights -1"));
 }
+
+/// A specimen the inverse fit's mesh cannot cut into square ±45° cells is
+/// bad input, found before any simulation runs (exit 2, naming --cells).
+#[test]
+fn a_mesh_the_cells_cannot_make_exits_2() {
+    let dir = temp("inverse-mesh");
+    let out = dir.join("x.toml");
+    let o = drape(&[
+        "fit",
+        "bias-extension",
+        "tests/data/cao2008/bias_extension_plain_230x115_force.csv",
+        "--height",
+        "231",
+        "--width",
+        "115",
+        "--cells",
+        "10",
+        "--material",
+        "twintex-plain",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert!(t.contains("--cells 10") && t.contains("square"), "{t}");
+    assert!(!out.exists());
+}

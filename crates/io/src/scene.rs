@@ -210,8 +210,8 @@ impl Scene {
     }
 
     /// The scene as it runs, self-contained: every value after the
-    /// overrides, and the files it reads (the blank's mesh, tools' meshes)
-    /// as absolute paths, so that [`Self::from_spec`] builds the same scene
+    /// overrides, and the files it reads (the blanks' meshes, tools'
+    /// meshes, material cards) as absolute paths, so that [`Self::from_spec`] builds the same scene
     /// from any directory.
     pub fn resolved_spec(&self) -> SceneFile {
         let base = self.file.parent().unwrap_or(Path::new("."));
@@ -234,11 +234,21 @@ impl Scene {
                 *file = absolute(file);
             }
         }
+        let plies = spec.stack.iter_mut().flat_map(|s| s.ply.iter_mut());
+        for m in std::iter::once(&mut spec.fabric.material)
+            .chain(plies.filter_map(|p| p.material.as_mut()))
+        {
+            if let MaterialSpec::Preset(name) = m
+                && is_card(name)
+            {
+                *name = absolute(name);
+            }
+        }
         spec
     }
 
-    /// The files the scene reads beside itself (the blank's mesh, tools'
-    /// meshes), as absolute paths.
+    /// The files the scene reads beside itself (the blanks' meshes, tools'
+    /// meshes, material cards), as absolute paths.
     pub fn input_files(&self) -> Vec<PathBuf> {
         let spec = self.resolved_spec();
         spec.fabric
@@ -254,6 +264,18 @@ impl Scene {
                 GeometrySpec::Mesh { file, .. } => Some(file),
                 _ => None,
             }))
+            .chain(
+                std::iter::once(&spec.fabric.material)
+                    .chain(
+                        spec.stack
+                            .iter()
+                            .flat_map(|s| s.ply.iter().filter_map(|p| p.material.as_ref())),
+                    )
+                    .filter_map(|m| match m {
+                        MaterialSpec::Preset(name) if is_card(name) => Some(name),
+                        _ => None,
+                    }),
+            )
             .map(PathBuf::from)
             .collect()
     }

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use drape_io::scene::Scene;
+use drape_io::scene::{MaterialSpec, Scene};
 
 fn scenes_dir() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
@@ -415,6 +415,46 @@ fn the_resolved_scene_builds_the_same_model_from_its_values_alone() {
     assert_eq!(again.model.x0, scene.model.x0);
     assert_eq!(again.model.tools[0].friction, 0.3);
     assert_eq!(again.settings, scene.settings);
+}
+
+/// A material card named relative to the scene is resolved like a mesh:
+/// absolute in the resolved scene (a checkpoint resumes from anywhere) and
+/// among the input files a resume checks.
+#[test]
+fn a_relative_material_card_is_resolved_like_a_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("cards")).unwrap();
+    let mut card = drape_constitutive::Material::preset("glass-serge-4x3").unwrap();
+    card.resin.young *= 2.0;
+    let card_path = dir.path().join("cards/stiff.toml");
+    std::fs::write(&card_path, toml::to_string(&card).unwrap()).unwrap();
+    let text = GOOD.replace(
+        "material = \"glass-serge-4x3\"",
+        "material = \"cards/stiff.toml\"",
+    );
+    assert_ne!(text, GOOD);
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::from_file(&path, &[]).unwrap();
+    let spec = scene.resolved_spec();
+    let MaterialSpec::Preset(name) = &spec.fabric.material else {
+        panic!("a card stays a name: {:?}", spec.fabric.material);
+    };
+    assert!(Path::new(name).is_absolute(), "{name}");
+    assert_eq!(
+        std::fs::canonicalize(name).unwrap(),
+        std::fs::canonicalize(&card_path).unwrap()
+    );
+    assert!(scene.input_files().iter().any(|f| f == Path::new(name)));
+    let json = serde_json::to_string(&spec).unwrap();
+    let again = Scene::from_spec(
+        serde_json::from_str(&json).unwrap(),
+        Path::new("elsewhere.toml"),
+    )
+    .unwrap();
+    // Read from a scene named elsewhere: a relative card would not be found.
+    assert_eq!(again.spec, spec);
+    assert_eq!(again.model.x0, scene.model.x0);
 }
 
 #[test]

@@ -508,7 +508,7 @@ pub(super) fn material(
 ) -> Result<Material, SceneError> {
     let material = match spec {
         // A card file (`drape fit … --out card.toml`), beside the scene.
-        MaterialSpec::Preset(name) if name.ends_with(".toml") => {
+        MaterialSpec::Preset(name) if super::spec::is_card(name) => {
             let path = at.file.parent().unwrap_or(Path::new(".")).join(name);
             let text = std::fs::read_to_string(&path).map_err(|e| {
                 at.error(

@@ -175,6 +175,12 @@ fn default_newton_iterations() -> usize {
     ImplicitSettings::default().max_iterations
 }
 
+/// Whether a material named in a scene is a card beside it (a `.toml`
+/// file) rather than a preset.
+pub(crate) fn is_card(name: &str) -> bool {
+    name.ends_with(".toml")
+}
+
 /// A material: a preset's name or a full table.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]

@@ -6,7 +6,8 @@
 //! cached in `target/bench/work-precision/reference-<key>/`, the key being
 //! a fingerprint of the scene as the reference runs it (its values after
 //! the reference's overrides, so a new shipped mass scaling or a comment
-//! keeps it): reruns reuse it, `--fresh-reference` recomputes it. Then
+//! keeps it, and its material's values, so a corrected preset does not):
+//! reruns reuse it, `--fresh-reference` recomputes it. Then
 //! every setting — the shipped one, coarser and finer meshes,
 //! mass-scaling targets, a shorter process time (with the viscoelastic
 //! resin as is, and with its Prony times scaled along), embedded fibres
@@ -77,7 +78,7 @@ use drape_io::results::read::read_summary;
 use drape_io::results::{
     Summary, WorkPrecisionPanel, WorkPrecisionPoint, pareto_front, write_work_precision_picture,
 };
-use drape_io::scene::Scene;
+use drape_io::scene::{MaterialSpec, Scene};
 
 use crate::holding::{AWAY_FROM_HOLDING_MM, max_shear_away};
 
@@ -812,14 +813,28 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 /// runs it (every value after `overrides`, not the file's text), so that
 /// changing a value the reference overrides — the shipped mesh or mass
 /// scaling, a comment — keeps the reference, and any other change makes a
-/// new one. (The drape version is not in the key: `--fresh-reference`
-/// after a change to the physics.)
+/// new one. The materials are in the key by their values (a preset's as
+/// this build defines it, a card's text), so that a preset's correction
+/// makes a new reference. (The drape version is not in the key:
+/// `--fresh-reference` after a change to the rest of the physics.)
 fn reference_key(text: &str, scene: &Path, overrides: &[(String, String)]) -> Result<u64, String> {
     let spec = Scene::parse(text, scene, overrides)
         .map_err(|e| e.to_string())?
         .resolved_spec();
-    let values =
+    let mut values =
         toml::to_string(&spec).map_err(|e| format!("{}: to TOML: {e}", scene.display()))?;
+    let plies = spec.stack.iter().flat_map(|s| s.ply.iter());
+    for m in std::iter::once(&spec.fabric.material).chain(plies.filter_map(|p| p.material.as_ref()))
+    {
+        if let MaterialSpec::Preset(name) = m {
+            let values_of = match Material::preset(name) {
+                Some(preset) => toml::to_string(&preset).map_err(|e| e.to_string())?,
+                // A card: resolved_spec made its path absolute.
+                None => std::fs::read_to_string(name).map_err(|e| format!("{name}: {e}"))?,
+            };
+            values.push_str(&values_of);
+        }
+    }
     Ok(fnv1a(values.as_bytes()))
 }
 
@@ -1652,6 +1667,21 @@ mod tests {
         // And another mesh for the reference itself.
         let (coarse, _) = plan(false, Some(30), shipped()).unwrap();
         assert_ne!(reference_key(&text, &scene, &coarse).unwrap(), as_shipped);
+        // The material by its values: a card changes the key with its text.
+        let dir = std::env::temp_dir().join(format!("drape-refkey-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut card = Material::preset("carbon-prepreg-2x2").unwrap();
+        let with_card = |card: &Material, file: &str| {
+            let path = dir.join(file);
+            std::fs::write(&path, toml::to_string(card).unwrap()).unwrap();
+            let named = format!("material = \"{}\"", path.display());
+            key(&line("material =", &named))
+        };
+        let first = with_card(&card, "card.toml");
+        assert_eq!(with_card(&card, "card.toml"), first);
+        card.density *= 1.001;
+        assert_ne!(with_card(&card, "card.toml"), first);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

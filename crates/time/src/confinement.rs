@@ -7,9 +7,20 @@
 //!
 //! Not here: the law, the gaps' geometry. The implicit driver does not
 //! confine (its Newton tangent would have to carry the clearance's
-//! dependence on the contact set); neither does a follower pressure, which
-//! pushes the ply onto one tool without a second wall (see
-//! docs/scene-reference.md, "Confined yarns").
+//! dependence on the contact set).
+//!
+//! Nor does a follower pressure (a vacuum bag) with one tool, by choice,
+//! from what the pressure does to the bow: a segment pressed onto its tool
+//! by p, bowing away from it by a half sine a over L against its crimp a₀
+//! (Rayleigh–Ritz, per unit width, P_E = π²B/L²), is in equilibrium at
+//! P_E·(a − a₀) − P·a + 4pL²/π³ = 0, so a = (a₀ − a_p)/(1 − P/P_E) with
+//! a_p = 4pL⁴/(π⁵B). For the glass preset under a full vacuum (0.1 MPa,
+//! L = 4.55 mm, B = 0.465 N·mm) a_p = 1.2 mm, past a₀ = 0.317 mm: the bag
+//! holds the segment flat on the tool while P < P_E, and past P_E the bow
+//! that opens is a blister whose load falls as it grows (the bag yields).
+//! There is no wall for the column to climb; the bag at most lifts the
+//! load at which a segment bows out to the perfect column's P_E, which the
+//! free law tends to anyway.
 
 use drape_contact::{ExplicitContact, Nearest};
 use drape_model::Model;

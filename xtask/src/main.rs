@@ -17,7 +17,8 @@
 //! - `bench work-precision [--quick] [--filter SUBSTR] [--fresh-reference]
 //!   [--timeout S] [--reference-cells N] [--time wall|cpu]`: run time against error for the hemisphere's ways to go
 //!   faster (see [`work_precision`]);
-//! - `mould OUT [--triangles N] [--punch FILE] [--offset MM]`: a generated
+//! - `mould OUT [--triangles N] [--punch FILE] [--offset MM] [--depth MM]
+//!   [--corner MM]`: a generated
 //!   open female tray mould (and its matched punch) as STL or OBJ (see
 //!   [`mould`]);
 //! - `slurm [--quick] [--study] [--keep]`: `drape sweep --slurm` against a
@@ -85,11 +86,13 @@ tasks:
       section of docs/performance.md. --quick is the coarse version CI can
       afford.
   mould OUT.stl|OUT.obj [--triangles N] [--punch PUNCH.stl|.obj] [--offset MM]
+                        [--depth MM] [--corner MM]
       write a generated open female mould: a double-curved 600 x 400 mm tray,
       80 mm deep, open at its flange's outer rim, normals pointing away from
       the cavity, about N triangles (default 3000); --punch also writes the
       matched punch, the same surface moved MM (default 0.57, the glass
-      ply's thickness) along its normals.
+      ply's thickness) along its normals. --depth (default 80) and --corner
+      (the opening's corner radius, default 90) change the cavity.
   slurm [--quick] [--study] [--keep]
       start a one-node Slurm cluster here (installs slurm-wlm and munge with
       apt-get when missing; needs root), submit a sweep with drape sweep

@@ -15,6 +15,12 @@
 //! mirrored between quadrants so the mesh has the tray's two mirror
 //! planes. The punch is the same surface moved `--offset` along its
 //! normals (the ply's thickness), with the same winding.
+//!
+//! `--depth` and `--corner` change the cavity's depth and the opening's
+//! corner radius (the defaults above: the shipped `tray-mould.stl`): the
+//! shallower trays against which `xtask/src/validate/tray.rs` measured
+//! whether the shipped tray's disagreement with the kinematic net is its
+//! depth's.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -26,6 +32,25 @@ pub struct Options {
     triangles: usize,
     punch: Option<PathBuf>,
     offset: f64,
+    shape: Shape,
+}
+
+/// The tray's free dimensions (mm).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shape {
+    /// The cavity's depth below the flange (before the bowl's curvature).
+    pub depth: f64,
+    /// The cavity opening's corner radius in plan.
+    pub corner: f64,
+}
+
+impl Default for Shape {
+    fn default() -> Self {
+        Self {
+            depth: DEPTH,
+            corner: CORNER,
+        }
+    }
 }
 
 /// The flange's outline, half sizes (mm): the open rim.
@@ -48,6 +73,7 @@ impl Options {
         let mut triangles = 3000;
         let mut punch = None;
         let mut offset = 0.57;
+        let mut shape = Shape::default();
         let mut it = args.iter();
         while let Some(a) = it.next() {
             let mut value = |name: &str| {
@@ -79,6 +105,33 @@ impl Options {
                             format!("--offset `{v}`: expected a distance in mm from 0 to 10")
                         })?;
                 }
+                "--depth" => {
+                    let v = value("--depth")?;
+                    shape.depth = v
+                        .parse()
+                        .ok()
+                        .filter(|d: &f64| (2.0 * TOP_FILLET..=150.0).contains(d))
+                        .ok_or_else(|| {
+                            format!(
+                                "--depth `{v}`: expected a depth in mm from {} (the fillets) to 150",
+                                2.0 * TOP_FILLET
+                            )
+                        })?;
+                }
+                "--corner" => {
+                    let v = value("--corner")?;
+                    shape.corner = v
+                        .parse()
+                        .ok()
+                        .filter(|r: &f64| *r > 0.0 && *r <= OPENING[1])
+                        .ok_or_else(|| {
+                            format!(
+                                "--corner `{v}`: expected a radius in mm above 0 and at most {} \
+                                 (the opening's half width)",
+                                OPENING[1]
+                            )
+                        })?;
+                }
                 other if other.starts_with("--") => {
                     return Err(format!("mould: unknown option `{other}`"));
                 }
@@ -90,11 +143,21 @@ impl Options {
         for p in std::iter::once(&out).chain(&punch) {
             format_of(p)?;
         }
+        if shape.corner <= wall_width(&shape) {
+            return Err(format!(
+                "--corner {}: at most the walls' width in plan ({:.1} mm at depth {}) leaves \
+                 the cavity's bottom a sharp corner; give a larger radius or a smaller depth",
+                shape.corner,
+                wall_width(&shape),
+                shape.depth
+            ));
+        }
         Ok(Self {
             out,
             triangles,
             punch,
             offset,
+            shape,
         })
     }
 }
@@ -118,12 +181,12 @@ fn format_of(path: &Path) -> Result<bool, String> {
 
 /// The tray's depth profile: height at the inward distance `d` from the
 /// cavity's opening (≤ 0 on the flange).
-fn profile(d: f64) -> f64 {
+fn profile(shape: &Shape, d: f64) -> f64 {
     let theta = WALL_DEG.to_radians();
     let (r1, r2) = (TOP_FILLET, BOTTOM_FILLET);
     let d1 = r1 * theta.sin();
     let z1 = -r1 + r1 * theta.cos();
-    let z2 = -DEPTH + r2 * (1.0 - theta.cos());
+    let z2 = -shape.depth + r2 * (1.0 - theta.cos());
     let d2 = d1 + (z1 - z2) / theta.tan();
     let dc = d2 + r2 * theta.sin();
     if d <= 0.0 {
@@ -133,46 +196,47 @@ fn profile(d: f64) -> f64 {
     } else if d <= d2 {
         z1 - (d - d1) * theta.tan()
     } else if d <= dc {
-        -DEPTH + r2 - (r2 * r2 - (d - dc) * (d - dc)).max(0.0).sqrt()
+        -shape.depth + r2 - (r2 * r2 - (d - dc) * (d - dc)).max(0.0).sqrt()
     } else {
-        -DEPTH
+        -shape.depth
     }
 }
 
 /// Where the bottom fillet ends, inward from the opening (mm).
-fn wall_width() -> f64 {
+fn wall_width(shape: &Shape) -> f64 {
     let theta = WALL_DEG.to_radians();
     let d1 = TOP_FILLET * theta.sin();
     let z1 = -TOP_FILLET + TOP_FILLET * theta.cos();
-    let z2 = -DEPTH + BOTTOM_FILLET * (1.0 - theta.cos());
+    let z2 = -shape.depth + BOTTOM_FILLET * (1.0 - theta.cos());
     d1 + (z1 - z2) / theta.tan() + BOTTOM_FILLET * theta.sin()
 }
 
 /// The mould's height at (x, y).
-fn height(x: f64, y: f64) -> f64 {
+fn height(shape: &Shape, x: f64, y: f64) -> f64 {
     // Signed distance to the rounded rectangle of the opening, < 0 inside.
+    let corner = shape.corner;
     let q = [
-        x.abs() - (OPENING[0] - CORNER),
-        y.abs() - (OPENING[1] - CORNER),
+        x.abs() - (OPENING[0] - corner),
+        y.abs() - (OPENING[1] - corner),
     ];
     let outside = q[0].max(0.0).hypot(q[1].max(0.0));
-    let s = outside + q[0].max(q[1]).min(0.0) - CORNER;
-    profile(-s) + x * x / (2.0 * BOWL[0]) + y * y / (2.0 * BOWL[1])
+    let s = outside + q[0].max(q[1]).min(0.0) - corner;
+    profile(shape, -s) + x * x / (2.0 * BOWL[0]) + y * y / (2.0 * BOWL[1])
 }
 
 /// The unit normal of the height field pointing up (into the cavity).
-fn up_normal(x: f64, y: f64) -> [f64; 3] {
+fn up_normal(shape: &Shape, x: f64, y: f64) -> [f64; 3] {
     let h = 1e-4;
-    let hx = (height(x + h, y) - height(x - h, y)) / (2.0 * h);
-    let hy = (height(x, y + h) - height(x, y - h)) / (2.0 * h);
+    let hx = (height(shape, x + h, y) - height(shape, x - h, y)) / (2.0 * h);
+    let hy = (height(shape, x, y + h) - height(shape, x, y - h)) / (2.0 * h);
     let n = (hx * hx + hy * hy + 1.0).sqrt();
     [-hx / n, -hy / n, 1.0 / n]
 }
 
 /// `n + 1` coordinates over [−half, half], denser (four times) across the
 /// band of the walls, symmetric about 0.
-fn coordinates(half: f64, opening: f64, n: usize) -> Vec<f64> {
-    let wall = wall_width();
+fn coordinates(shape: &Shape, half: f64, opening: f64, n: usize) -> Vec<f64> {
+    let wall = wall_width(shape);
     // The walls and their fillets in plan, with a little on either side.
     let (lo, hi) = (opening - wall - 5.0, opening + 5.0);
     let density = |x: f64| {
@@ -215,23 +279,23 @@ fn coordinates(half: f64, opening: f64, n: usize) -> Vec<f64> {
 /// The tray's vertices and triangles (normals away from the cavity: down),
 /// about `triangles` of them; `offset` moves every vertex along the
 /// surface's upward normal.
-pub fn tray(triangles: usize, offset: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+pub fn tray(shape: &Shape, triangles: usize, offset: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
     let aspect = OUTLINE[0] / OUTLINE[1];
     let cells = triangles as f64 / 2.0;
     // Even counts: a grid line on each mirror plane.
     let even = |v: f64| ((v / 2.0).round() as usize).max(2) * 2;
     let nx = even((cells * aspect).sqrt());
     let ny = even((cells / aspect).sqrt());
-    let xs = coordinates(OUTLINE[0], OPENING[0], nx);
-    let ys = coordinates(OUTLINE[1], OPENING[1], ny);
+    let xs = coordinates(shape, OUTLINE[0], OPENING[0], nx);
+    let ys = coordinates(shape, OUTLINE[1], OPENING[1], ny);
     let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1));
     for &y in &ys {
         for &x in &xs {
-            let n = up_normal(x, y);
+            let n = up_normal(shape, x, y);
             vertices.push([
                 x + offset * n[0],
                 y + offset * n[1],
-                height(x, y) + offset * n[2],
+                height(shape, x, y) + offset * n[2],
             ]);
         }
     }
@@ -317,10 +381,10 @@ fn write(path: &Path, vertices: &[[f64; 3]], triangles: &[[u32; 3]]) -> Result<(
 
 /// Writes the mould (and the punch).
 pub fn main(options: &Options) -> ExitCode {
-    let (v, t) = tray(options.triangles, 0.0);
+    let (v, t) = tray(&options.shape, options.triangles, 0.0);
     let mut result = write(&options.out, &v, &t);
     if let (Ok(()), Some(punch)) = (&result, &options.punch) {
-        let (v, t) = tray(options.triangles, options.offset);
+        let (v, t) = tray(&options.shape, options.triangles, options.offset);
         result = write(punch, &v, &t);
     }
     match result {
@@ -338,27 +402,36 @@ mod tests {
 
     #[test]
     fn the_profile_is_continuous_with_a_continuous_slope() {
-        let h = 1e-6;
-        let mut d = -5.0;
-        while d < 100.0 {
-            let jump = (profile(d + h) - profile(d - h)).abs();
-            assert!(
-                jump < 2.0 * h * 60f64.to_radians().tan() + 1e-9,
-                "jump at {d}"
-            );
-            d += 0.01;
+        for shape in [
+            Shape::default(),
+            Shape {
+                depth: 40.0,
+                corner: 140.0,
+            },
+        ] {
+            let profile = |d| profile(&shape, d);
+            let h = 1e-6;
+            let mut d = -5.0;
+            while d < 100.0 {
+                let jump = (profile(d + h) - profile(d - h)).abs();
+                assert!(
+                    jump < 2.0 * h * 60f64.to_radians().tan() + 1e-9,
+                    "jump at {d}"
+                );
+                d += 0.01;
+            }
+            assert_eq!(profile(-1.0), 0.0);
+            assert_eq!(profile(wall_width(&shape) + 1.0), -shape.depth);
+            // The wall's slope is the wall angle.
+            let mid = 0.5 * (TOP_FILLET + wall_width(&shape) - BOTTOM_FILLET);
+            let slope = (profile(mid - 0.5) - profile(mid + 0.5)) / 1.0;
+            assert!((slope - 60f64.to_radians().tan()).abs() < 1e-9, "{slope}");
         }
-        assert_eq!(profile(-1.0), 0.0);
-        assert_eq!(profile(wall_width() + 1.0), -DEPTH);
-        // The wall's slope is the wall angle.
-        let mid = 0.5 * (TOP_FILLET + wall_width() - BOTTOM_FILLET);
-        let slope = (profile(mid - 0.5) - profile(mid + 0.5)) / 1.0;
-        assert!((slope - 60f64.to_radians().tan()).abs() < 1e-9, "{slope}");
     }
 
     #[test]
     fn the_tray_is_open_at_its_outline_wound_down_and_mirror_symmetric() {
-        let (v, t) = tray(3000, 0.0);
+        let (v, t) = tray(&Shape::default(), 3000, 0.0);
         assert!((t.len() as f64 - 3000.0).abs() < 300.0, "{}", t.len());
         // Normals down (away from the cavity).
         for tri in &t {
@@ -374,18 +447,46 @@ mod tests {
             assert!(set.contains(&key([p[0], -p[1], p[2]])));
         }
         // The bottom is 80 mm below the flange at the centre.
-        assert!((height(0.0, 0.0) + DEPTH).abs() < 1e-12);
-        assert_eq!(height(300.0, 0.0), 300.0 * 300.0 / 8000.0);
+        let shape = Shape::default();
+        assert!((height(&shape, 0.0, 0.0) + DEPTH).abs() < 1e-12);
+        assert_eq!(height(&shape, 300.0, 0.0), 300.0 * 300.0 / 8000.0);
     }
 
     #[test]
     fn the_punch_is_the_mould_moved_along_its_normals() {
-        let (m, _) = tray(1000, 0.0);
-        let (p, _) = tray(1000, 0.57);
+        let (m, _) = tray(&Shape::default(), 1000, 0.0);
+        let (p, _) = tray(&Shape::default(), 1000, 0.57);
         for (a, b) in m.iter().zip(&p) {
             let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
             let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             assert!((len - 0.57).abs() < 1e-12 && d[2] > 0.0);
+        }
+    }
+
+    #[test]
+    fn depth_and_corner_are_options_checked_and_named() {
+        let parse = |extra: &[&str]| {
+            let mut args = vec!["m.stl".to_owned()];
+            args.extend(extra.iter().map(|s| (*s).to_owned()));
+            Options::parse(&args)
+        };
+        // The defaults are the shipped mould's.
+        assert_eq!(parse(&[]).unwrap().shape, Shape::default());
+        let shallow = parse(&["--depth", "40", "--corner", "140"]).unwrap().shape;
+        assert_eq!((shallow.depth, shallow.corner), (40.0, 140.0));
+        let (v, _) = tray(&shallow, 2000, 0.0);
+        let bottom = v.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+        assert!((bottom + 40.0).abs() < 1e-9, "{bottom}");
+        for (args, says) in [
+            (&["--depth", "5"][..], "--depth `5`"),
+            (&["--depth", "x"][..], "--depth `x`"),
+            (&["--corner", "0"][..], "--corner `0`"),
+            (&["--corner", "151"][..], "--corner `151`"),
+            // 20 mm corners under 80 mm walls: a sharp bottom corner.
+            (&["--corner", "20"][..], "sharp corner"),
+        ] {
+            let err = parse(args).unwrap_err();
+            assert!(err.contains(says), "{err}");
         }
     }
 }

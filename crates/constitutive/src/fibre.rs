@@ -61,6 +61,14 @@ pub struct FibreLaw {
     /// the fabric's bending rigidity B ([`crate::Material::bending_rigidity`]).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub buckling_stress: f64,
+    /// L (mm), the yarn's free length between interlacings, the column of
+    /// [`Self::buckling_stress`]; 0 (the default): not given, and a yarn
+    /// between two tools buckles as a free one (as it does with L but
+    /// σ_b = 0: no column to confine). With L > 0 and σ_b > 0
+    /// the explicit driver confines the column by the free space the
+    /// tools leave ([`Self::confined_stress_and_tangent`]).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub segment_length: f64,
 }
 
 fn is_zero(value: &f64) -> bool {
@@ -84,6 +92,7 @@ impl FibreLaw {
             crimp_strain,
             compression_factor: 0.0,
             buckling_stress: 0.0,
+            segment_length: 0.0,
         };
         law.validate("fibre")?;
         Ok(law)
@@ -112,6 +121,13 @@ impl FibreLaw {
             self.buckling_stress,
             self.buckling_stress >= 0.0,
             "a stress >= 0 (MPa)",
+        )?;
+        MaterialError::check(
+            path,
+            "segment_length",
+            self.segment_length,
+            self.segment_length >= 0.0 && self.segment_length.is_finite(),
+            "a length >= 0 (mm)",
         )?;
         if self.buckling_stress > 0.0 {
             // The column law needs the crimp as its imperfection, replaces
@@ -148,8 +164,109 @@ impl FibreLaw {
     /// Public so that a batched evaluation computes the same bits.
     #[inline]
     pub fn buckled_stress_and_tangent(&self, eps: f64) -> (f64, f64) {
+        self.column(-eps / self.crimp_strain)
+    }
+
+    /// Whether a yarn between two tools is confined
+    /// ([`Self::confined_stress_and_tangent`]): σ_b > 0 and L > 0.
+    #[inline]
+    pub fn confines(&self) -> bool {
+        self.buckling_stress > 0.0 && self.segment_length > 0.0
+    }
+
+    /// a₀ = (2L/π)·√ε_sh (mm), the bow of the crimped segment: the half
+    /// sine of amplitude a₀ over L is longer than its chord by ε_sh.
+    #[inline]
+    pub fn crimp_amplitude(&self) -> f64 {
+        2.0 * self.segment_length / std::f64::consts::PI * self.crimp_strain.sqrt()
+    }
+
+    /// The stress and tangent of a yarn whose column may bow out by at most
+    /// `clearance` (mm) beyond its crimp: the free space the tools leave it
+    /// (infinite, or a law that [`Self::confines`] nothing: the free law,
+    /// bit for bit).
+    ///
+    /// The segment of length L is the pinned column of
+    /// [`Self::buckling_stress`], bowed by a₀ ([`Self::crimp_amplitude`]);
+    /// its bow grows as a = a₀/√(1 + x), x = −ε/ε_sh, until it reaches the
+    /// wall at a_m = a₀ + c, at x_c = (a_m/a₀)² − 1 (the bow grows by the
+    /// free space c the tools leave over the ply's thickness, which
+    /// already holds the crimp). Beyond, it is a column between two walls
+    /// (Chai, J. Mech. Phys. Solids 46 (1998) 1155, "The post-buckling
+    /// response of a bi-laterally constrained column"; Domokos, Holmes &
+    /// Royce, J. Nonlinear Sci. 7 (1997) 281, "Constrained Euler
+    /// buckling"): it cannot bow further, so it shortens by going to higher
+    /// modes, each touching the walls. In mode n its n half sines of length
+    /// L/n and amplitude a_m carry P_n = n²·P_E (the Euler load of a span
+    /// L/n) and make the arc longer than the chord by n²·ε_a, ε_a =
+    /// (π·a_m/2L)² (each span's excess π²a_m²/(4·L/n), n spans, over L).
+    /// Eliminating n: P/P_E = (arc excess)/ε_a, so along the modes the load
+    /// grows linearly with the shortening, by P_E per ε_a: the envelope
+    /// through the mode points (Chai's load between two modes rises and
+    /// snaps back about it, which a smeared yarn does not resolve). The law
+    /// continues the free column from its load at the wall, τ_c, with that
+    /// slope: τ = τ_c + k·(ε − ε_c), ε_c = −x_c·ε_sh, and, in series, the
+    /// fibres' own compliance 1/E_f, which the free column leaves out (four
+    /// orders below the bow's) but which is what a yarn with no room to
+    /// bow has left: 1/k = ε_a/σ_b + 1/E_f. So k < E_f at any clearance
+    /// (the stable step is still E_f's), the stress is continuous in ε and
+    /// in c (as c → ∞, x_c → ∞: the free law), and the tangent jumps at ε_c
+    /// from the free column's σ_b/(2ε_sh·(1 + x_c)^{3/2}) up to k.
+    ///
+    /// The clearance is taken from the tools' last gaps, fixed over a step:
+    /// for a given c the law is hyperelastic ([`Self::confined_energy`]).
+    #[inline]
+    pub fn confined_stress_and_tangent(&self, eps: f64, clearance: f64) -> (f64, f64) {
+        if eps > 0.0 || !self.confines() || clearance == f64::INFINITY {
+            return self.stress_and_tangent(eps);
+        }
+        let (xc, eps_a) = self.wall(clearance);
         let sh = self.crimp_strain;
         let x = -eps / sh;
+        if x <= xc {
+            return self.buckled_stress_and_tangent(eps);
+        }
+        let (tau_c, _) = self.column(xc);
+        let k = self.confined_tangent(eps_a);
+        (tau_c + k * (eps + xc * sh), k)
+    }
+
+    /// [`Self::energy`] of the confined column
+    /// ([`Self::confined_stress_and_tangent`]): the free column's energy at
+    /// the wall plus the linear branch's, τ_c·d + k·d²/2, d = ε − ε_c.
+    pub fn confined_energy(&self, eps: f64, clearance: f64) -> f64 {
+        if eps > 0.0 || !self.confines() || clearance == f64::INFINITY {
+            return self.energy(eps);
+        }
+        let (xc, eps_a) = self.wall(clearance);
+        let sh = self.crimp_strain;
+        if -eps / sh <= xc {
+            return self.energy(eps);
+        }
+        let d = eps + xc * sh;
+        let k = self.confined_tangent(eps_a);
+        self.energy(-xc * sh) + self.column(xc).0 * d + 0.5 * k * d * d
+    }
+
+    /// x_c, where the bow reaches the wall, and ε_a = (π·a_m/2L)² =
+    /// ε_sh·(a_m/a₀)², for a clearance c (negative taken as 0).
+    #[inline]
+    fn wall(&self, clearance: f64) -> (f64, f64) {
+        let ratio = 1.0 + clearance.max(0.0) / self.crimp_amplitude();
+        let r2 = ratio * ratio;
+        (r2 - 1.0, self.crimp_strain * r2)
+    }
+
+    /// The walled column's tangent k: 1/k = ε_a/σ_b + 1/E_f.
+    #[inline]
+    fn confined_tangent(&self, eps_a: f64) -> f64 {
+        1.0 / (eps_a / self.buckling_stress + 1.0 / self.modulus)
+    }
+
+    /// The free column at x = −ε/ε_sh: see [`Self::buckled_stress_and_tangent`].
+    #[inline]
+    fn column(&self, x: f64) -> (f64, f64) {
+        let sh = self.crimp_strain;
         let root = (1.0 + x).sqrt();
         let tau = -self.buckling_stress * x / (root * (1.0 + root));
         let tangent = self.buckling_stress / (2.0 * sh * root * (1.0 + x));
@@ -181,6 +298,12 @@ impl FibreLaw {
             let straightened = -(-x).exp_m1(); // 1 − e^(−x)
             (e * (eps - sh * straightened), e * straightened)
         }
+    }
+
+    /// The confined stress ([`Self::confined_stress_and_tangent`]).
+    #[inline]
+    pub fn confined_stress(&self, eps: f64, clearance: f64) -> f64 {
+        self.confined_stress_and_tangent(eps, clearance).0
     }
 
     /// The stress τ(ε).
@@ -244,7 +367,8 @@ impl FibreLaw {
     /// more: an uncrimped yarn (ε_sh = 0) that carries less in compression
     /// than in tension (c_c < 1) goes from E_f to c_c·E_f, a crimped one
     /// with c_c > 0 from 0 to c_c·E_f, a buckling one from 0 to
-    /// σ_b/(2ε_sh). (A crimped yarn without compression stiffness has
+    /// σ_b/(2ε_sh), a confined one ([`Self::confines`]) at a closed gap
+    /// from 0 to its walled tangent 1/(ε_sh/σ_b + 1/E_f). (A crimped yarn without compression stiffness has
     /// E_t = 0 on both sides: no jump.)
     ///
     /// Such a yarn switches between a taut and a slack stiffness as it
@@ -258,7 +382,15 @@ impl FibreLaw {
         } else {
             0.0
         };
-        let compressed = self.stress_and_tangent(0.0).1;
+        // A confined column's largest jump is at a closed gap (c = 0): from
+        // the tension side's 0 at ε = 0 straight to the walled tangent,
+        // which falls as c grows, while the free column's tangent at the
+        // wall does not exceed its σ_b/(2ε_sh).
+        let compressed = if self.confines() {
+            self.confined_tangent(self.crimp_strain)
+        } else {
+            self.stress_and_tangent(0.0).1
+        };
         (taut - compressed).abs() >= KINK_SHARE * self.modulus
     }
 }
@@ -279,7 +411,7 @@ mod tests {
             sh in prop_oneof![Just(0.0), 1e-4f64..0.02],
             cc in 0.0f64..1.0,
         ) {
-            let law = FibreLaw { modulus: 75_000.0, crimp_strain: sh, compression_factor: cc, buckling_stress: 0.0 };
+            let law = FibreLaw { modulus: 75_000.0, crimp_strain: sh, compression_factor: cc, buckling_stress: 0.0, segment_length: 0.0 };
             // Stay off the kink at ε = 0 where the compression branch starts.
             prop_assume!(eps.abs() > 1e-5);
             let h = 1e-7 * eps.abs().max(1e-4);
@@ -294,7 +426,7 @@ mod tests {
         #[test]
         fn series_and_closed_form_meet(sh in 1e-4f64..0.02) {
             // Either side of the switch the two forms agree to round-off.
-            let law = FibreLaw { modulus: 1.0, crimp_strain: sh, compression_factor: 0.0, buckling_stress: 0.0 };
+            let law = FibreLaw { modulus: 1.0, crimp_strain: sh, compression_factor: 0.0, buckling_stress: 0.0, segment_length: 0.0 };
             let below = SERIES_BELOW * sh * (1.0 - 1e-12);
             let above = SERIES_BELOW * sh * (1.0 + 1e-12);
             let (t0, k0) = law.stress_and_tangent(below);
@@ -340,6 +472,7 @@ mod tests {
                 crimp_strain: sh,
                 compression_factor: cc,
                 buckling_stress: 0.0,
+                segment_length: 0.0,
             };
             let jump = (law.tangent(h) - law.tangent(-h)).abs();
             assert_eq!(
@@ -508,6 +641,226 @@ mod tests {
             }),
             "fibre.buckling_stress"
         );
+    }
+
+    /// The glass preset's yarn confined: L = 4.55 mm, so a₀ = 0.317 mm.
+    fn confined_glass() -> FibreLaw {
+        FibreLaw {
+            segment_length: 10.0 / 2.2,
+            ..buckling_glass()
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn confined_stress_is_the_derivative_of_energy_and_tangent_of_stress(
+            x in 1e-3f64..60.0,
+            sh in 1e-3f64..0.05,
+            share in 0.01f64..1.0,
+            length in 1.0f64..10.0,
+            clearance in prop_oneof![Just(0.0), 1e-3f64..2.0],
+        ) {
+            let law = FibreLaw {
+                buckling_stress: share * 2.0 * sh * 75_000.0,
+                segment_length: length,
+                ..FibreLaw::new(75_000.0, sh).unwrap()
+            };
+            let (xc, _) = law.wall(clearance);
+            // Off the kink at the wall, where the tangent jumps.
+            prop_assume!((x - xc).abs() > 1e-3 * (1.0 + xc));
+            let eps = -x * sh;
+            let h = 1e-6 * eps.abs().min((x - xc).abs() * sh);
+            let w = |e| law.confined_energy(e, clearance);
+            let tau = |e| law.confined_stress_and_tangent(e, clearance).0;
+            let d_energy = (w(eps + h) - w(eps - h)) / (2.0 * h);
+            let d_stress = (tau(eps + h) - tau(eps - h)) / (2.0 * h);
+            let (t, k) = law.confined_stress_and_tangent(eps, clearance);
+            // Round-off ~ε_mach·w/h over the stress scale |τ| + k·|ε|.
+            let scale = t.abs() + k * eps.abs();
+            prop_assert!((d_energy - t).abs() <= 1e-6 * scale, "dW/dε {d_energy} vs τ {t}");
+            prop_assert!((d_stress - k).abs() <= 1e-6 * k, "dτ/dε {d_stress} vs k {k}");
+            // Monotone, storing energy, and the stable step still E_f's.
+            prop_assert!(t < 0.0 && k > 0.0 && k < law.modulus && w(eps) > 0.0);
+        }
+
+        #[test]
+        fn confinement_is_continuous_and_only_adds(
+            x in 1e-3f64..60.0,
+            c in 0.0f64..3.0,
+            more in 1e-6f64..3.0,
+        ) {
+            let law = confined_glass();
+            let free = law.stress(-x * law.crimp_strain);
+            let (xc, _) = law.wall(c);
+            // Either side of the wall the two branches meet (to round-off
+            // of the stress there).
+            let at = |x: f64| law.confined_stress_and_tangent(-x * law.crimp_strain, c).0;
+            let (below, above) = (at(xc * (1.0 - 1e-12)), at(xc * (1.0 + 1e-12)));
+            prop_assert!((below - above).abs() <= 1e-9 * law.buckling_stress, "{below} vs {above}");
+            // Up to the wall, the free column bit for bit; beyond it, more
+            // than the free column carries, and less with more room.
+            let tau = at(x);
+            if x <= xc {
+                prop_assert_eq!(tau, free);
+            } else {
+                prop_assert!(tau < free);
+            }
+            prop_assert!(tau <= at_with(&law, x, c + more));
+        }
+    }
+
+    fn at_with(law: &FibreLaw, x: f64, c: f64) -> f64 {
+        law.confined_stress_and_tangent(-x * law.crimp_strain, c).0
+    }
+
+    #[test]
+    fn confined_column_follows_the_mode_envelope() {
+        let law = confined_glass();
+        let (s, sh) = (law.buckling_stress, law.crimp_strain);
+        // a₀ = (2L/π)·√ε_sh.
+        let a0 = law.crimp_amplitude();
+        assert!((a0 - 2.0 * 4.545_454_545 / std::f64::consts::PI * 0.012f64.sqrt()).abs() < 1e-9);
+        assert!((a0 - 0.3170).abs() < 1e-4, "{a0}");
+        let c = 0.1;
+        let a_m = a0 + c;
+        let eps_a = (std::f64::consts::PI * a_m / (2.0 * law.segment_length)).powi(2);
+        // Mode n touches both walls with arc excess n²·ε_a over the chord,
+        // the crimp ε_sh of which is there unloaded: ε_n = ε_sh − n²·ε_a.
+        // Between modes the load grows by σ_b per ε_a of shortening (P_n =
+        // n²·P_E), less the fibres' compliance in series.
+        let k = 1.0 / (eps_a / s + 1.0 / law.modulus);
+        let tau = |n: f64| law.confined_stress_and_tangent(sh - n * n * eps_a, c).0;
+        for n in 1..6 {
+            let n = f64::from(n);
+            let rise = tau(n) - tau(n + 1.0);
+            let expected = k * (2.0 * n + 1.0) * eps_a;
+            assert!(
+                (rise - expected).abs() <= 1e-12 * expected,
+                "n {n}: {rise} vs {expected}"
+            );
+            // k·ε_a = σ_b less the fibres' share: 1 − k·ε_a/σ_b =
+            // 1/(1 + ε_a·E_f/σ_b) = 1.0e-3 here.
+            let share = 1.0 - k * eps_a / s;
+            assert!(
+                (share * (1.0 + eps_a * law.modulus / s) - 1.0).abs() < 1e-9,
+                "{share}"
+            );
+            assert!((share - 1.0e-3).abs() < 0.05e-3, "{share}");
+        }
+        // At the wall (mode 1) the free imperfect column's load,
+        // P/P_E = 1 − a₀/a_m.
+        let at_wall = tau(1.0);
+        assert!(
+            (at_wall + s * (1.0 - a0 / a_m)).abs() <= 1e-12 * s,
+            "{at_wall}"
+        );
+        // The numbers the docs quote (glass, c = 0.1 mm): the wall at 0.88 %
+        // shortening, k = 74.9 MPa, 12.4 MPa at 17 % (free: 1.16 MPa).
+        let (xc, _) = law.wall(c);
+        assert!((xc * sh - 0.00877).abs() < 1e-5, "{}", xc * sh);
+        assert!((k - 74.86).abs() < 0.01, "{k}");
+        let at17 = law.confined_stress(-0.17, c);
+        assert!((at17 + 12.44).abs() < 0.01, "{at17}");
+        assert!(
+            (law.stress(-0.17) + 1.16).abs() < 0.01,
+            "{}",
+            law.stress(-0.17)
+        );
+    }
+
+    #[test]
+    fn unconfined_laws_and_far_tools_give_the_free_law() {
+        let law = confined_glass();
+        for eps in [-0.3, -0.01, -1e-7, 0.0, 1e-7, 0.02] {
+            let free = (law.stress_and_tangent(eps), law.energy(eps));
+            assert_eq!(
+                (
+                    law.confined_stress_and_tangent(eps, f64::INFINITY),
+                    law.confined_energy(eps, f64::INFINITY)
+                ),
+                free
+            );
+            // Tension is never confined.
+            if eps > 0.0 {
+                assert_eq!(
+                    law.confined_stress_and_tangent(eps, 0.0),
+                    law.stress_and_tangent(eps)
+                );
+            }
+            // Without L, or without σ_b, nothing is confined.
+            let plain = buckling_glass();
+            assert_eq!(
+                plain.confined_stress_and_tangent(eps, 0.0),
+                plain.stress_and_tangent(eps)
+            );
+        }
+        // Far but finite tools: the wall is past any strain a yarn reaches.
+        assert_eq!(law.confined_stress(-0.5, 100.0), law.stress(-0.5));
+    }
+
+    #[test]
+    fn a_closed_gap_is_a_kink_only_past_the_share() {
+        // Glass closed: from 0 to 1/(ε_sh/σ_b + 1/E_f) = 129.4 MPa, 1.7e-3·E_f.
+        let law = confined_glass();
+        assert!(!law.has_kink());
+        let k0 = law.confined_stress_and_tangent(-1e-9, 0.0).1;
+        assert!(
+            (k0 / law.modulus - 1.7259e-3).abs() < 1e-7,
+            "{}",
+            k0 / law.modulus
+        );
+        // The carbon preset's column (σ_b 18.6 MPa, ε_sh 0.005) would jump
+        // by 1.6 % of E_f: a kink.
+        let carbon = FibreLaw {
+            buckling_stress: 18.6,
+            segment_length: 4.0,
+            ..FibreLaw::new(230_000.0, 0.005).unwrap()
+        };
+        assert!(carbon.has_kink());
+        assert!(
+            !FibreLaw {
+                segment_length: 0.0,
+                ..carbon
+            }
+            .has_kink()
+        );
+        // The largest σ_b allowed, closed: k < E_f still.
+        let edge = FibreLaw {
+            buckling_stress: 2.0 * law.crimp_strain * law.modulus,
+            ..law
+        };
+        let k = edge.confined_stress_and_tangent(-1e-3, 0.0).1;
+        assert!(
+            k < law.modulus && (k / law.modulus - 2.0 / 3.0).abs() < 1e-12,
+            "{k}"
+        );
+    }
+
+    #[test]
+    fn segment_length_is_checked_and_named() {
+        let field = |law: FibreLaw| law.validate("fibre").unwrap_err().field;
+        confined_glass().validate("fibre").unwrap();
+        for bad in [-1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(
+                field(FibreLaw {
+                    segment_length: bad,
+                    ..confined_glass()
+                }),
+                "fibre.segment_length"
+            );
+        }
+        // A column length without a column is valid and confines nothing
+        // (`yarn_buckling = false` drops σ_b and keeps the preset's L).
+        let bare = FibreLaw {
+            segment_length: 4.0,
+            ..FibreLaw::new(75_000.0, 0.012).unwrap()
+        };
+        bare.validate("fibre").unwrap();
+        assert!(!bare.confines());
+        let text = toml::to_string(&confined_glass()).unwrap();
+        assert!(text.contains("segment_length"), "{text}");
+        let back: FibreLaw = toml::from_str(&text).unwrap();
+        assert_eq!(back, confined_glass());
     }
 
     #[test]

@@ -164,6 +164,16 @@ impl Material {
     /// σ_b is as uncertain as B. The paper's own law (c_c = 0) is
     /// [`Self::paper_preset`].
     ///
+    /// Confined yarns: the glass and twintex presets carry their L
+    /// ([`FibreLaw::segment_length`]), so that between two tools their
+    /// column can bow out no further than the free space the tools leave
+    /// ([`FibreLaw::confined_stress_and_tangent`]). The carbon prepreg's
+    /// does not: its walled tangent at a closed gap, 1/(ε_sh/σ_b + 1/E_f)
+    /// = 3.7 GPa, is 1.6 % of its E_f, past [`FibreLaw::KINK_SHARE`], so
+    /// confining it would put dashpots on every carbon run's yarns
+    /// (ARCHITECTURE.md, "Dashpots on kinked yarns"), a change of the
+    /// carbon cases this was not checked against **\[choice\]**.
+    ///
     /// Bending rigidities (on by default in a scene, so they shape every
     /// run that does not turn bending off) are **\[assumptions\]**, not
     /// measurements: the paper gives none, and no published bending
@@ -213,6 +223,8 @@ impl Material {
                             0.5,
                             0.3,
                         ),
+                        // Not confined: see "Confined yarns" above.
+                        segment_length: 0.0,
                     },
                     resin: ResinLaw {
                         young: 45.0,
@@ -237,6 +249,7 @@ impl Material {
                     crimp_strain: 0.012,
                     compression_factor: 0.0,
                     buckling_stress: euler_buckling_stress(GLASS_BENDING, GLASS_SEGMENT, 0.5, 0.57),
+                    segment_length: GLASS_SEGMENT,
                 },
                 resin: ResinLaw {
                     young: 30.0,
@@ -261,6 +274,7 @@ impl Material {
                         0.146,
                         1.2,
                     ),
+                    segment_length: TWINTEX_SEGMENT,
                 },
                 resin: ResinLaw {
                     young: 0.002,

@@ -20,8 +20,10 @@ use rayon::prelude::*;
 use crate::phases::{ContactPhase, PhaseTimer};
 use crate::plies::{PlyContact, Support, ToolFriction};
 
+mod clearance;
 mod ply_link;
 use crate::tool::{Tool, ToolMotion, ToolState};
+pub use clearance::Nearest;
 
 /// The gap, as a fraction of the contact offset (the fabric's half
 /// thickness), within which a node is touching a tool though nothing

@@ -59,7 +59,7 @@ mod tool;
 mod view;
 
 pub use explicit::{
-    ContactFault, ContactSettings, ContactStatus, ContactStep, ExplicitContact, FaultKind,
+    ContactFault, ContactSettings, ContactStatus, ContactStep, ExplicitContact, FaultKind, Nearest,
     StepTimes, TOUCHING,
 };
 pub use implicit::{

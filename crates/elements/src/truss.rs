@@ -101,6 +101,50 @@ impl TrussBatch {
         Ok([-f, f])
     }
 
+    /// [`Self::element_force`] of a yarn with `clearance` (mm) to bow out
+    /// into ([`FibreLaw::confined_stress_and_tangent`]; infinite: free).
+    #[inline]
+    pub fn element_force_confined(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+        clearance: f64,
+    ) -> Result<[Vector3<f64>; 2], ElementError> {
+        let k = self.kinematics(e, x)?;
+        let tau = self.law.confined_stress(k.log_strain, clearance);
+        let n = self.section[e] * tau / k.stretch;
+        let f = k.direction * n;
+        Ok([-f, f])
+    }
+
+    /// [`Self::element_tangent`] of a yarn with `clearance` (mm), for the
+    /// law's tests and a driver that holds the clearance fixed in a step.
+    pub fn element_tangent_confined(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+        clearance: f64,
+        k_out: &mut DMatrix<f64>,
+    ) -> Result<(), ElementError> {
+        let k = self.kinematics(e, x)?;
+        let (tau, e_t) = self
+            .law
+            .confined_stress_and_tangent(k.log_strain, clearance);
+        self.tangent_block(&k, e, tau, e_t, k_out);
+        Ok(())
+    }
+
+    /// [`Self::element_energy`] of a yarn with `clearance` (mm).
+    pub fn element_energy_confined(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+        clearance: f64,
+    ) -> Result<f64, ElementError> {
+        let k = self.kinematics(e, x)?;
+        Ok(self.section[e] * self.length[e] * self.law.confined_energy(k.log_strain, clearance))
+    }
+
     /// The 6×6 tangent ∂f/∂x of truss `e` (material + geometric):
     /// K₂₂ = A₀/(λ²L₀)·((E_t − 2τ)·n⊗n + τ·I), K₁₁ = K₂₂ = −K₁₂.
     pub fn element_tangent(
@@ -111,6 +155,18 @@ impl TrussBatch {
     ) -> Result<(), ElementError> {
         let k = self.kinematics(e, x)?;
         let (tau, e_t) = self.law.stress_and_tangent(k.log_strain);
+        self.tangent_block(&k, e, tau, e_t, k_out);
+        Ok(())
+    }
+
+    fn tangent_block(
+        &self,
+        k: &FibreKinematics,
+        e: usize,
+        tau: f64,
+        e_t: f64,
+        k_out: &mut DMatrix<f64>,
+    ) {
         let scale = self.section[e] / (k.stretch * k.stretch * self.length[e]);
         let nn = k.direction * k.direction.transpose();
         let block: Matrix3<f64> = (nn * (e_t - 2.0 * tau) + Matrix3::identity() * tau) * scale;
@@ -120,7 +176,6 @@ impl TrussBatch {
                 .fixed_view_mut::<3, 3>(3 * a, 3 * b)
                 .copy_from(&(block * sign));
         }
-        Ok(())
     }
 
     /// Writes every truss's two nodal forces into `slots` (2 per truss, in
@@ -145,10 +200,29 @@ impl TrussBatch {
         dashpots: Option<(&[Vector3<f64>], &[f64])>,
         slots: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
+        self.forces_confined_into(x, dashpots, None, slots)
+    }
+
+    /// [`Self::forces_with_damping_into`], with each truss's yarn confined
+    /// by its `clearance` (mm, one per truss; infinite: free) when given
+    /// ([`FibreLaw::confined_stress_and_tangent`]); the lanes call the
+    /// scalar law per lane, so the same bits as the scalar path.
+    pub fn forces_confined_into(
+        &self,
+        x: &[Vector3<f64>],
+        dashpots: Option<(&[Vector3<f64>], &[f64])>,
+        clearance: Option<&[f64]>,
+        slots: &mut [Vector3<f64>],
+    ) -> Result<(), ElementError> {
         assert_eq!(slots.len(), 2 * self.len());
         if let Some((_, c)) = dashpots {
             assert_eq!(c.len(), self.len());
         }
+        if let Some(c) = clearance {
+            assert_eq!(c.len(), self.len());
+        }
+        // A law that confines nothing ignores the clearance: the free path.
+        let clearance = clearance.filter(|_| self.law.confines());
         // Tasks of TRUSS_PIECE trusses, each a plain loop over blocks of
         // LANES trusses on the lanes (crate::truss_lanes, same bits) that
         // stops at its first failure (its lowest element): a per-truss
@@ -161,7 +235,7 @@ impl TrussBatch {
                 .enumerate()
                 .map(|(c, out)| {
                     let first = c * TRUSS_PIECE;
-                    self.piece_forces_into(first, x, out)?;
+                    self.piece_forces_into(first, x, clearance, out)?;
                     if let Some((v, coefficient)) = dashpots {
                         self.piece_damping_into(first, x, v, coefficient, out);
                     }
@@ -176,6 +250,7 @@ impl TrussBatch {
         &self,
         first: usize,
         x: &[Vector3<f64>],
+        clearance: Option<&[f64]>,
         out: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
         let done = out.len() / (2 * LANES) * LANES;
@@ -187,14 +262,15 @@ impl TrussBatch {
                 &self.law,
                 &self.nodes[range.clone()],
                 &self.length[range.clone()],
-                &self.section[range],
+                &self.section[range.clone()],
+                clearance.map(|c| &c[range]),
                 x,
                 block,
             ) {
-                self.scalar_forces_into(e0, x, block)?;
+                self.scalar_forces_into(e0, x, clearance, block)?;
             }
         }
-        self.scalar_forces_into(first + done, x, blocks.into_remainder())
+        self.scalar_forces_into(first + done, x, clearance, blocks.into_remainder())
     }
 
     /// The forces of trusses `first..` into `slots` (2 per truss), one by
@@ -203,10 +279,15 @@ impl TrussBatch {
         &self,
         first: usize,
         x: &[Vector3<f64>],
+        clearance: Option<&[f64]>,
         slots: &mut [Vector3<f64>],
     ) -> Result<(), ElementError> {
         for (k, pair) in slots.chunks_exact_mut(2).enumerate() {
-            let f = self.element_force(first + k, x)?;
+            let e = first + k;
+            let f = match clearance {
+                Some(c) => self.element_force_confined(e, x, c[e])?,
+                None => self.element_force(e, x)?,
+            };
             pair.copy_from_slice(&f);
         }
         Ok(())
@@ -512,15 +593,115 @@ mod tests {
                 let mut best = [Vector3::zeros(); 2 * LANES];
                 let args = (&t.nodes[r.clone()], &t.length[r.clone()], &t.section[r]);
                 assert!(truss_lanes::block_forces_lanes(
-                    &t.law, args.0, args.1, args.2, &x, &mut base
+                    &t.law, args.0, args.1, args.2, None, &x, &mut base
                 ));
                 assert!(truss_lanes::block_forces(
-                    &t.law, args.0, args.1, args.2, &x, &mut best
+                    &t.law, args.0, args.1, args.2, None, &x, &mut best
                 ));
                 assert_eq!(base, best);
                 assert_eq!(base[..], slots[2 * b * LANES..2 * (b + 1) * LANES]);
             }
         }
+    }
+
+    /// The glass preset's yarn, confined (L = 4.55 mm, a₀ = 0.317 mm).
+    fn confined_glass() -> FibreLaw {
+        FibreLaw {
+            buckling_stress: 1.556,
+            segment_length: 10.0 / 2.2,
+            ..FibreLaw::new(75_000.0, 0.012).unwrap()
+        }
+    }
+
+    #[test]
+    fn confined_truss_tangent_and_force_are_derivatives() {
+        // Shortened 3 % and 10 %, with 0.05 mm of room: past the wall
+        // (x_c = 0.33, 0.4 % shortening), and with the room infinite.
+        let (t, _) = batch(confined_glass());
+        for (stretch, clearance, seed) in [
+            (0.97, 0.05, 1),
+            (0.90, 0.05, 2),
+            (0.90, 0.0, 3),
+            (0.97, f64::INFINITY, 4),
+            (1.01, 0.0, 5),
+        ] {
+            let q = random_rotation(seed);
+            let x = vec![
+                Vector3::new(1.0, 2.0, 3.0),
+                Vector3::new(1.0, 2.0, 3.0) + q * Vector3::new(4.0 * stretch, 0.1, 0.0),
+            ];
+            let mut k = DMatrix::zeros(6, 6);
+            t.element_tangent_confined(0, &x, clearance, &mut k)
+                .unwrap();
+            assert_tangent_matches(
+                &k,
+                &x,
+                |x| t.element_force_confined(0, x, clearance).unwrap().to_vec(),
+                &[0, 1],
+            );
+            let f = t.element_force_confined(0, &x, clearance).unwrap();
+            let h = 1e-7;
+            for d in 0..3 {
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[1][d] += h;
+                xm[1][d] -= h;
+                let w = |x: &[Vector3<f64>]| t.element_energy_confined(0, x, clearance).unwrap();
+                let fd = (w(&xp) - w(&xm)) / (2.0 * h);
+                assert!(
+                    (fd - f[1][d]).abs() <= 1e-6 * f[1].norm(),
+                    "{fd} vs {}",
+                    f[1][d]
+                );
+            }
+        }
+        // Confined, a yarn shortened 10 % pushes back 9.4 times harder than
+        // a free one.
+        let x = vec![Vector3::zeros(), Vector3::new(4.0 * 0.9, 0.0, 0.0)];
+        let free = t.element_force(0, &x).unwrap()[1].x;
+        let walled = t.element_force_confined(0, &x, 0.05).unwrap()[1].x;
+        assert!(walled < 5.0 * free && free < 0.0, "{walled} vs {free}");
+    }
+
+    #[test]
+    fn confined_truss_lanes_equal_the_scalar_path_bit_for_bit() {
+        // Clearances from closed to infinite, so that lanes of one block
+        // sit on the free column, at the wall and beyond it.
+        let (t, x) = spread(confined_glass());
+        let room = [0.0, 0.01, 0.05, 0.1, 0.3, 1.0, f64::INFINITY];
+        let clearance: Vec<f64> = (0..t.len()).map(|e| room[e % room.len()]).collect();
+        let mut slots = vec![Vector3::repeat(f64::NAN); 2 * t.len()];
+        t.forces_confined_into(&x, None, Some(&clearance), &mut slots)
+            .unwrap();
+        let mut walled = 0;
+        for e in 0..t.len() {
+            let f = t.element_force_confined(e, &x, clearance[e]).unwrap();
+            assert_eq!(slots[2 * e..2 * e + 2], f, "truss {e}");
+            walled += usize::from(f != t.element_force(e, &x).unwrap());
+        }
+        // The case has trusses beyond their wall (shortened up to 3 %).
+        assert!(walled >= 10, "{walled} trusses past the wall");
+        for b in 0..t.len() / LANES {
+            let r = b * LANES..(b + 1) * LANES;
+            let mut base = [Vector3::zeros(); 2 * LANES];
+            let mut best = [Vector3::zeros(); 2 * LANES];
+            let c = Some(&clearance[r.clone()]);
+            let args = (&t.nodes[r.clone()], &t.length[r.clone()], &t.section[r]);
+            assert!(truss_lanes::block_forces_lanes(
+                &t.law, args.0, args.1, args.2, c, &x, &mut base
+            ));
+            assert!(truss_lanes::block_forces(
+                &t.law, args.0, args.1, args.2, c, &x, &mut best
+            ));
+            assert_eq!(base, best);
+        }
+        // Infinite room everywhere: the free forces, bit for bit.
+        let far = vec![f64::INFINITY; t.len()];
+        let mut free = vec![Vector3::repeat(f64::NAN); 2 * t.len()];
+        t.forces_confined_into(&x, None, Some(&far), &mut free)
+            .unwrap();
+        let mut plain = vec![Vector3::repeat(f64::NAN); 2 * t.len()];
+        t.forces_into(&x, &mut plain).unwrap();
+        assert_eq!(free, plain);
     }
 
     #[test]

@@ -11,7 +11,9 @@
 //! uncrimped) are evaluated for every lane and selected lane by lane; the
 //! closed form's `exp_m1` is only called for the lanes that use it. A
 //! block with a non-finite or collapsed truss is left to the scalar path,
-//! which names it.
+//! which names it. A confined yarn's compressed lanes call the scalar
+//! `FibreLaw::confined_stress` per lane (its walls are rare and its
+//! branches many; the same bits by construction).
 //!
 //! Instruction set: see [`crate::lanes`]; compiled for the baseline and
 //! with AVX2, picked at run time.
@@ -32,15 +34,16 @@ pub(crate) fn block_forces(
     nodes: &[[u32; 2]],
     length: &[f64],
     section: &[f64],
+    clearance: Option<&[f64]>,
     x: &[Vector3<f64>],
     slots: &mut [Vector3<f64>],
 ) -> bool {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2 (checked just above).
-        return unsafe { block_forces_avx2(law, nodes, length, section, x, slots) };
+        return unsafe { block_forces_avx2(law, nodes, length, section, clearance, x, slots) };
     }
-    block_forces_lanes(law, nodes, length, section, x, slots)
+    block_forces_lanes(law, nodes, length, section, clearance, x, slots)
 }
 
 /// [`block_forces`] compiled with AVX2.
@@ -51,10 +54,11 @@ fn block_forces_avx2(
     nodes: &[[u32; 2]],
     length: &[f64],
     section: &[f64],
+    clearance: Option<&[f64]>,
     x: &[Vector3<f64>],
     slots: &mut [Vector3<f64>],
 ) -> bool {
-    block_forces_lanes(law, nodes, length, section, x, slots)
+    block_forces_lanes(law, nodes, length, section, clearance, x, slots)
 }
 
 /// [`block_forces`] for the target's baseline instruction set.
@@ -64,10 +68,13 @@ pub(crate) fn block_forces_lanes(
     nodes: &[[u32; 2]],
     length: &[f64],
     section: &[f64],
+    clearance: Option<&[f64]>,
     x: &[Vector3<f64>],
     slots: &mut [Vector3<f64>],
 ) -> bool {
     let nodes: &[[u32; 2]; LANES] = nodes.try_into().expect("a block's trusses");
+    let clearance: Option<&[f64; LANES]> =
+        clearance.map(|c| c.try_into().expect("a block's clearances"));
     let length: &[f64; LANES] = length.try_into().expect("a block's lengths");
     let section: &[f64; LANES] = section.try_into().expect("a block's sections");
     let slots: &mut [Vector3<f64>; 2 * LANES] = slots.try_into().expect("a block's slots");
@@ -95,7 +102,7 @@ pub(crate) fn block_forces_lanes(
     let n = [d[0] / l, d[1] / l, d[2] / l];
     let s = stretch.0;
     let eps = f64x4::new([s[0].ln(), s[1].ln(), s[2].ln(), s[3].ln()]);
-    let tau = stress(law, eps);
+    let tau = stress(law, eps, clearance);
     // N = A₀·τ/λ, f₂ = −f₁ = N·n.
     let force = f64x4::new(*section) * tau / stretch;
     for k in 0..LANES {
@@ -113,19 +120,26 @@ pub(crate) fn block_forces_lanes(
 /// `FibreLaw::stress` lane by lane: every branch in the scalar law's
 /// operations, the lane's own branch selected.
 #[inline(always)]
-fn stress(law: &FibreLaw, eps: f64x4) -> f64x4 {
+fn stress(law: &FibreLaw, eps: f64x4, clearance: Option<&[f64; LANES]>) -> f64x4 {
     let e = law.modulus;
     let zero = f64x4::splat(0.0);
     let compressed = eps.le(zero);
     let mut compression = f64x4::splat(law.compression_factor * e) * eps;
     if law.buckling_stress > 0.0 {
         // The buckled column's square roots, only in the compressed lanes,
-        // by the scalar law's own function (the same bits).
-        for ((out, &eps), &squeezed) in compression.0.iter_mut().zip(&eps.0).zip(&compressed) {
-            *out = if squeezed {
-                law.buckled_stress_and_tangent(eps).0
-            } else {
-                0.0
+        // by the scalar law's own function (the same bits); confined by
+        // the lane's clearance when there is one.
+        for (k, ((out, &eps), &squeezed)) in compression
+            .0
+            .iter_mut()
+            .zip(&eps.0)
+            .zip(&compressed)
+            .enumerate()
+        {
+            *out = match (squeezed, clearance) {
+                (false, _) => 0.0,
+                (true, Some(c)) => law.confined_stress(eps, c[k]),
+                (true, None) => law.buckled_stress_and_tangent(eps).0,
             };
         }
     }

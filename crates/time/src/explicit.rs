@@ -7,6 +7,7 @@ use drape_model::{Model, State};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+use crate::confinement::Confinement;
 use crate::energy::{chunked_sum, chunked_sums_into};
 use crate::guard::{self, Guard, GuardSettings};
 use crate::profile::{Pass, ProfileClock, Profiler, StepProfile};
@@ -115,6 +116,9 @@ pub struct Explicit<'m> {
     tool_touched: Vec<bool>,
     /// The per-pass profile, when asked for ([`Self::enable_profile`]).
     profiler: Option<Profiler>,
+    /// The confined yarns' scratch, when any yarn is confined
+    /// ([`crate::confinement`]).
+    confinement: Option<Confinement>,
 }
 
 impl<'m> Explicit<'m> {
@@ -195,6 +199,7 @@ impl<'m> Explicit<'m> {
             forces: ForcePass::new(model),
             pressure: PressurePass::new(model),
             profiler: None,
+            confinement: Confinement::applies(model).then(Confinement::default),
             mass: model.mass.clone(),
             truss_mass: Vec::new(),
             truss_damping: Vec::new(),
@@ -207,6 +212,9 @@ impl<'m> Explicit<'m> {
             v_new: vec![Vector3::zeros(); n],
             reactions: vec![Vector3::zeros(); n],
         };
+        if driver.confinement.is_some() {
+            driver.forces.truss_clearance = Confinement::free(model);
+        }
         driver.share_truss_mass();
         if let Some(target) = driver.settings.mass_scaling {
             driver.scale_mass(target);
@@ -520,6 +528,11 @@ impl<'m> Explicit<'m> {
         shared::external_forces(model, state.time, &mut self.f_ext);
         self.pressure
             .add_into(model, &state.x, state.time, &mut self.f_ext);
+        // A resumed run's yarns confined as the stopped run's last contact
+        // pass left them (the same forces, bit for bit).
+        if let Some(r) = &self.resume {
+            Confinement::restore(&r.truss_clearance, &mut self.forces.truss_clearance);
+        }
         // Forces at the start, with no time passing so no relaxation.
         self.forces.evaluate(
             model,
@@ -560,7 +573,8 @@ impl<'m> Explicit<'m> {
         let mut forced_warned = false;
         if state.step == 0 {
             energy.kinetic = kinetic0;
-            energy.strain = shared::strain_energy(model, state);
+            energy.strain =
+                shared::strain_energy_confined(model, state, &self.forces.truss_clearance);
             observer.frame(&Frame {
                 index: 0,
                 model,
@@ -693,6 +707,9 @@ impl<'m> Explicit<'m> {
                     })?;
                 for (touched, f) in self.tool_touched.iter_mut().zip(&contact.tool_force) {
                     *touched |= *f != 0.0;
+                }
+                if let Some(confinement) = &mut self.confinement {
+                    confinement.update(model, contact, &mut self.forces.truss_clearance);
                 }
                 if let Some(p) = &mut self.profiler {
                     p.lap(Pass::Contact);
@@ -831,6 +848,7 @@ impl<'m> Explicit<'m> {
                         .as_ref()
                         .map_or(0.0, |c| c.friction_dissipation),
                     implicit: None,
+                    truss_clearance: Confinement::stored(&self.forces.truss_clearance),
                 };
                 observer.checkpoint(state, &driver);
                 self.lap(Pass::Output);
@@ -997,7 +1015,7 @@ impl<'m> Explicit<'m> {
             .contact
             .as_ref()
             .map_or(0.0, |c| c.friction_dissipation);
-        e.strain = shared::strain_energy(self.model, state);
+        e.strain = shared::strain_energy_confined(self.model, state, &self.forces.truss_clearance);
         e.viscous = e.internal_work - e.strain;
         e.balance_error = e.kinetic + e.internal_work + e.damping
             - e.external_work

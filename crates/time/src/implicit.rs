@@ -1034,6 +1034,7 @@ impl<'m> Implicit<'m> {
                     .map_or_else(Vec::new, |c| c.carried().to_vec()),
                 contact_force: self.f_c_n.clone(),
             }),
+            truss_clearance: Vec::new(),
         }
     }
 

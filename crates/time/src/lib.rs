@@ -50,6 +50,7 @@
 //! ```
 
 pub mod completion;
+mod confinement;
 mod energy;
 mod error;
 mod explicit;

@@ -126,6 +126,11 @@ pub struct DriverState {
     /// What the implicit driver carries besides (None for explicit runs).
     #[serde(default)]
     pub implicit: Option<ImplicitCarry>,
+    /// The explicit driver's confined yarns' clearances (mm) per truss
+    /// batch, as the last contact pass left them (f64::MAX: no wall);
+    /// empty where no yarn is confined.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub truss_clearance: Vec<Vec<f64>>,
 }
 
 /// The implicit driver's carried state: accelerations (the Bossak scheme

@@ -115,6 +115,9 @@ pub(crate) struct ForcePass {
     pub history_new: Vec<Vec<f64>>,
     /// Estimated instructions of the truss and of the membrane pass.
     work: (usize, usize),
+    /// Per truss batch, each truss's clearance for a confined yarn (mm,
+    /// see crate::confinement); empty for a batch that is not confined.
+    pub truss_clearance: Vec<Vec<f64>>,
 }
 
 /// Instructions below which a kind's pass is not worth a task of its own
@@ -157,6 +160,7 @@ impl ForcePass {
                 .map(|b| b.initial_history())
                 .collect(),
             work: pass_work(model),
+            truss_clearance: Vec::new(),
         }
     }
 
@@ -264,7 +268,18 @@ impl ForcePass {
                 let (truss_part, rest) = self.slots.split_at_mut(split);
                 let history_new = &mut self.history_new;
                 let layout = &self.layout;
-                let trusses = || truss_forces(model, x, dashpots, truss_part, &fail, &mut |_| {});
+                let clearance = &self.truss_clearance;
+                let trusses = || {
+                    truss_forces(
+                        model,
+                        x,
+                        dashpots,
+                        clearance,
+                        truss_part,
+                        &fail,
+                        &mut |_| {},
+                    )
+                };
                 let membranes = || {
                     membrane_forces(
                         model,
@@ -291,7 +306,15 @@ impl ForcePass {
             _ => {
                 let split = truss_slots.unwrap_or(self.layout.len);
                 let (truss_part, rest) = self.slots.split_at_mut(split);
-                truss_forces(model, x, dashpots, truss_part, &fail, &mut lap)?;
+                truss_forces(
+                    model,
+                    x,
+                    dashpots,
+                    &self.truss_clearance,
+                    truss_part,
+                    &fail,
+                    &mut lap,
+                )?;
                 membrane_forces(
                     model,
                     x,
@@ -329,6 +352,7 @@ fn truss_forces(
     model: &Model,
     x: &[Vector3<f64>],
     dashpots: Option<Dashpots<'_>>,
+    clearance: &[Vec<f64>],
     slots: &mut [Vector3<f64>],
     fail: &(dyn Fn(String, ElementError) -> RunError + Sync),
     lap: &mut dyn FnMut(Pass),
@@ -339,7 +363,11 @@ fn truss_forces(
         let dashpots = dashpots
             .filter(|(_, c)| !c[i].is_empty())
             .map(|(v, c)| (v, c[i].as_slice()));
-        b.forces_with_damping_into(x, dashpots, &mut slots[start..end])
+        let clearance = clearance
+            .get(i)
+            .filter(|c| !c.is_empty())
+            .map(Vec::as_slice);
+        b.forces_confined_into(x, dashpots, clearance, &mut slots[start..end])
             .map_err(|e| fail(format!("truss batch {i}"), e))?;
         lap(Pass::Trusses);
         start = end;
@@ -510,11 +538,27 @@ impl PressurePass {
 
 /// Stored strain energy at `state`.
 pub(crate) fn strain_energy(model: &Model, state: &State) -> f64 {
+    strain_energy_confined(model, state, &[])
+}
+
+/// [`strain_energy`] with the confined yarns' clearances of each truss
+/// batch (empty, or a batch's empty: free yarns), held at their values: a
+/// clearance that changes under a compressed yarn changes its energy
+/// without work, which the balance then shows.
+pub(crate) fn strain_energy_confined(model: &Model, state: &State, clearance: &[Vec<f64>]) -> f64 {
     let mut e = 0.0;
-    for b in &model.trusses {
-        e += (0..b.len())
-            .map(|i| b.element_energy(i, &state.x).unwrap_or(f64::NAN))
-            .sum::<f64>();
+    for (k, b) in model.trusses.iter().enumerate() {
+        e += match clearance.get(k).filter(|c| !c.is_empty()) {
+            Some(c) => (0..b.len())
+                .map(|i| {
+                    b.element_energy_confined(i, &state.x, c[i])
+                        .unwrap_or(f64::NAN)
+                })
+                .sum::<f64>(),
+            None => (0..b.len())
+                .map(|i| b.element_energy(i, &state.x).unwrap_or(f64::NAN))
+                .sum::<f64>(),
+        };
     }
     for (b, h) in model.membranes.iter().zip(&state.history) {
         e += b.energy(&state.x, h).unwrap_or(f64::NAN);

@@ -9,23 +9,29 @@ mod common;
 use common::*;
 
 /// `scenes/hemisphere-stack.toml` (plies `p0` under `p45`), coarse and
-/// short; without its `[stack]` when `plies` is false (one ply).
-fn scene(dir: &Path, plies: bool) -> String {
+/// short; with `plies` 1, as `[fabric]` alone (`stack` false) or as a
+/// stack of its bottom ply.
+fn scene(dir: &Path, plies: usize, stack: bool) -> String {
     let text = std::fs::read_to_string(workspace().join("scenes/hemisphere-stack.toml")).unwrap();
     let mut text = text
         .replace("cells = [24, 24]", "cells = [6, 6]")
         .replace("end_time = 1.0 ", "end_time = 0.05 ")
         .replace("frames = 20 ", "frames = 2 ");
     assert!(text.contains("end_time = 0.05") && text.contains("cells = [6, 6]"));
-    if !plies {
+    if plies == 1 {
         let (start, end) = (
             text.find("\n[stack]\n").unwrap(),
             text.find("[[tools]]").unwrap(),
         );
-        text.replace_range(start..end, "\n");
+        let one = if stack {
+            "\n[stack]\n[[stack.ply]]\nname = \"p0\"\n\n"
+        } else {
+            "\n"
+        };
+        text.replace_range(start..end, one);
         text = text.replace("blank = {", "bending = false\nblank = {");
     }
-    let path = dir.join(if plies { "stack.toml" } else { "one.toml" });
+    let path = dir.join(format!("{plies}-{stack}.toml"));
     std::fs::write(&path, text).unwrap();
     path.to_str().unwrap().to_owned()
 }
@@ -59,7 +65,7 @@ fn warp_angle(row: &[&str], header: &[&str]) -> f64 {
 fn a_stack_pictures_and_exports_every_ply() {
     let dir = temp("stack");
     let out = dir.join("out");
-    let o = drape(&["run", &scene(&dir, true), "--out", out.to_str().unwrap()]);
+    let o = drape(&["run", &scene(&dir, 2, true), "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
 
     // One picture per ply beside the overlaid one, on the same frame.
@@ -134,17 +140,28 @@ fn a_stack_pictures_and_exports_every_ply() {
         assert!(inp.contains(&format!("NAME={name},")), "{name}: {inp}");
     }
 
-    // One ply: no picture per ply, the one-ply table.
-    let one = dir.join("one");
-    let o = drape(&["run", &scene(&dir, false), "--out", one.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", text(&o));
-    let pictures: Vec<String> = std::fs::read_dir(&one)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.starts_with("shear_map"))
-        .collect();
-    assert_eq!(pictures, ["shear_map.png"]);
-    let csv = std::fs::read_to_string(one.join("orientations.csv")).unwrap();
-    assert!(csv.starts_with("element,x_mm,"));
+    // One ply, as [fabric] or as a stack of one: no picture per ply, the
+    // one-ply files, the same bytes both ways.
+    let mut tables = Vec::new();
+    for stack in [false, true] {
+        let one = dir.join(format!("one-{stack}"));
+        let o = drape(&[
+            "run",
+            &scene(&dir, 1, stack),
+            "--out",
+            one.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", text(&o));
+        let pictures: Vec<String> = std::fs::read_dir(&one)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with("shear_map"))
+            .collect();
+        assert_eq!(pictures, ["shear_map.png"]);
+        let csv = std::fs::read_to_string(one.join("orientations.csv")).unwrap();
+        assert!(csv.starts_with("element,x_mm,"));
+        tables.push(csv);
+    }
+    assert_eq!(tables[0], tables[1]);
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -826,8 +826,14 @@ impl ResultsDir {
                 source: std::io::Error::other(e),
             })?;
         crate::atomic::write(&path, &png).map_err(at(&path))?;
-        // A laminate's plies overlap in the picture above: one each too.
-        for ply in &model.plies {
+        // A laminate's plies overlap in the picture above: one each too
+        // (a stack of one ply is pictured as `[fabric]` is).
+        let plies = if model.plies.len() > 1 {
+            &model.plies[..]
+        } else {
+            &[]
+        };
+        for ply in plies {
             let path = self.dir.join(ply_picture(&ply.name));
             let png =
                 pictures::shear_map(model, state, fields, measures, self.shear_range, Some(ply))

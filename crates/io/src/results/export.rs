@@ -136,16 +136,22 @@ impl Orientations {
                 elements.push(batch.element_nodes(e).to_vec());
             }
         }
-        let nominal = if model.plies.is_empty() {
+        // A stack of one ply is written as `[fabric]` is (as its VTU
+        // frames are): a layup only from two plies on.
+        let layup = if model.plies.len() > 1 {
+            &model.plies[..]
+        } else {
+            &[]
+        };
+        let nominal = if layup.is_empty() {
             model
                 .membranes
                 .first()
                 .map_or(f64::NAN, |b| b.section.material.thickness)
         } else {
-            model.plies.iter().map(|p| p.thickness).sum()
+            layup.iter().map(|p| p.thickness).sum()
         };
-        let plies = model
-            .plies
+        let plies = layup
             .iter()
             .map(|p| PlyPart {
                 name: p.name.clone(),

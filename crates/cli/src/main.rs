@@ -1352,12 +1352,25 @@ fn export(
         drape::map_orientations(run, mesh, &units, &out)
             .map_err(|e| compare_error_writing(e, "writing the orientations")),
     )?;
-    println!(
-        "mapped            {} elements of {} onto the formed part of {}",
-        r.mapped.len(),
-        mesh.display(),
-        run.display()
-    );
+    if let Some(first) = r.mapped.plies.first() {
+        // A laminate: each ply mapped onto the same elements.
+        let names: Vec<&str> = r.mapped.plies.iter().map(|p| p.name.as_str()).collect();
+        println!(
+            "mapped            {} elements of {} onto each of the {} plies of {} ({})",
+            first.elements.len(),
+            mesh.display(),
+            names.len(),
+            run.display(),
+            names.join(", ")
+        );
+    } else {
+        println!(
+            "mapped            {} elements of {} onto the formed part of {}",
+            r.mapped.len(),
+            mesh.display(),
+            run.display()
+        );
+    }
     println!(
         "distance          largest {:.4} mm (element {}), mean {:.4} mm",
         r.max_distance.0, r.max_distance.1, r.mean_distance
@@ -1388,7 +1401,11 @@ fn export(
             "warning: {} elements have no orientation (listed in the include's set {}, empty \
              fields in the table); element {label}: {why}",
             r.missing.len(),
-            drape_io::results::export::names::NO_ORIENTATION
+            if r.mapped.plies.is_empty() {
+                drape_io::results::export::names::NO_ORIENTATION
+            } else {
+                "PLY_NO_ORIENTATION of each ply"
+            }
         );
     }
     if let Some(why) = &r.source_unknown {

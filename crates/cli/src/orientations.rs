@@ -69,7 +69,9 @@ pub struct MappedReport {
     pub mean_distance: f64,
     /// Elements farther from the formed surface than its nominal thickness.
     pub beyond_thickness: usize,
-    /// The nominal thickness (mm).
+    /// The nominal thickness (mm); a laminate's, all plies together
+    /// (each is mapped from its own surface, at most that far from the
+    /// laminate's other side).
     pub thickness: f64,
     /// The structural mesh's size (the diagonal of its bounding box, mm,
     /// after its unit): less than 1 mm or more than 10 m is most likely a
@@ -82,7 +84,8 @@ pub struct MappedReport {
     /// written by hand or by another tool), or None. In the header too.
     pub source_unknown: Option<String>,
     /// Elements written without values (label, why): a direction that
-    /// cannot be computed. Listed in the include's `DRAPE_NO_ORIENTATION`.
+    /// cannot be computed. Listed in the include's `DRAPE_NO_ORIENTATION`
+    /// (a laminate's: in each ply's `P_NO_ORIENTATION`, the why naming it).
     pub missing: Vec<(i64, String)>,
 }
 
@@ -194,7 +197,13 @@ pub fn map_orientations(
     let missing: Vec<(i64, String)> = mapped
         .incomplete()
         .into_iter()
-        .map(|(e, why)| (mapped.labels[e], why))
+        .map(|(e, why)| {
+            // A laminate's labels repeat, once per ply: say whose.
+            match mapped.plies.iter().find(|p| p.elements.contains(&e)) {
+                Some(p) => (mapped.labels[e], format!("ply {}: {why}", p.name)),
+                None => (mapped.labels[e], why),
+            }
+        })
         .collect();
     mapped
         .check_finite()

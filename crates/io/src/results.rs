@@ -464,6 +464,19 @@ const OUTPUT_FILES: [&str; 13] = [
     "orientations.csv",
 ];
 
+/// The shear map of one ply of a laminate, `shear_map_<ply>.png` (a
+/// ply's name holds no path separator: the scene refuses one).
+pub fn ply_picture(ply: &str) -> String {
+    format!("shear_map_{ply}.png")
+}
+
+/// Whether `name` is a ply's shear map ([`ply_picture`]) of an earlier run.
+fn is_ply_picture(name: &str) -> bool {
+    name.strip_prefix("shear_map_")
+        .and_then(|rest| rest.strip_suffix(".png"))
+        .is_some_and(|ply| !ply.is_empty())
+}
+
 /// The series a results folder holds: the `.pvd` file and the prefix of
 /// its frame files in `frames/`.
 const SERIES: [(&str, &str); 3] = [
@@ -528,6 +541,12 @@ impl ResultsDir {
         let frames = dir.join("frames");
         for name in OUTPUT_FILES {
             remove_if_present(&dir.join(name))?;
+        }
+        for entry in std::fs::read_dir(dir).map_err(at(dir))? {
+            let entry = entry.map_err(at(dir))?;
+            if entry.file_name().to_str().is_some_and(is_ply_picture) {
+                remove_if_present(&entry.path())?;
+            }
         }
         for entry in std::fs::read_dir(&frames).map_err(at(&frames))? {
             let entry = entry.map_err(at(&frames))?;
@@ -779,8 +798,8 @@ impl ResultsDir {
     }
 
     /// Writes `shear_map.png` (the formed part seen from above, coloured by
-    /// shear angle, with a colour bar), `waviness_map.png` and
-    /// `profiles.png`.
+    /// shear angle, with a colour bar), for a laminate one such map per
+    /// ply ([`ply_picture`]), `waviness_map.png` and `profiles.png`.
     ///
     /// The shear map projects the current positions on the x–y plane and
     /// paints each membrane element with the viridis colour of its
@@ -801,14 +820,29 @@ impl ResultsDir {
         measures: &Measures,
     ) -> Result<(), ResultsError> {
         let path = self.dir.join("shear_map.png");
-        let png =
-            pictures::shear_map(model, state, fields, measures, self.shear_range).map_err(|e| {
-                ResultsError {
-                    path: path.clone(),
-                    source: std::io::Error::other(e),
-                }
+        let png = pictures::shear_map(model, state, fields, measures, self.shear_range, None)
+            .map_err(|e| ResultsError {
+                path: path.clone(),
+                source: std::io::Error::other(e),
             })?;
         crate::atomic::write(&path, &png).map_err(at(&path))?;
+        // A laminate's plies overlap in the picture above: one each too
+        // (a stack of one ply is pictured as `[fabric]` is).
+        let plies = if model.plies.len() > 1 {
+            &model.plies[..]
+        } else {
+            &[]
+        };
+        for ply in plies {
+            let path = self.dir.join(ply_picture(&ply.name));
+            let png =
+                pictures::shear_map(model, state, fields, measures, self.shear_range, Some(ply))
+                    .map_err(|e| ResultsError {
+                        path: path.clone(),
+                        source: std::io::Error::other(e),
+                    })?;
+            crate::atomic::write(&path, &png).map_err(at(&path))?;
+        }
         let path = self.dir.join("waviness_map.png");
         let png = pictures::waviness_map(model, fields, measures).map_err(|e| ResultsError {
             path: path.clone(),

@@ -18,6 +18,10 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "two-ply hemisphere [0/90 + ±45] against μ_ply = 0, 0.2, 0.5, 1 (a table), and a four-ply [0/45/90/−45] run",
             "runs complete; the top ply's slip at μ_ply = 1 below that at 0; run times against one ply (a note)",
         ),
+        "plies/hemisphere-frictionless" => (
+            "two-ply hemisphere [0/90 + ±45] at μ_ply = 0: each ply's shear against that ply formed alone on a mould offset by the other ply's thickness",
+            "the single-ply runs, element by element (same mesh): RMS of the shear difference ≤ 0.5° (the issue's bound); per frame in a note, beside each single run against itself on a punch 1 µm larger (the noise floor)",
+        ),
         "plies/hemisphere-overlap" => (
             "two plies (0/90 under ±45, μ_ply = 0.2) formed together on the hemisphere: no interpenetration",
             "the plies' distance computed from the positions: largest overlap ≤ 1 % of the ply thickness",

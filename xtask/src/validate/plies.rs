@@ -1,8 +1,9 @@
 //! Validation of laminates: contact and Coulomb friction between the
 //! plies of a stack through the explicit driver: a ply pulled over another
 //! under a normal load (the sled), a two-ply stack on an incline (which
-//! interface slides first), and no interpenetration of two plies formed
-//! together over the hemisphere.
+//! interface slides first), no interpenetration of two plies formed
+//! together over the hemisphere, and two plies without friction between
+//! them against each ply formed alone.
 //!
 //! References come from closed formulas evaluated here (μN, the rigid
 //! slide of a constant or ramped force, the friction angle atan μ) and,
@@ -40,6 +41,11 @@ pub const CASES: &[Case] = &[
         name: "plies/hemisphere-friction",
         quick: false,
         run: hemisphere_friction,
+    },
+    Case {
+        name: "plies/hemisphere-frictionless",
+        quick: false,
+        run: hemisphere_frictionless,
     },
 ];
 
@@ -488,4 +494,198 @@ fn hemisphere_friction() -> Vec<Check> {
         f64::from(u8::from(slips[3] < slips[0])),
         0.0,
     )]
+}
+
+/// A run's shear per frame: (time, |elements| shear angles in degrees),
+/// and its element centroids at the end.
+struct ShearRun {
+    frames: Vec<(f64, Vec<f64>)>,
+    centroid: Vec<Vector3<f64>>,
+    plies: Vec<std::ops::Range<usize>>,
+    thickness: Vec<f64>,
+}
+
+/// Runs the scene `text` (read as if from `path`) to its end.
+fn shear_run(text: &str, path: &std::path::Path) -> ShearRun {
+    let scene = drape_io::scene::Scene::parse(text, path, &[]).expect("scene");
+    let model = &scene.model;
+    let mut frames = Vec::new();
+    let mut centroid = Vec::new();
+    let mut observer = Frames(|f: &Frame<'_>| {
+        let fields = f.model.element_fields(f.state).expect("fields");
+        frames.push((
+            f.state.time,
+            fields.shear.iter().map(|g| g.to_degrees()).collect(),
+        ));
+        centroid = fields.centroid;
+    });
+    let mut state = model.initial_state();
+    Explicit::new(model, scene.settings.clone())
+        .expect("driver")
+        .run(&mut state, &mut observer)
+        .expect("run");
+    ShearRun {
+        frames,
+        centroid,
+        plies: model.plies.iter().map(|p| p.elements.clone()).collect(),
+        thickness: model.plies.iter().map(|p| p.thickness).collect(),
+    }
+}
+
+/// Root mean square and largest magnitude of `a − b` over `elements`.
+fn rms_max(a: &[f64], b: &[f64], elements: impl Iterator<Item = (usize, usize)>) -> (f64, f64) {
+    let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
+    for (i, j) in elements {
+        let d = a[i] - b[j];
+        sum += d * d;
+        max = max.max(d.abs());
+        n += 1;
+    }
+    ((sum / n.max(1) as f64).sqrt(), max)
+}
+
+/// The two-ply hemisphere [0/90 + ±45] (`scenes/hemisphere-stack.toml`,
+/// 24 × 24 cells) at μ_ply = 0 against each ply formed alone on a mould
+/// offset by the other ply's thickness: the bottom ply (it alone touches
+/// the punch; nothing lies under it) on the same punch, the top one on a
+/// punch whose radius is the bottom ply's thickness larger (same pole: the
+/// top ply's blank starts one mean thickness higher in the stack, so the
+/// pair is the same, translated). The tools' contact offset in a stack is
+/// its largest half thickness: both plies have the same thickness here, so
+/// it is each ply's own. Same mesh per ply, element by element: the RMS of
+/// the difference of the shear angle over the ply's elements, per frame;
+/// at the end split into the elements on the punch's dome and the rest
+/// (the flange hanging free, where the plies still touch each other).
+/// Beside it, each ply alone against itself on a punch 1 µm larger: the
+/// scene's own sensitivity, the floor under which no comparison of runs
+/// of it can go.
+///
+/// Checks: the bound, each ply's RMS at the end ≤ 0.5°.
+fn hemisphere_frictionless() -> Vec<Check> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let path = root.join("scenes/hemisphere-stack.toml");
+    let text = std::fs::read_to_string(&path).expect("scene");
+    let mu_line =
+        "friction = 0.2                            # Coulomb μ between neighbouring plies";
+    assert!(text.contains(mu_line), "the shipped stack scene changed");
+    let stack = shear_run(&text.replace(mu_line, "friction = 0"), &path);
+    // One ply: [fabric] alone, without yarn bending as a stack has none.
+    let head = &text[..text.find("\n[stack]\n").expect("[stack]") + 1];
+    let tail = &text[text.find("[[tools]]").expect("tools")..];
+    let fabric = head.replacen("blank = {", "bending = false\nblank = {", 1);
+    assert_ne!(fabric, head);
+    let radius = "radius = 120,";
+    assert!(
+        tail.contains(radius),
+        "the shipped stack scene's punch changed"
+    );
+    let bottom = shear_run(&format!("{fabric}{tail}"), &path);
+    let top_fabric = fabric.replacen("orientation_deg = 0 ", "orientation_deg = 45 ", 1);
+    assert_ne!(top_fabric, fabric);
+    let h0 = stack.thickness[0];
+    let top = shear_run(
+        &format!(
+            "{top_fabric}{}",
+            tail.replacen(radius, &format!("radius = {},", 120.0 + h0), 1)
+        ),
+        &path,
+    );
+    // The noise floor: each ply alone again on a punch 1 µm larger.
+    let nudged = |fabric: &str, radius_mm: f64| {
+        shear_run(
+            &format!(
+                "{fabric}{}",
+                tail.replacen(radius, &format!("radius = {},", radius_mm + 1e-3), 1)
+            ),
+            &path,
+        )
+    };
+    let floors = [nudged(&fabric, 120.0), nudged(&top_fabric, 120.0 + h0)];
+    let singles = [&bottom, &top];
+    for (p, single) in singles.iter().enumerate() {
+        assert_eq!(
+            single.centroid.len(),
+            stack.plies[p].len(),
+            "ply {p}'s mesh"
+        );
+        assert_eq!(single.frames.len(), stack.frames.len());
+    }
+    let mut table = String::from(
+        "| t (s) | RMS Δγ 0/90 (°) | max \\|Δγ\\| 0/90 (°) | alone vs alone +1 µm, RMS 0/90 (°) | RMS Δγ ±45 (°) | max \\|Δγ\\| ±45 (°) | alone vs alone +1 µm, RMS ±45 (°) |\n|---|---|---|---|---|---|---|\n",
+    );
+    let mut floor_end = [0.0; 2];
+    let mut end = [0.0; 2];
+    for (k, (t, shear)) in stack.frames.iter().enumerate() {
+        let mut row = format!("| {t:.2} |");
+        for (p, single) in singles.iter().enumerate() {
+            let first = stack.plies[p].start;
+            let (rms, max) = rms_max(
+                shear,
+                &single.frames[k].1,
+                (0..single.centroid.len()).map(|e| (first + e, e)),
+            );
+            let n = single.centroid.len();
+            let (floor, _) = rms_max(
+                &floors[p].frames[k].1,
+                &single.frames[k].1,
+                (0..n).map(|e| (e, e)),
+            );
+            row.push_str(&format!(" {rms:.3} | {max:.2} | {floor:.3} |"));
+            end[p] = rms;
+            floor_end[p] = floor;
+        }
+        if k % 2 == 0 || k + 1 == stack.frames.len() {
+            table.push_str(&row);
+            table.push('\n');
+        }
+    }
+    // The dome at the end: the punch's pole has risen by its stroke.
+    assert!(tail.contains("pole = [0, 0, -0.2]") && tail.contains("distance = 300,"));
+    let centre = Vector3::new(0.0, 0.0, -0.2 + 300.0 - 120.0);
+    let mut split = String::new();
+    for (p, single) in singles.iter().enumerate() {
+        let sphere = 120.0 + [0.0, h0][p] + 0.5 * stack.thickness[p];
+        let on: Vec<bool> = single
+            .centroid
+            .iter()
+            .map(|c| ((c - centre).norm() - sphere).abs() < 1.0 && c.z > centre.z - 1.0)
+            .collect();
+        let first = stack.plies[p].start;
+        let (s_end, o_end) = (
+            &stack.frames.last().unwrap().1,
+            &single.frames.last().unwrap().1,
+        );
+        let on = &on;
+        let pick = |want: bool| {
+            (0..on.len())
+                .filter(move |&e| on[e] == want)
+                .map(move |e| (first + e, e))
+        };
+        let (dome, dome_max) = rms_max(s_end, o_end, pick(true));
+        let (flange, _) = rms_max(s_end, o_end, pick(false));
+        split.push_str(&format!(
+            "{}: on the dome {} elements, RMS {dome:.3}° (largest {dome_max:.2}°); off it {} elements, RMS {flange:.3}°. ",
+            ["0/90", "±45"][p],
+            on.iter().filter(|&&o| o).count(),
+            on.iter().filter(|&&o| !o).count(),
+        ));
+    }
+    note(format!(
+        "Two-ply hemisphere [0/90 + ±45] at μ_ply = 0 against each ply alone (24 × 24 cells, the shipped stack scene; the top ply alone on a punch {h0} mm larger in radius): the shear difference per element over time, and beside it that of each ply alone against itself on a punch 1 µm larger (the scene's own sensitivity: no yarn bending, folding flanges, a stroke ~10× faster than quasi-static)\n\n{table}\nAt the end, {split}The noise floor at the end, {:.2}° and {:.2}° RMS, is above the issue's 0.5°: on this scene the comparison cannot resolve 0.5°.",
+        floor_end[0], floor_end[1]
+    ));
+    vec![
+        Check::abs(
+            "RMS shear difference, 0/90 ply in the stack vs alone (°)",
+            0.0,
+            end[0],
+            0.5,
+        ),
+        Check::abs(
+            "RMS shear difference, ±45 ply in the stack vs alone (°)",
+            0.0,
+            end[1],
+            0.5,
+        ),
+    ]
 }

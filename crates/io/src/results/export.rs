@@ -48,6 +48,9 @@
 //!
 //! Numbers are written as the shortest text that reads back as the same
 //! `f64` (the results module's `fmt_f64`), so re-reading reproduces every value.
+//!
+//! A laminate (a model with plies) is written as a layup instead: one set
+//! of these names per ply, prefixed by the ply's name ([`layup`]).
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -57,6 +60,9 @@ use drape_model::{ElementFields, Model, State};
 use nalgebra::Vector3;
 
 use super::fmt_f64;
+
+mod layup;
+pub use layup::PlyPart;
 
 /// Per element of a mesh: the draped fibre orientation, the shear angle
 /// and the thickness.
@@ -96,6 +102,10 @@ pub struct Orientations {
     /// Lines the include's header carries for its reader (the source
     /// run's state, when it did not complete).
     pub notes: Vec<String>,
+    /// A laminate's plies, bottom to top, each a range of the elements
+    /// above; empty for one ply (`[fabric]`), whose files are written as
+    /// they always were. With plies, `nominal_thickness` is the laminate's.
+    pub plies: Vec<PlyPart>,
 }
 
 /// The names the include defines.
@@ -126,10 +136,29 @@ impl Orientations {
                 elements.push(batch.element_nodes(e).to_vec());
             }
         }
-        let nominal = model
-            .membranes
-            .first()
-            .map_or(f64::NAN, |b| b.section.material.thickness);
+        // A stack of one ply is written as `[fabric]` is (as its VTU
+        // frames are): a layup only from two plies on.
+        let layup = if model.plies.len() > 1 {
+            &model.plies[..]
+        } else {
+            &[]
+        };
+        let nominal = if layup.is_empty() {
+            model
+                .membranes
+                .first()
+                .map_or(f64::NAN, |b| b.section.material.thickness)
+        } else {
+            layup.iter().map(|p| p.thickness).sum()
+        };
+        let plies = layup
+            .iter()
+            .map(|p| PlyPart {
+                name: p.name.clone(),
+                elements: p.elements.clone(),
+                nominal_thickness: p.thickness,
+            })
+            .collect();
         Self {
             title: title.to_owned(),
             nodes: state.x.clone(),
@@ -144,6 +173,7 @@ impl Orientations {
             distance: None,
             missing: Vec::new(),
             notes: Vec::new(),
+            plies,
         }
     }
 
@@ -210,6 +240,9 @@ impl Orientations {
     /// metres must give its thickness in metres (Abaqus has no units, the
     /// model's are the include's). Directions and angles are unchanged.
     pub fn to_inp_in(&self, unit: &str, millimetres: f64) -> String {
+        if !self.plies.is_empty() {
+            return layup::to_inp_in(self, unit, millimetres);
+        }
         let length = |v: f64| fmt_f64(v / millimetres);
         let mut s = String::with_capacity(200 * (self.nodes.len() + 3 * self.len()) + 4096);
         let _ = writeln!(s, "** drape: draped fibre orientations, {}", self.title);
@@ -354,9 +387,21 @@ impl Orientations {
     /// [`Self::incomplete`] has empty fields for its directions, angles and
     /// thickness (never `NaN`): a value that could not be computed.
     pub fn to_csv(&self) -> String {
+        if !self.plies.is_empty() {
+            return layup::to_csv(self);
+        }
         let skip: std::collections::BTreeSet<usize> =
             self.incomplete().into_iter().map(|(e, _)| e).collect();
         let mut s = String::with_capacity(240 * (self.len() + 1));
+        self.csv_header(&mut s);
+        for e in 0..self.len() {
+            self.csv_row(&mut s, e, &skip);
+        }
+        s
+    }
+
+    /// The CSV's header line of [`Self::to_csv`].
+    fn csv_header(&self, s: &mut String) {
         s.push_str(
             "element,x_mm,y_mm,z_mm,warp_x,warp_y,warp_z,weft_x,weft_y,weft_z,shear_deg,\
              yarn_angle_deg,thickness_mm",
@@ -365,47 +410,50 @@ impl Orientations {
             s.push_str(",distance_mm");
         }
         s.push('\n');
-        for e in 0..self.len() {
-            let _ = write!(s, "{}", self.labels[e]);
-            let c = self
-                .centroid
-                .get(e)
-                .copied()
-                .unwrap_or(Vector3::repeat(f64::NAN));
-            for (k, v) in [
-                c.x,
-                c.y,
-                c.z,
-                self.warp[e].x,
-                self.warp[e].y,
-                self.warp[e].z,
-                self.weft[e].x,
-                self.weft[e].y,
-                self.weft[e].z,
-                self.shear_deg[e],
-                90.0 - self.shear_deg[e],
-                self.thickness[e],
-            ]
-            .into_iter()
-            .chain(self.distance.as_ref().map(|d| d[e]))
-            .enumerate()
-            {
-                s.push(',');
-                // The centroid (0..3) and the distance are always written;
-                // an incomplete element's values are not.
-                let withheld = (3..12).contains(&k) && skip.contains(&e);
-                if !withheld {
-                    s.push_str(&crate::finite::or_empty(v, fmt_f64));
-                }
+    }
+
+    /// Element `e`'s line of [`Self::to_csv`] (its values withheld when it
+    /// is in `skip`, the incomplete ones).
+    fn csv_row(&self, s: &mut String, e: usize, skip: &std::collections::BTreeSet<usize>) {
+        let _ = write!(s, "{}", self.labels[e]);
+        let c = self
+            .centroid
+            .get(e)
+            .copied()
+            .unwrap_or(Vector3::repeat(f64::NAN));
+        for (k, v) in [
+            c.x,
+            c.y,
+            c.z,
+            self.warp[e].x,
+            self.warp[e].y,
+            self.warp[e].z,
+            self.weft[e].x,
+            self.weft[e].y,
+            self.weft[e].z,
+            self.shear_deg[e],
+            90.0 - self.shear_deg[e],
+            self.thickness[e],
+        ]
+        .into_iter()
+        .chain(self.distance.as_ref().map(|d| d[e]))
+        .enumerate()
+        {
+            s.push(',');
+            // The centroid (0..3) and the distance are always written;
+            // an incomplete element's values are not.
+            let withheld = (3..12).contains(&k) && skip.contains(&e);
+            if !withheld {
+                s.push_str(&crate::finite::or_empty(v, fmt_f64));
             }
-            s.push('\n');
         }
-        s
+        s.push('\n');
     }
 
     /// Reads an include written by [`Self::to_inp`] (drape's own format:
-    /// `*NODE`, `*ELEMENT` and the `DRAPE_*` distributions; other keywords
-    /// are skipped). `path` names the file in errors.
+    /// `*NODE`, `*ELEMENT` and the `DRAPE_*` distributions, or a layup's
+    /// per-ply ones when its header names plies; other keywords are
+    /// skipped). `path` names the file in errors.
     pub fn parse_inp(text: &str, path: &Path) -> Result<Self, String> {
         let err = |line: usize, what: &str| format!("{}:{line}: {what}", path.display());
         let mut out = Self::default();
@@ -421,12 +469,16 @@ impl Orientations {
             Distribution(String),
         }
         let mut block = Block::None;
+        let mut ply_names: Vec<String> = Vec::new();
         for (i, raw) in text.lines().enumerate() {
             let line_no = i + 1;
             let line = raw.trim();
             if line.is_empty() || line.starts_with("**") {
                 if let Some(title) = line.strip_prefix("** drape: draped fibre orientations, ") {
                     title.clone_into(&mut out.title);
+                }
+                if let Some(list) = line.strip_prefix(layup::PLIES_LINE) {
+                    ply_names = list.split(',').map(|n| n.trim().to_owned()).collect();
                 }
                 continue;
             }
@@ -441,7 +493,7 @@ impl Orientations {
                         let name = parts
                             .find_map(|p| p.strip_prefix("NAME="))
                             .ok_or_else(|| err(line_no, "a *DISTRIBUTION without NAME="))?;
-                        Block::Distribution(name.trim().to_owned())
+                        Block::Distribution(name.trim().trim_matches('"').to_owned())
                     }
                     _ => Block::None,
                 };
@@ -507,48 +559,70 @@ impl Orientations {
             }
             Ok(t)
         };
-        let axes = table(names::AXES, 6)?;
-        let angle = table(names::YARN_ANGLE, 1)?;
-        let thickness = table(names::THICKNESS, 1)?;
-        out.nominal_thickness = defaults
-            .get(names::THICKNESS)
-            .and_then(|v| v.first().copied())
-            .unwrap_or(f64::NAN);
         let by_label: BTreeMap<i64, &Vec<i64>> = elements.iter().map(|(l, n)| (*l, n)).collect();
-        for (&label, v) in axes {
-            let missing = |what: &str| format!("{}: element {label} has no {what}", path.display());
-            out.labels.push(label);
-            out.warp.push(Vector3::new(v[0], v[1], v[2]));
-            out.weft.push(Vector3::new(v[3], v[4], v[5]));
-            out.shear_deg.push(
-                90.0 - angle
-                    .get(&label)
-                    .ok_or_else(|| missing(names::YARN_ANGLE))?[0],
-            );
-            out.thickness.push(
-                thickness
-                    .get(&label)
-                    .ok_or_else(|| missing(names::THICKNESS))?[0],
-            );
-            if !out.nodes.is_empty() {
-                let nodes = by_label
-                    .get(&label)
-                    .ok_or_else(|| missing("*ELEMENT line"))?
-                    .iter()
-                    .map(|n| {
-                        node_index.get(n).copied().ok_or_else(|| {
-                            format!("{}: element {label}: no node {n}", path.display())
+        // One ply's distributions are named DRAPE_*; a layup's, after each
+        // ply (Abaqus names are case-blind: the keys were upper-cased).
+        let prefixes: Vec<String> = if ply_names.is_empty() {
+            vec!["DRAPE".into()]
+        } else {
+            ply_names.iter().map(|n| n.to_ascii_uppercase()).collect()
+        };
+        for (p, prefix) in prefixes.iter().enumerate() {
+            let axes = table(&format!("{prefix}_AXES"), 6)?;
+            let angle_name = format!("{prefix}_YARN_ANGLE");
+            let angle = table(&angle_name, 1)?;
+            let thickness_name = format!("{prefix}_THICKNESS");
+            let thickness = table(&thickness_name, 1)?;
+            let nominal = defaults
+                .get(&thickness_name)
+                .and_then(|v| v.first().copied())
+                .unwrap_or(f64::NAN);
+            let first = out.labels.len();
+            for (&label, v) in axes {
+                let missing =
+                    |what: &str| format!("{}: element {label} has no {what}", path.display());
+                out.labels.push(label);
+                out.warp.push(Vector3::new(v[0], v[1], v[2]));
+                out.weft.push(Vector3::new(v[3], v[4], v[5]));
+                out.shear_deg
+                    .push(90.0 - angle.get(&label).ok_or_else(|| missing(&angle_name))?[0]);
+                out.thickness.push(
+                    thickness
+                        .get(&label)
+                        .ok_or_else(|| missing(&thickness_name))?[0],
+                );
+                if !out.nodes.is_empty() {
+                    let nodes = by_label
+                        .get(&label)
+                        .ok_or_else(|| missing("*ELEMENT line"))?
+                        .iter()
+                        .map(|n| {
+                            node_index.get(n).copied().ok_or_else(|| {
+                                format!("{}: element {label}: no node {n}", path.display())
+                            })
                         })
-                    })
-                    .collect::<Result<Vec<u32>, String>>()?;
-                let c = nodes
-                    .iter()
-                    .map(|&n| out.nodes[n as usize])
-                    .sum::<Vector3<f64>>()
-                    / nodes.len() as f64;
-                out.centroid.push(c);
-                out.elements.push(nodes);
+                        .collect::<Result<Vec<u32>, String>>()?;
+                    let c = nodes
+                        .iter()
+                        .map(|&n| out.nodes[n as usize])
+                        .sum::<Vector3<f64>>()
+                        / nodes.len() as f64;
+                    out.centroid.push(c);
+                    out.elements.push(nodes);
+                }
             }
+            if ply_names.is_empty() {
+                out.nominal_thickness = nominal;
+            } else {
+                out.plies.push(PlyPart {
+                    name: ply_names[p].clone(),
+                    elements: first..out.labels.len(),
+                    nominal_thickness: nominal,
+                });
+            }
+        }
+        if !out.plies.is_empty() {
+            out.nominal_thickness = out.plies.iter().map(|p| p.nominal_thickness).sum();
         }
         Ok(out)
     }
@@ -588,6 +662,7 @@ mod tests {
             distance: None,
             missing: vec![(1, "edge-on".into())],
             notes: vec!["the source run stopped".into()],
+            plies: Vec::new(),
         }
     }
 
@@ -631,5 +706,151 @@ mod tests {
         let mut o = three();
         o.nominal_thickness = f64::NAN;
         assert!(o.check_finite().unwrap_err().contains("nominal thickness"));
+    }
+
+    /// A quad and a triangle with values that need every digit; written
+    /// in metres, as `drape export --units m` does.
+    fn golden() -> Orientations {
+        Orientations {
+            title: "golden".into(),
+            nodes: vec![
+                Vector3::new(0.0, 0.0, 0.0),
+                Vector3::new(1.5, 0.0, 0.1),
+                Vector3::new(0.0, 1.25, 0.0),
+                Vector3::new(1.5, 1.25, -0.2),
+                Vector3::new(3.0, 0.0, 0.0),
+            ],
+            elements: vec![vec![0, 1, 3, 2], vec![1, 4, 3]],
+            labels: vec![1, 2],
+            centroid: vec![
+                Vector3::new(0.75, 0.625, -0.025),
+                Vector3::new(2.0, 0.4166666666666667, -0.03333333333333333),
+            ],
+            warp: vec![Vector3::new(0.6, 0.8, 0.0), Vector3::new(1.0, 0.0, 0.0)],
+            weft: vec![Vector3::new(-0.6, 0.8, 0.0), Vector3::new(0.0, 1.0, 0.0)],
+            shear_deg: vec![16.26020470831196, -0.1],
+            thickness: vec![0.31, 0.2999999999999999],
+            nominal_thickness: 0.3,
+            ..Orientations::default()
+        }
+    }
+
+    /// The files of one ply (no plies: `[fabric]`) are, byte for byte,
+    /// what drape wrote before laminates existed: the expected texts were
+    /// written by that version (commit 5f63977) from these numbers.
+    #[test]
+    fn one_ply_files_are_byte_identical_to_those_before_laminates() {
+        let o = golden();
+        let data = |name: &str| {
+            std::fs::read_to_string(
+                Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("tests/data/orientations")
+                    .join(name),
+            )
+            .unwrap()
+        };
+        assert_eq!(o.to_inp_in("m", 1000.0), data("one_ply_m.inp"));
+        assert_eq!(o.to_csv(), data("one_ply.csv"));
+        let mut m = o;
+        m.nodes.clear();
+        m.elements.clear();
+        m.distance = Some(vec![0.0, 0.125]);
+        m.missing = vec![(1, "edge-on".into())];
+        m.notes = vec!["stopped".into()];
+        assert_eq!(m.to_inp(), data("one_ply_mapped.inp"));
+        assert_eq!(m.to_csv(), data("one_ply_mapped.csv"));
+    }
+
+    /// `golden` as ply `name`, turned by `deg` about z and raised by `dz`
+    /// (its labels from `first`).
+    fn ply_of(deg: f64, dz: f64, first: i64) -> Orientations {
+        let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), deg.to_radians());
+        let mut o = golden();
+        o.nodes.iter_mut().for_each(|x| x.z += dz);
+        o.centroid.iter_mut().for_each(|x| x.z += dz);
+        o.warp.iter_mut().for_each(|d| *d = r * *d);
+        o.weft.iter_mut().for_each(|d| *d = r * *d);
+        o.labels.iter_mut().for_each(|l| *l += first - 1);
+        o
+    }
+
+    /// Two plies (the second with a name Abaqus must read quoted) written
+    /// as a layup and read back: each ply's elements, directions, angles
+    /// and nominal thickness as that ply's, under its own names; the
+    /// table has a `ply` column.
+    #[test]
+    fn a_layup_reads_back_ply_by_ply_under_the_plies_names() {
+        let mut top = ply_of(45.0, 0.3, 3);
+        top.nominal_thickness = 0.25;
+        top.missing = vec![(1, "edge-on".into())];
+        let o = Orientations::layup(vec![
+            ("p0".into(), ply_of(0.0, 0.0, 1)),
+            ("+45".into(), top),
+        ]);
+        assert_eq!(o.plies[1].elements, 2..4);
+        assert_eq!(o.elements[2], [5, 6, 8, 7]);
+        assert!((o.nominal_thickness - 0.55).abs() < 1e-15);
+        let inp = o.to_inp();
+        for line in [
+            "** plies, bottom to top: p0, +45\n",
+            "*ELSET, ELSET=p0\n1, 2\n",
+            "*ELSET, ELSET=\"+45\"\n3, 4\n",
+            "*ELSET, ELSET=\"+45_NO_ORIENTATION\"\n4\n",
+            "*DISTRIBUTION, NAME=p0_AXES, LOCATION=ELEMENT, TABLE=p0_AXES_TABLE\n",
+            "*ORIENTATION, NAME=\"+45_WEFT\", DEFINITION=COORDINATES, SYSTEM=RECTANGULAR\n\"+45_AXES\"\n3, \"+45_YARN_ANGLE\"\n",
+            "*DISTRIBUTION, NAME=\"+45_THICKNESS\", LOCATION=ELEMENT, TABLE=\"+45_THICKNESS_TABLE\"\n, 0.25\n",
+            "**   ply +45, element 4: edge-on\n",
+        ] {
+            assert!(inp.contains(line), "{line}\n{inp}");
+        }
+        assert!(
+            !inp.contains("DRAPE_AXES") && !inp.contains("DRAPE_PLY"),
+            "{inp}"
+        );
+        let back = Orientations::parse_inp(&inp, Path::new("layup.inp")).unwrap();
+        let names: Vec<&str> = back.plies.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(names, ["p0", "+45"]);
+        assert_eq!(back.plies[0].elements, 0..2);
+        // Element 4 has no values: only element 3 of the top ply.
+        assert_eq!(back.plies[1].elements, 2..3);
+        assert_eq!(back.labels, [1, 2, 3]);
+        assert_eq!(back.plies[1].nominal_thickness, 0.25);
+        for (e, want) in [(0, &o.warp[0]), (1, &o.warp[1]), (2, &o.warp[2])] {
+            assert_eq!(&back.warp[e], want, "element {e}");
+        }
+        assert_eq!(back.weft[2], o.weft[2]);
+        // γ goes through the yarn angle 90° − γ: exact to its last bits.
+        for e in 0..3 {
+            assert!(
+                (back.shear_deg[e] - o.shear_deg[e]).abs() < 1e-12,
+                "element {e}"
+            );
+        }
+        assert_eq!(back.elements[2], o.elements[2]);
+        let csv = o.to_csv();
+        let rows: Vec<&str> = csv.lines().collect();
+        assert!(rows[0].starts_with("ply,element,x_mm,"), "{csv}");
+        assert!(rows[3].starts_with("+45,3,"), "{csv}");
+        assert_eq!(
+            rows[4],
+            "+45,4,2,0.4166666666666667,0.26666666666666666,,,,,,,,,"
+        );
+    }
+
+    /// A ply's orientations taken out of a layup are the ply's own.
+    #[test]
+    fn a_ply_taken_from_a_layup_is_that_ply() {
+        let top = ply_of(-45.0, 0.3, 3);
+        let o = Orientations::layup(vec![
+            ("a".into(), ply_of(0.0, 0.0, 1)),
+            ("b".into(), top.clone()),
+        ]);
+        let b = o.ply(&o.plies[1]);
+        assert_eq!(b.labels, top.labels);
+        assert_eq!(b.warp, top.warp);
+        assert_eq!(b.shear_deg, top.shear_deg);
+        assert!(b.plies.is_empty());
+        // Its elements name the layup's nodes (the second ply's).
+        assert_eq!(b.nodes[b.elements[0][0] as usize], top.nodes[0]);
     }
 }

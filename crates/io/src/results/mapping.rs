@@ -192,7 +192,28 @@ pub fn model_elements(model: &Model) -> Vec<Vec<u32>> {
 /// The shear angle and the thickness are interpolated as values, not
 /// recomputed from the directions, as in the source (see the conventions
 /// of [`super::export`]).
+///
+/// A laminate's plies are mapped one by one, each from its own formed
+/// surface onto all of `target`'s elements: the result is a layup with
+/// every ply over the same labels.
 pub fn map_onto(source: &Orientations, target: &ImportedMesh) -> Result<Orientations, String> {
+    if source.plies.is_empty() {
+        return map_one(source, target);
+    }
+    let plies = source
+        .plies
+        .iter()
+        .map(|p| {
+            map_one(&source.ply(p), target)
+                .map(|o| (p.name.clone(), o))
+                .map_err(|e| format!("ply {}: {e}", p.name))
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    Ok(Orientations::layup(plies))
+}
+
+/// [`map_onto`] for one ply.
+fn map_one(source: &Orientations, target: &ImportedMesh) -> Result<Orientations, String> {
     if source.nodes.is_empty() {
         return Err("the orientations carry no mesh to map from".into());
     }

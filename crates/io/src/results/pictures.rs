@@ -228,16 +228,37 @@ fn on_scale(v: f64, [lo, hi]: [f64; 2]) -> RGBColor {
 /// scales), each element filled with the viridis colour of |γ| over
 /// `range` (None: 0 to the largest), a colour bar, the blank's outline
 /// before forming and the largest shear marked.
+///
+/// With `ply` (`shear_map_<ply>.png` of a laminate), that ply's elements
+/// only, its outline and its largest shear, on the frame and colour scale
+/// of the whole laminate's picture, so that the plies' pictures compare
+/// pixel for pixel and colour for colour.
 pub(super) fn shear_map(
     model: &Model,
     state: &State,
     fields: &ElementFields,
     measures: &Measures,
     range: Option<[f64; 2]>,
+    ply: Option<&drape_model::stack::Ply>,
 ) -> Result<Vec<u8>> {
     let mut patches = Vec::with_capacity(fields.shear.len());
+    // The laminate's largest |γ|: the colour scale of every ply's picture.
+    let mut vmax_all = 0.0f64;
+    let mut element = 0;
     for batch in &model.membranes {
         for e in 0..batch.len() {
+            let k = element;
+            element += 1;
+            let value = fields
+                .shear
+                .get(k)
+                .map_or(f64::NAN, |g| g.abs().to_degrees());
+            if value.is_finite() {
+                vmax_all = vmax_all.max(value);
+            }
+            if ply.is_some_and(|p| !p.elements.contains(&k)) {
+                continue;
+            }
             let nodes = batch.element_nodes(e);
             let corners = nodes
                 .iter()
@@ -251,10 +272,6 @@ pub(super) fn shear_map(
                 ));
             };
             let z = nodes.iter().map(|&n| state.x[n as usize].z).sum::<f64>() / nodes.len() as f64;
-            let value = fields
-                .shear
-                .get(patches.len())
-                .map_or(f64::NAN, |g| g.abs().to_degrees());
             patches.push(Patch { corners, value, z });
         }
     }
@@ -265,16 +282,41 @@ pub(super) fn shear_map(
         .map(|p| p.value)
         .filter(|v| v.is_finite())
         .fold(0.0, f64::max);
-    let scale = shear_scale(range, vmax);
-    let outline = boundary_edges(model);
+    let scale = shear_scale(range, if ply.is_some() { vmax_all } else { vmax });
+    let mut outline = boundary_edges(model);
+    let mut max_shear_at = measures.max_shear_at;
+    if let Some(p) = ply {
+        let nodes = p.nodes.clone();
+        outline.retain(|edge| edge.iter().all(|n| nodes.contains(n)));
+        // The ply's own largest shear (its first element of the largest,
+        // as the laminate's is found).
+        let mut largest: Option<(usize, f64)> = None;
+        for k in p.elements.clone() {
+            let v = fields.shear.get(k).map_or(f64::NAN, |g| g.abs());
+            if v.is_finite() && largest.is_none_or(|(_, b)| v > b) {
+                largest = Some((k, v));
+            }
+        }
+        max_shear_at = largest
+            .and_then(|(k, _)| fields.centroid.get(k))
+            .map_or([f64::NAN; 3], |c| [c.x, c.y, c.z]);
+    }
 
     // No "=" in titles: plotters 0.3.7's ab_glyph text drops each glyph's
     // left side bearing, which glues "=" to the character before it.
-    let title = format!(
-        "Shear angle |γ| seen from above   (time {} s, largest {}°)",
-        human(state.time),
-        human(vmax)
-    );
+    let title = match ply {
+        None => format!(
+            "Shear angle |γ| seen from above   (time {} s, largest {}°)",
+            human(state.time),
+            human(vmax)
+        ),
+        Some(p) => format!(
+            "Ply {}: shear angle |γ| seen from above   (time {} s, largest {}°)",
+            p.name,
+            human(state.time),
+            human(vmax)
+        ),
+    };
     render(MAP_SIZE, |root| {
         let (w, _) = MAP_SIZE;
         let body = root.titled(&title, (FAMILY, 24)).map_err(drawing)?;
@@ -351,7 +393,7 @@ pub(super) fn shear_map(
             }))
             .map_err(drawing)?;
 
-        let [mx, my, _] = measures.max_shear_at;
+        let [mx, my, _] = max_shear_at;
         if vmax > 0.0 && mx.is_finite() && my.is_finite() {
             chart
                 .draw_series([

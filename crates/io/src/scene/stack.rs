@@ -101,12 +101,16 @@ pub(super) fn build(
     for (i, p) in stack.ply.iter().enumerate() {
         let here = format!("stack.ply[{i}]");
         let name = p.name.clone().unwrap_or_else(|| format!("ply{}", i + 1));
-        if name.is_empty() || name.contains(['.', ' ', '"', ',']) {
+        if name.is_empty()
+            || name.contains(['.', '"', ',', '/', '\\', ':', '*', '?', '<', '>', '|'])
+            || name.chars().any(|c| c.is_whitespace() || c.is_control())
+        {
             return Err(at.error(
                 &format!("{here}.name"),
                 format!(
-                    "`{name}` is not allowed: a ply's name names node sets (`NAME.left`) and \
-                     results columns, so it is not empty and has no dot, space, comma or quote"
+                    "`{name}` is not allowed: a ply's name names node sets (`NAME.left`), \
+                     results columns and files (`shear_map_NAME.png`), so it is not empty and \
+                     has no dot, space, comma, quote or any of / \\ : * ? < > |"
                 ),
             ));
         }
@@ -114,6 +118,21 @@ pub(super) fn build(
             return Err(at.error(
                 &format!("{here}.name"),
                 format!("`{name}` is the name of stack.ply[{j}] already: each ply needs its own"),
+            ));
+        }
+        // The orientation export names each ply's element set and
+        // orientations in Abaqus, whose names are case-blind.
+        if let Some(q) = plies
+            .iter()
+            .find(|q: &&PlyModel| q.name.eq_ignore_ascii_case(&name))
+        {
+            return Err(at.error(
+                &format!("{here}.name"),
+                format!(
+                    "`{name}` differs from the ply `{}` below only in case: the orientations \
+                     export names each ply in Abaqus, where case does not count",
+                    q.name
+                ),
             ));
         }
         let mut material = match &p.material {

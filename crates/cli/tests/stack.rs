@@ -1,0 +1,167 @@
+//! A laminate end to end: a two-ply run writes one shear map per ply and
+//! its orientations as a layup (a `ply` column in the table), and `drape
+//! export --onto` carries every ply onto a structural mesh; a one-ply run
+//! writes no per-ply picture.
+
+use std::path::Path;
+
+mod common;
+use common::*;
+
+/// `scenes/hemisphere-stack.toml` (plies `p0` under `p45`), coarse and
+/// short; with `plies` 1, as `[fabric]` alone (`stack` false) or as a
+/// stack of its bottom ply.
+fn scene(dir: &Path, plies: usize, stack: bool) -> String {
+    let text = std::fs::read_to_string(workspace().join("scenes/hemisphere-stack.toml")).unwrap();
+    let mut text = text
+        .replace("cells = [24, 24]", "cells = [6, 6]")
+        .replace("end_time = 1.0 ", "end_time = 0.05 ")
+        .replace("frames = 20 ", "frames = 2 ");
+    assert!(text.contains("end_time = 0.05") && text.contains("cells = [6, 6]"));
+    if plies == 1 {
+        let (start, end) = (
+            text.find("\n[stack]\n").unwrap(),
+            text.find("[[tools]]").unwrap(),
+        );
+        let one = if stack {
+            "\n[stack]\n[[stack.ply]]\nname = \"p0\"\n\n"
+        } else {
+            "\n"
+        };
+        text.replace_range(start..end, one);
+        text = text.replace("blank = {", "bending = false\nblank = {");
+    }
+    let path = dir.join(format!("{plies}-{stack}.toml"));
+    std::fs::write(&path, text).unwrap();
+    path.to_str().unwrap().to_owned()
+}
+
+/// A flat structural mesh of two S4R quads, 40 × 20 mm about the axis at
+/// z = −5 mm (under the plies, which the punch lifts).
+const PLATE: &str = "\
+*NODE
+1, -20, -10, -5
+2, 0, -10, -5
+3, 20, -10, -5
+4, -20, 10, -5
+5, 0, 10, -5
+6, 20, 10, -5
+*ELEMENT, TYPE=S4R, ELSET=PLATE
+11, 1, 2, 5, 4
+12, 2, 3, 6, 5
+";
+
+/// The angle of the warp columns of a CSV row to x, degrees (0..180).
+fn warp_angle(row: &[&str], header: &[&str]) -> f64 {
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (x, y): (f64, f64) = (
+        row[col("warp_x")].parse().unwrap(),
+        row[col("warp_y")].parse().unwrap(),
+    );
+    y.atan2(x).to_degrees().rem_euclid(180.0)
+}
+
+#[test]
+fn a_stack_pictures_and_exports_every_ply() {
+    let dir = temp("stack");
+    let out = dir.join("out");
+    let o = drape(&["run", &scene(&dir, 2, true), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+
+    // One picture per ply beside the overlaid one, on the same frame.
+    let size = |name: &str| {
+        let decoder = png::Decoder::new(std::io::BufReader::new(
+            std::fs::File::open(out.join(name)).unwrap(),
+        ));
+        let reader = decoder.read_info().unwrap();
+        let info = reader.info();
+        (info.width, info.height)
+    };
+    let whole = size("shear_map.png");
+    assert_eq!(size("shear_map_p0.png"), whole);
+    assert_eq!(size("shear_map_p45.png"), whole);
+    let bytes = |name: &str| std::fs::read(out.join(name)).unwrap();
+    assert_ne!(bytes("shear_map_p0.png"), bytes("shear_map_p45.png"));
+
+    // The table: a ply column, each ply's rows with its own warp.
+    let csv = std::fs::read_to_string(out.join("orientations.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(header[..2], ["ply", "element"]);
+    let inp = std::fs::read_to_string(out.join("orientations.inp")).unwrap();
+    assert!(inp.contains("** plies, bottom to top: p0, p45\n"));
+    assert!(inp.contains("*ELSET, ELSET=p45\n"));
+    assert!(inp.contains("*ORIENTATION, NAME=p45_WARP,"));
+
+    // Onto a structural mesh: both plies over its two elements.
+    std::fs::write(dir.join("plate.inp"), PLATE).unwrap();
+    let mapped = dir.join("mapped");
+    let o = drape(&[
+        "export",
+        out.to_str().unwrap(),
+        "--onto",
+        dir.join("plate.inp").to_str().unwrap(),
+        "--out",
+        mapped.to_str().unwrap(),
+    ]);
+    let said = text(&o);
+    assert!(o.status.success(), "{said}");
+    assert!(
+        said.contains("mapped            2 elements of")
+            && said.contains("onto each of the 2 plies of")
+            && said.contains("(p0, p45)"),
+        "{said}"
+    );
+    let csv = std::fs::read_to_string(mapped.join("orientations_plate.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header[..2], ["ply", "element"]);
+    assert_eq!(header.last(), Some(&"distance_mm"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let plies: Vec<(&str, &str)> = rows.iter().map(|r| (r[0], r[1])).collect();
+    assert_eq!(
+        plies,
+        [("p0", "11"), ("p0", "12"), ("p45", "11"), ("p45", "12")]
+    );
+    let distance = |r: &Vec<&str>| r.last().unwrap().parse::<f64>().unwrap();
+    for (k, r) in rows.iter().enumerate() {
+        // Near the pole the plies are still flat: their warps at 0° and 45°.
+        let want = if k < 2 { 0.0 } else { 45.0 };
+        let a = warp_angle(r, &header);
+        let off = (a - want).abs().min(180.0 - (a - want).abs());
+        assert!(off < 2.0, "row {k}: warp at {a}°: {csv}");
+        assert!(distance(r) < 10.0, "row {k}: {csv}");
+    }
+    // The top ply above the bottom one.
+    for k in 0..2 {
+        assert!(distance(&rows[k + 2]) > distance(&rows[k]), "{csv}");
+    }
+    let inp = std::fs::read_to_string(mapped.join("orientations_plate.inp")).unwrap();
+    for name in ["p0_WARP", "p45_WARP", "p0_AXES", "p45_THICKNESS"] {
+        assert!(inp.contains(&format!("NAME={name},")), "{name}: {inp}");
+    }
+
+    // One ply, as [fabric] or as a stack of one: no picture per ply, the
+    // one-ply files, the same bytes both ways.
+    let mut tables = Vec::new();
+    for stack in [false, true] {
+        let one = dir.join(format!("one-{stack}"));
+        let o = drape(&[
+            "run",
+            &scene(&dir, 1, stack),
+            "--out",
+            one.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", text(&o));
+        let pictures: Vec<String> = std::fs::read_dir(&one)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with("shear_map"))
+            .collect();
+        assert_eq!(pictures, ["shear_map.png"]);
+        let csv = std::fs::read_to_string(one.join("orientations.csv")).unwrap();
+        assert!(csv.starts_with("element,x_mm,"));
+        tables.push(csv);
+    }
+    assert_eq!(tables[0], tables[1]);
+    std::fs::remove_dir_all(dir).unwrap();
+}

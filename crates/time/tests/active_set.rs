@@ -403,3 +403,77 @@ fn newton_converges_quadratically_once_the_active_set_has_settled() {
     }
     assert!(checked > 0, "no iterations to check: {record:?}");
 }
+
+/// A 60 × 20 mm strip pinched between a floor and a force-driven holder
+/// (F = 2 000 N, μ = 0.2 on both faces), drawn out at one end at
+/// 200 mm/s: once every node slides, the pulled edge carries the
+/// friction of both faces, 2·μ·F (the pull along x is steady, so no
+/// inertia). How the clamp is shared among the pinched nodes is
+/// indeterminate, and each node's friction cone is μ times its share:
+/// when every system picked its own least-squares share, the shares
+/// jumped between Newton iterations, nodes at the cone's edge flipped
+/// between stick and slip in turn, and the active-set run stopped at
+/// t = 0.012 s (increment 2e-10 s, 11 friction-chatter cutbacks) where
+/// the condensed one completes in 39 increments. Both solvers must
+/// complete, with no friction-chatter cutback, and carry the pull (the
+/// boundary's work over the second half of the run over the distance
+/// drawn) to 1e-6.
+#[test]
+fn a_strip_drawn_through_a_pinch_settles() {
+    let h = glass().thickness;
+    let (force, mu) = (2000.0, 0.2);
+    let mut model = blank_model([60.0, 20.0], [12, 4], 0.0);
+    model
+        .tools
+        .push(plane("floor", -0.5 * h, true, mu, ToolMotion::Fixed));
+    model.tools.push(plane(
+        "holder",
+        0.5 * h,
+        false,
+        mu,
+        ToolMotion::Force {
+            direction: -Vector3::z(),
+            force,
+            amplitude: Amplitude::Ramp { duration: 0.01 },
+            mass: 1e-3,
+        },
+    ));
+    let (speed, end) = (200.0, 0.05);
+    let pulled = model.node_set("right").unwrap().to_vec();
+    model.boundary.push(BoundaryCondition {
+        nodes: pulled,
+        components: [true, false, false],
+        motion: Motion::Velocity {
+            value: Vector3::new(speed, 0.0, 0.0),
+            amplitude: drape_model::Amplitude::Constant,
+        },
+    });
+    for solver in [ContactSolver::Condensed, ContactSolver::ActiveSet] {
+        // The boundary's work at each frame (N·mm): over the last frame
+        // interval it is the pull times the distance drawn.
+        let mut work = Vec::new();
+        let mut observer = Frames(|fr: &Frame<'_>| work.push(fr.energy.boundary_work));
+        let settings = ImplicitSettings {
+            end_time: end,
+            frames: 2,
+            contact_solver: solver,
+            ..ImplicitSettings::default()
+        };
+        let mut driver = Implicit::new(&model, settings).unwrap();
+        let mut state = model.initial_state();
+        let summary = driver.run(&mut state, &mut observer);
+        let summary = summary.unwrap_or_else(|e| panic!("{solver:?}: {e}"));
+        assert!(!summary.stopped, "{solver:?} stopped");
+        let totals = summary.implicit.unwrap();
+        assert_eq!(totals.cutback_reasons.friction_chatter, 0, "{solver:?}");
+        let [.., before, last] = work[..] else {
+            panic!("{solver:?}: {} frames", work.len());
+        };
+        let pull = (last - before) / (speed * 0.5 * end);
+        let expected = 2.0 * mu * force;
+        assert!(
+            (pull - expected).abs() < 1e-6 * expected,
+            "{solver:?}: pull {pull} N against 2μF = {expected} N"
+        );
+    }
+}

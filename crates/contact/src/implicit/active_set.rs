@@ -52,13 +52,14 @@
 //! diagonal, which makes the matrix quasi-definite (an LDLᵀ exists in any
 //! symmetric order, so the symbolic analysis is reused) and picks the
 //! least-squares share; the driver then removes ε's bias by iterative
-//! refinement against the unregularised system. That share is where this
-//! solver differs from the condensed one, whose warm start keeps the
-//! share of the last solve: with friction each row has its own cone, and
-//! on the deep-drawing scenes (holder and die pinching most of the flange)
-//! the active-set runs chatter between stick and slip and do not complete
-//! (measured 2026-11-28; a proximal regularisation towards the last
-//! multipliers got further but lost the clamp). A force-driven holder is
+//! refinement against the unregularised system. With friction each row
+//! has its own cone, μ times its share, so the share must not move
+//! between iterations: after each solve the clamp of a force-driven
+//! tool's flat face is shared among the nodes it pinches in proportion
+//! to their masses (`share_clamp`: a uniform clamping pressure; the step
+//! and Cᵀλ are unchanged). Left to the least-squares share, the
+//! deep-drawing runs chattered between stick and slip from t ≈ 0.21 s
+//! and did not complete. A force-driven holder is
 //! one more unknown (its displacement along its axis, its inertia on the
 //! diagonal), coupled to every row of its pairs.
 //!
@@ -105,6 +106,7 @@ pub struct SystemRow {
     pub regularisation: f64,
     /// Its value at the iterate: a gap or a slip component (mm).
     pub target: f64,
+
     /// A normal row (λ ≥ 0).
     pub bounded: bool,
 }
@@ -231,6 +233,84 @@ impl ImplicitContact {
         }
     }
 
+    /// Shares the clamp of a force-driven tool's flat face among the nodes
+    /// it pinches against another tool in proportion to their masses
+    /// (their share of the fabric where the mesh is uniform): a uniform
+    /// clamping pressure, as a rigid flat holder on a fabric of uniform
+    /// thickness gives.
+    ///
+    /// Why: with two held rows ±n on each such node, only the holder's
+    /// total and each node's net normal force λ_d − λ_h are determined;
+    /// the rest is a null space of the system, where the solve's answer
+    /// (the regularisation's least-squares share, see [`REGULARISATION`])
+    /// moved with every iteration's K̂ (Σ|Δλ| 5·10⁴ N of a 3.8·10⁵ N
+    /// clamp in one iteration of the deep drawing 10 × 10 with no row
+    /// entering or leaving). Each pinched node's friction cone is μ times
+    /// its share, so the nodes at the edge of the cone flipped between
+    /// stick and slip in turn and the deep drawings did not complete. Kept
+    /// at the last solve's share instead (a proximal term towards the last
+    /// multipliers), the clamp drifted onto a few nodes (two nodes carried
+    /// it all by t = 0.24 s). Moving λ along that null space leaves Cᵀλ,
+    /// the holder's force and so the step unchanged.
+    ///
+    /// Only rows both held whose normals are opposite to round-off, the
+    /// holder's along its axis (its flat face): elsewhere (a rounded edge)
+    /// the rows are not dependent and the system's share stands.
+    fn share_clamp(&mut self) {
+        const FLAT: f64 = 1e-9;
+        let pairs = &mut self.pairs;
+        for (h, holder) in self.tools.iter().enumerate() {
+            if !holder.is_force_driven() {
+                continue;
+            }
+            let axis = holder.motion.direction();
+            let range = |pairs: &[Pair], t: usize| {
+                let start = pairs.partition_point(|p| (p.tool as usize) < t);
+                let end = pairs.partition_point(|p| (p.tool as usize) <= t);
+                start..end
+            };
+            let held = range(pairs, h);
+            for d in (0..self.tools.len()).filter(|&d| d != h) {
+                let other = range(pairs, d);
+                // The node's pair on tool d when the node is pinched.
+                let partner = |pairs: &[Pair], k: usize| -> Option<usize> {
+                    let p = &pairs[k];
+                    if !p.active || p.normal.dot(&axis) < 1.0 - FLAT {
+                        return None;
+                    }
+                    let j = other.start
+                        + pairs[other.clone()]
+                            .binary_search_by_key(&p.node, |q| q.node)
+                            .ok()?;
+                    let q = &pairs[j];
+                    (q.active && p.normal.dot(&q.normal) < -1.0 + FLAT).then_some(j)
+                };
+                let weight = |node: u32| self.mass.get(node as usize).copied().unwrap_or(1.0);
+                let (mut clamp, mut total) = (0.0, 0.0);
+                for k in held.clone() {
+                    if partner(pairs, k).is_some() {
+                        clamp += pairs[k].multiplier;
+                        total += weight(pairs[k].node);
+                    }
+                }
+                if total <= 0.0 {
+                    continue;
+                }
+                for k in held.clone() {
+                    let Some(j) = partner(pairs, k) else {
+                        continue;
+                    };
+                    let share = clamp * weight(pairs[k].node) / total;
+                    let net = pairs[j].multiplier - pairs[k].multiplier;
+                    for (m, value) in [(k, share), (j, share + net)] {
+                        pairs[m].multiplier = value;
+                        pairs[m].lambda = value.max(0.0);
+                    }
+                }
+            }
+        }
+    }
+
     /// The deepest linearised penetration (mm, ≥ 0) after the last
     /// active-set system among the normal rows it did not hold: how far
     /// the step would carry a node into a tool whose row was left out.
@@ -280,6 +360,7 @@ impl ImplicitContact {
                 pair.stick += row.direction * l;
             }
         }
+        self.share_clamp();
         for row in &self.springs {
             let pair = &mut self.pairs[row.pair as usize];
             let i = 3 * pair.node as usize;

@@ -18,6 +18,10 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "two-ply hemisphere [0/90 + ±45] against μ_ply = 0, 0.2, 0.5, 1 (a table), and a four-ply [0/45/90/−45] run",
             "runs complete; the top ply's slip at μ_ply = 1 below that at 0; run times against one ply (a note)",
         ),
+        "plies/hemisphere-four" => (
+            "four plies [0/45/90/−45] formed together on the hemisphere, and the bottom ply alone, on 2 threads",
+            "the plies' distance from the positions: overlap ≤ 1 % of the thickness; no capped ply solve; full: wall time ≤ 5× one ply's",
+        ),
         "plies/hemisphere-overlap" => (
             "two plies (0/90 under ±45, μ_ply = 0.2) formed together on the hemisphere: no interpenetration",
             "the plies' distance computed from the positions: largest overlap ≤ 1 % of the ply thickness",

@@ -18,15 +18,19 @@ pub enum ContactPhase {
     Multipliers,
     /// Coulomb friction.
     Friction,
+    /// Contact between the plies of a laminate (normal and the friction
+    /// solved with the tools'), in a stack only.
+    Plies,
 }
 
 impl ContactPhase {
     /// Every phase, in the order of a pass.
-    pub const ALL: [ContactPhase; 4] = [
+    pub const ALL: [ContactPhase; 5] = [
         ContactPhase::BroadPhase,
         ContactPhase::Projection,
         ContactPhase::Multipliers,
         ContactPhase::Friction,
+        ContactPhase::Plies,
     ];
 
     /// A short label.
@@ -36,6 +40,7 @@ impl ContactPhase {
             ContactPhase::Projection => "projection",
             ContactPhase::Multipliers => "multipliers",
             ContactPhase::Friction => "friction",
+            ContactPhase::Plies => "ply–ply contact",
         }
     }
 }

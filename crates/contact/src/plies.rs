@@ -23,7 +23,12 @@
 //! by projected Gauss–Seidel sweeps over the constraints in a fixed order
 //! (results independent of the thread count), with the nodes that touch a
 //! tool this step held on the tool by a support constraint whose
-//! multiplier goes to that tool's contact ([`Support`]).
+//! multiplier goes to that tool's contact ([`Support`]). Three things keep
+//! the sweeps few: where a node of each ply is nearest a node of the
+//! other, the two searches' rows (nearly the same row, which Gauss–Seidel
+//! shares out between them without end) are one row with the deeper gap;
+//! the sweeps are over-relaxed ([`OMEGA`]); and each solve starts from the
+//! forces of the step before.
 //!
 //! Broad phase: per search direction, a uniform grid of the master ply's
 //! faces grown by the reach; each slave node lists the faces whose grown
@@ -37,9 +42,23 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 /// Sweeps allowed to the friction solve: a stack sticking on a tool
-/// needs its friction to 1e-10 (no creep), which node-on-node meshes
-/// (both searches on one gap) reach slowly.
+/// needs its friction to 1e-10 (no creep); the four-ply hemisphere's
+/// steps need at most ~70.
 const FRICTION_SWEEPS: usize = 500;
+
+/// The weight of a face's vertex above which a node's closest point is
+/// taken to be at that vertex, for pairing a node with a node of the other
+/// ply ([`mutual`]): rows of such a pair differ by less than a fifth of a
+/// node's share, so one row keeps both gaps to that fraction of one step's
+/// correction, which the next step's gap takes up.
+const PAIR_WEIGHT: f64 = 0.9;
+
+/// Over-relaxation of the projected Gauss–Seidel sweeps (normal and
+/// friction): any factor in (0, 2) converges to the same multipliers on
+/// these convex problems; on the hemisphere stacks' systems 1.3 halves the
+/// sweeps of plain Gauss–Seidel (1.0), and 1.5 and above lose again on the
+/// systems whose active set changes most.
+const OMEGA: f64 = 1.3;
 
 /// Slave nodes projected per rayon task.
 const NODES_PER_TASK: usize = 256;
@@ -137,6 +156,10 @@ struct Search {
     cell_ptr: Vec<u32>,
     cell_faces: Vec<u32>,
     fill: Vec<u32>,
+    /// Each slave node's multiplier (as a force, N) and tangential force
+    /// at the last pass it was constrained, and that pass's number: the
+    /// next pass's solves start from them.
+    warm: Vec<Warm>,
 }
 
 impl Default for Hit {
@@ -155,7 +178,21 @@ struct Constraint {
     mu: f64,
     /// 1/(1/mₛ + Σ wⱼ²/mⱼ) with the fixed nodes' inverse mass 0.
     mass: f64,
+    /// The inverse masses of the slave and the masters (0 for a fixed
+    /// node), read by every sweep.
+    inv: [f64; 4],
+    /// The upper ply's node whose slip on the ply below the row measures
+    /// (`u32::MAX`: none, a row of a lower node alone).
+    slip_node: u32,
     search: u32,
+}
+
+/// A constraint's forces at a pass, for the next pass to start from.
+#[derive(Debug, Clone, Copy, Default)]
+struct Warm {
+    normal: f64,
+    tangential: Vector3<f64>,
+    pass: u64,
 }
 
 /// What the last step of the ply pass did.
@@ -168,6 +205,28 @@ pub struct PlyStep {
     /// Largest linearised gap violation left (mm): at most 1e-8 of the
     /// largest at the start unless the sweeps ran out.
     pub residual: f64,
+}
+
+/// Sums over the steps of the ply pass since it was made: what its
+/// solves cost, for a profile or a validation note.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PlyTotals {
+    /// Steps with at least one active constraint.
+    pub steps: u64,
+    /// Active constraints, summed over those steps.
+    pub constraints: u64,
+    /// Gauss–Seidel sweeps of the normal solve, summed.
+    pub normal_sweeps: u64,
+    /// Sweeps of the friction solve, summed.
+    pub friction_sweeps: u64,
+    /// The most sweeps one step's normal solve took.
+    pub max_normal_sweeps: usize,
+    /// The most sweeps one step's friction solve took.
+    pub max_friction_sweeps: usize,
+    /// Steps whose normal solve ran out of sweeps.
+    pub normal_capped: u64,
+    /// Steps whose friction solve ran out of sweeps.
+    pub friction_capped: u64,
 }
 
 /// The ply–ply contact pass.
@@ -199,6 +258,10 @@ pub struct PlyContact {
     pub friction_dissipation: f64,
     /// The last step.
     pub last: PlyStep,
+    /// Sums over the steps so far.
+    pub totals: PlyTotals,
+    /// Passes so far (the normal pass counts them).
+    pass: u64,
 }
 
 impl PlyContact {
@@ -225,6 +288,7 @@ impl PlyContact {
                     offset,
                     cand_ptr: vec![0; count + 1],
                     hits: vec![Hit::NONE; count],
+                    warm: vec![Warm::default(); count],
                     boxes: vec![[0.0; 6]; layers[master].faces.len()],
                     ..Search::default()
                 });
@@ -237,9 +301,9 @@ impl PlyContact {
             searches,
             margin,
             tolerance: 1e-8,
-            // Where two meshes meet node on node, both searches constrain
-            // the same gap and the sweeps share it out slowly; by 200 what
-            // is left is ~1e-9 mm.
+            // The four-ply hemisphere's steps need at most ~70; a step
+            // that runs out is counted ([`PlyTotals::normal_capped`]) and
+            // what it leaves is the next step's gap.
             max_sweeps: 200,
             reference_x: Vec::new(),
             constraints: Vec::with_capacity(2 * n),
@@ -251,6 +315,8 @@ impl PlyContact {
             touched: Vec::with_capacity(n),
             friction_dissipation: 0.0,
             last: PlyStep::default(),
+            totals: PlyTotals::default(),
+            pass: 0,
         }
     }
 
@@ -304,6 +370,7 @@ impl PlyContact {
         }
         self.touched.clear();
         self.constraints.clear();
+        self.pass += 1;
         self.refresh(x);
         let inv = |i: u32| {
             if movable[i as usize] {
@@ -313,7 +380,7 @@ impl PlyContact {
             }
         };
         let layers = &self.layers;
-        for (k, s) in self.searches.iter_mut().enumerate() {
+        for s in self.searches.iter_mut() {
             let slave = &layers[s.slave];
             let faces = &layers[s.master].faces;
             let outline = &self.outline[s.master];
@@ -385,11 +452,51 @@ impl PlyContact {
                         };
                     }
                 });
+        }
+        for (k, s) in self.searches.iter().enumerate() {
+            let slave = &layers[s.slave];
+            // The search the other way of the same interface ([`Self::new`]
+            // pushes them in pairs, the upper ply's nodes first).
+            let (other, other_slave) = if s.side > 0.0 {
+                (&self.searches[k + 1], &layers[s.master])
+            } else {
+                (&self.searches[k - 1], &layers[s.master])
+            };
             for (local, hit) in s.hits.iter().enumerate() {
-                if !hit.found || hit.gap >= 0.0 {
+                if !hit.found {
                     continue;
                 }
                 let node = slave.first_node + local as u32;
+                // Two nodes each nearest the other, one in each ply: the
+                // two searches' rows are nearly one row, which
+                // Gauss–Seidel shares out between them without end (and
+                // never settles where their gaps differ by round-off).
+                // The deeper of the two is kept, as it is; the other gap
+                // moves with it to first order, and is the deeper one at
+                // a later step if it falls behind.
+                let pair = mutual(hit, node, other, other_slave);
+                let deeper = |o: &Hit| {
+                    if s.side > 0.0 {
+                        o.gap < hit.gap
+                    } else {
+                        o.gap <= hit.gap
+                    }
+                };
+                if pair.is_some_and(deeper) {
+                    continue;
+                }
+                let gap = hit.gap;
+                // The upper ply's node whose slip on the ply below this
+                // row measures: its slave, or for a row kept for a pair
+                // from below, the pair's upper node.
+                let slip_node = match (s.side > 0.0, pair) {
+                    (true, _) => node,
+                    (false, Some(_)) => nearest(hit).unwrap_or(u32::MAX),
+                    (false, None) => u32::MAX,
+                };
+                if gap >= 0.0 {
+                    continue;
+                }
                 let m_inv = inv(node)
                     + hit
                         .nodes
@@ -400,14 +507,30 @@ impl PlyContact {
                 if m_inv == 0.0 {
                     continue;
                 }
+                // The last step's force, as this step's multiplier: in a
+                // forming run the plies press on each other much as they
+                // did a step ago.
+                let warm = s.warm[local];
+                let mu = if warm.pass + 1 == self.pass {
+                    warm.normal * dt * tau
+                } else {
+                    0.0
+                };
                 self.constraints.push(Constraint {
                     slave: node,
                     masters: hit.nodes,
                     w: hit.w,
                     normal: hit.normal,
-                    gap: hit.gap,
-                    mu: 0.0,
+                    gap,
+                    mu,
                     mass: 1.0 / m_inv,
+                    inv: [
+                        inv(node),
+                        inv(hit.nodes[0]),
+                        inv(hit.nodes[1]),
+                        inv(hit.nodes[2]),
+                    ],
+                    slip_node,
                     search: k as u32,
                 });
             }
@@ -432,6 +555,14 @@ impl PlyContact {
             self.dx[s.node as usize] = Vector3::zeros();
             s.mu = 0.0;
         }
+        for c in &self.constraints {
+            if c.mu > 0.0 {
+                self.dx[c.slave as usize] += c.normal * (c.mu * c.inv[0]);
+                for k in 0..3 {
+                    self.dx[c.masters[k] as usize] -= c.normal * (c.mu * c.w[k] * c.inv[k + 1]);
+                }
+            }
+        }
         // Converged when what is left of every violation is 1e-8 of the
         // largest one at the start (an absolute tolerance would be most of
         // a slow step's penetration, dt²·a).
@@ -448,14 +579,14 @@ impl PlyContact {
                         .map(|(&j, w)| dx[j as usize] * *w)
                         .sum::<Vector3<f64>>();
                 let g = c.gap + c.normal.dot(&rel);
-                let mu = (c.mu - g * c.mass).max(0.0);
+                let mu = (c.mu - OMEGA * g * c.mass).max(0.0);
                 let d = mu - c.mu;
                 if d != 0.0 {
                     worst = worst.max(if mu > 0.0 { g.abs() } else { -g });
                     c.mu = mu;
-                    dx[c.slave as usize] += c.normal * (d * inv(c.slave));
-                    for (&j, w) in c.masters.iter().zip(&c.w) {
-                        dx[j as usize] -= c.normal * (d * w * inv(j));
+                    dx[c.slave as usize] += c.normal * (d * c.inv[0]);
+                    for k in 0..3 {
+                        dx[c.masters[k] as usize] -= c.normal * (d * c.w[k] * c.inv[k + 1]);
                     }
                 }
             }
@@ -465,7 +596,7 @@ impl PlyContact {
                     continue;
                 }
                 let g = s.normal.dot(&dx[s.node as usize]);
-                let mu = (s.mu - g / m_inv).max(0.0);
+                let mu = (s.mu - OMEGA * g / m_inv).max(0.0);
                 let d = mu - s.mu;
                 if d != 0.0 {
                     worst = worst.max(if mu > 0.0 { g.abs() } else { -g });
@@ -512,6 +643,14 @@ impl PlyContact {
             }
         }
         self.last = step;
+        let totals = &mut self.totals;
+        totals.steps += 1;
+        totals.constraints += step.active as u64;
+        totals.normal_sweeps += step.sweeps as u64;
+        totals.max_normal_sweeps = totals.max_normal_sweeps.max(step.sweeps);
+        if step.residual > tolerance {
+            totals.normal_capped += 1;
+        }
         step
     }
 
@@ -556,18 +695,53 @@ impl PlyContact {
         let lambda_scale = 1.0 / (dt * tau);
         self.f_t.clear();
         self.f_t.resize(self.constraints.len(), Vector3::zeros());
+        // From the last step's tangential forces, in the new tangent
+        // planes and within the new caps.
+        for (k, c) in self.constraints.iter().enumerate() {
+            let s = &self.searches[c.search as usize];
+            let cap = s.friction * c.mu * lambda_scale;
+            let local = (c.slave - self.layers[s.slave].first_node) as usize;
+            let warm = s.warm[local];
+            if cap == 0.0 || warm.pass + 1 != self.pass {
+                continue;
+            }
+            let f = warm.tangential - c.normal * c.normal.dot(&warm.tangential);
+            let n = f.norm();
+            if n == 0.0 {
+                continue;
+            }
+            let f = if n > cap { f * (cap / n) } else { f };
+            self.f_t[k] = f;
+            let dv = f * (tau * c.inv[0]);
+            v[c.slave as usize] += dv;
+            x[c.slave as usize] += dv * dt;
+            for k in 0..3 {
+                let dv = f * (-c.w[k] * tau * c.inv[k + 1]);
+                v[c.masters[k] as usize] += dv;
+                x[c.masters[k] as usize] += dv * dt;
+            }
+        }
         let mut largest: f64 = tools.iter().map(|t| t.cap).fold(0.0, f64::max);
         for c in &self.constraints {
             largest = largest.max(self.searches[c.search as usize].friction * c.mu * lambda_scale);
         }
         if largest == 0.0 {
+            self.remember(lambda_scale);
             return;
         }
         let project = |trial: Vector3<f64>, cap: f64| {
             let n = trial.norm();
             if n > cap { trial * (cap / n) } else { trial }
         };
+        let mut sweeps = 0;
+        let mut converged = false;
+        // Over-relaxed until converged, then plain sweeps until one changes
+        // nothing beyond the tolerance: a plain update leaves its
+        // constraint's relative tangential velocity exactly zero where it
+        // sticks (given the others), which an over-relaxed one overshoots.
+        let mut omega = OMEGA;
         for _ in 0..FRICTION_SWEEPS {
+            sweeps += 1;
             let mut change: f64 = 0.0;
             for (k, c) in self.constraints.iter().enumerate() {
                 let mu_f = self.searches[c.search as usize].friction;
@@ -576,7 +750,7 @@ impl PlyContact {
                 }
                 let v_t = relative(v, c);
                 let new = project(
-                    self.f_t[k] - v_t * (c.mass / tau),
+                    self.f_t[k] - v_t * (omega * c.mass / tau),
                     mu_f * c.mu * lambda_scale,
                 );
                 let d = new - self.f_t[k];
@@ -585,13 +759,13 @@ impl PlyContact {
                 }
                 change = change.max(d.norm());
                 self.f_t[k] = new;
-                let dv = d * (tau * inv(c.slave));
+                let dv = d * (tau * c.inv[0]);
                 v[c.slave as usize] += dv;
                 x[c.slave as usize] += dv * dt;
-                for (&j, w) in c.masters.iter().zip(&c.w) {
-                    let dv = d * (-w * tau * inv(j));
-                    v[j as usize] += dv;
-                    x[j as usize] += dv * dt;
+                for k in 0..3 {
+                    let dv = d * (-c.w[k] * tau * c.inv[k + 1]);
+                    v[c.masters[k] as usize] += dv;
+                    x[c.masters[k] as usize] += dv * dt;
                 }
             }
             for t in tools.iter_mut() {
@@ -602,7 +776,7 @@ impl PlyContact {
                 let i = t.node as usize;
                 let rel = v[i] - t.tool_velocity;
                 let v_t = rel - t.normal * t.normal.dot(&rel);
-                let new = project(t.force - v_t / (m_inv * tau), t.cap);
+                let new = project(t.force - v_t * (omega / (m_inv * tau)), t.cap);
                 let d = new - t.force;
                 if d == Vector3::zeros() {
                     continue;
@@ -614,8 +788,18 @@ impl PlyContact {
                 x[i] += dv * dt;
             }
             if change <= 1e-10 * largest {
-                break;
+                if omega == 1.0 {
+                    converged = true;
+                    break;
+                }
+                omega = 1.0;
             }
+        }
+        let totals = &mut self.totals;
+        totals.friction_sweeps += sweeps as u64;
+        totals.max_friction_sweeps = totals.max_friction_sweeps.max(sweeps);
+        if !converged {
+            totals.friction_capped += 1;
         }
         for (c, f_t) in self.constraints.iter().zip(&self.f_t) {
             if *f_t == Vector3::zeros() {
@@ -627,12 +811,28 @@ impl PlyContact {
             }
             self.friction_dissipation -= f_t.dot(&relative(v, c)) * dt;
         }
-        // The slip of each node on the ply below: the upper ply's nodes
-        // of the downward searches, at the velocities all forces left.
+        // The slip of each node on the ply below: the upper ply's node of
+        // each row (its slave, or its pair's), at the velocities all
+        // forces left.
         for c in &self.constraints {
-            if self.searches[c.search as usize].side > 0.0 && c.mu > 0.0 {
-                self.slip[c.slave as usize] += relative(v, c).norm() * dt;
+            if c.slip_node != u32::MAX && c.mu > 0.0 {
+                self.slip[c.slip_node as usize] += relative(v, c).norm() * dt;
             }
+        }
+        self.remember(lambda_scale);
+    }
+
+    /// Keeps each constraint's multiplier (as a force) and tangential
+    /// force for the next step's solves to start from.
+    fn remember(&mut self, lambda_scale: f64) {
+        for (k, c) in self.constraints.iter().enumerate() {
+            let s = &mut self.searches[c.search as usize];
+            let local = (c.slave - self.layers[s.slave].first_node) as usize;
+            s.warm[local] = Warm {
+                normal: c.mu * lambda_scale,
+                tangential: self.f_t.get(k).copied().unwrap_or_else(Vector3::zeros),
+                pass: self.pass,
+            };
         }
     }
 
@@ -674,6 +874,25 @@ impl PlyContact {
         }
         worst
     }
+}
+
+/// A hit's face vertex that carries at least [`PAIR_WEIGHT`] of the
+/// closest point.
+fn nearest(hit: &Hit) -> Option<u32> {
+    (0..3)
+        .find(|&k| hit.w[k] >= PAIR_WEIGHT)
+        .map(|k| hit.nodes[k])
+}
+
+/// The other search's hit of the node nearest `hit` (of `node`), if that
+/// node's nearest is `node` in turn: a pair of nodes, one per ply, each
+/// all but on the other.
+fn mutual<'a>(hit: &Hit, node: u32, other: &'a Search, other_slave: &PlyLayer) -> Option<&'a Hit> {
+    let m = nearest(hit)?;
+    let o = other
+        .hits
+        .get(m.checked_sub(other_slave.first_node)? as usize)?;
+    (o.found && nearest(o) == Some(node)).then_some(o)
 }
 
 /// Which features of each face are on the outline of the layer: an edge
@@ -949,6 +1168,116 @@ mod tests {
         // Equal and opposite forces.
         let total: Vector3<f64> = force.iter().sum();
         assert!(total.norm() < 1e-9 * force[4].norm());
+    }
+
+    #[test]
+    fn nodes_on_nodes_make_one_row_per_pair_with_the_deeper_gap() {
+        // `passes` steps on one configuration; the first step's rows.
+        let solve = |raise: f64, passes: usize| {
+            let (mut x, mut contact) = two_squares(0.9);
+            x[6].z += raise;
+            let mut v = vec![Vector3::zeros(); 8];
+            let mass = vec![1.0; 8];
+            let mut force = vec![Vector3::zeros(); 8];
+            let mut first = None;
+            for _ in 0..passes {
+                let step = contact.normal(
+                    &mut x,
+                    &mut v,
+                    &mass,
+                    &[true; 8],
+                    1e-3,
+                    1e-3,
+                    &mut [],
+                    &mut force,
+                );
+                if first.is_none() {
+                    let rows: Vec<(u32, u32)> = contact
+                        .constraints
+                        .iter()
+                        .map(|c| (c.slave, c.slip_node))
+                        .collect();
+                    first = Some((step, rows));
+                }
+            }
+            let (step, mut rows) = first.expect("a pass");
+            rows.sort_unstable();
+            (step, rows, contact.max_overlap(&x))
+        };
+        // Flat: four pairs, one row each (the two searches would make
+        // eight), the upper node's where the gaps tie.
+        let (step, rows, overlap) = solve(0.0, 1);
+        assert_eq!(step.active, 4);
+        assert_eq!(rows, [(4, 4), (5, 5), (6, 6), (7, 7)]);
+        assert!(overlap < 1e-9, "{overlap}");
+        // One upper corner raised: both upper faces tilt, so each lower
+        // node is nearer them than its upper node is to the flat lower
+        // faces; the lower nodes' rows are kept, their slip counted for
+        // the upper node of each pair. The upper nodes' gaps follow to
+        // first order: what one step leaves of them is of the order of
+        // the correction (0.1 mm) times the tilt squared (≤ 0.02 rad
+        // along the diagonal), and the next step, where they are the
+        // deeper, takes it up.
+        let (step, rows, overlap) = solve(0.01, 1);
+        assert_eq!(step.active, 4);
+        assert_eq!(rows, [(0, 4), (1, 5), (2, 6), (3, 7)]);
+        assert!(overlap < 0.1 * 0.02 * 0.02, "{overlap}");
+        let (_, _, overlap) = solve(0.01, 2);
+        assert!(overlap < 1e-8, "{overlap}");
+    }
+
+    #[test]
+    fn a_repeated_step_starts_from_the_last_forces() {
+        // The lower ply fixed, the upper pushed 0.1 mm into it twice: the
+        // second solve starts from the first one's multipliers, which are
+        // its answer, and stops after the sweep that finds nothing to do.
+        let (mut x, mut contact) = two_squares(0.9);
+        let mut v = vec![Vector3::zeros(); 8];
+        let mass = vec![1.0; 8];
+        let movable: Vec<bool> = (0..8).map(|i| i >= 4).collect();
+        let mut force = vec![Vector3::zeros(); 8];
+        let (dt, tau) = (1e-3, 1e-3);
+        let first = contact.normal(
+            &mut x,
+            &mut v,
+            &mass,
+            &movable,
+            dt,
+            tau,
+            &mut [],
+            &mut force,
+        );
+        contact.friction(
+            &mut x,
+            &mut v,
+            &mass,
+            &movable,
+            dt,
+            tau,
+            &mut [],
+            &mut force,
+        );
+        assert!(first.sweeps > 1);
+        for p in &mut x[4..] {
+            p.z -= 0.1;
+        }
+        let second = contact.normal(
+            &mut x,
+            &mut v,
+            &mass,
+            &movable,
+            dt,
+            tau,
+            &mut [],
+            &mut force,
+        );
+        assert_eq!(second.sweeps, 1);
+        // To the solve's tolerance, 1e-8 of the 0.1 mm it started from.
+        for p in &x[4..] {
+            assert!((p.z - 1.0).abs() <= 1e-9, "{}", p.z);
+        }
+        assert_eq!(contact.totals.steps, 2);
+        assert_eq!(contact.totals.normal_capped, 0);
     }
 
     #[test]

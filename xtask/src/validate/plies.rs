@@ -20,6 +20,8 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::{Case, Check, note};
 
+mod four;
+
 /// The cases of this module.
 pub const CASES: &[Case] = &[
     Case {
@@ -46,6 +48,11 @@ pub const CASES: &[Case] = &[
         name: "plies/hemisphere-frictionless",
         quick: false,
         run: hemisphere_frictionless,
+    },
+    Case {
+        name: "plies/hemisphere-four",
+        quick: true,
+        run: four::hemisphere_four,
     },
 ];
 
@@ -333,6 +340,13 @@ fn distance_over(p: &Vector3<f64>, x: &[Vector3<f64>], faces: &[[u32; 3]], up: f
 /// The largest overlap of either ply into the other: thickness − the
 /// distance of each node from the other ply's mid-surface.
 fn overlap(model: &Model, x: &[Vector3<f64>]) -> f64 {
+    overlap_between(model, x, 0, 1)
+}
+
+/// The largest overlap of ply `lower` into its neighbour `upper` or back:
+/// half of each thickness − the distance of each node from the other
+/// ply's mid-surface.
+fn overlap_between(model: &Model, x: &[Vector3<f64>], lower: usize, upper: usize) -> f64 {
     let faces = |p: usize| -> Vec<[u32; 3]> {
         let mut out = Vec::new();
         for b in &model.membranes[model.plies[p].membranes.clone()] {
@@ -345,9 +359,9 @@ fn overlap(model: &Model, x: &[Vector3<f64>]) -> f64 {
         }
         out
     };
-    let offset = 0.5 * (model.plies[0].thickness + model.plies[1].thickness);
+    let offset = 0.5 * (model.plies[lower].thickness + model.plies[upper].thickness);
     let mut worst: f64 = 0.0;
-    for (slave, master, up) in [(1usize, 0usize, 1.0), (0, 1, -1.0)] {
+    for (slave, master, up) in [(upper, lower, 1.0), (lower, upper, -1.0)] {
         let f = faces(master);
         for i in model.plies[slave].nodes.clone() {
             if let Some(d) = distance_over(&x[i as usize], x, &f, up) {

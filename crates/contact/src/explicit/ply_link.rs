@@ -6,6 +6,7 @@
 use nalgebra::Vector3;
 
 use super::{ContactStatus, ExplicitContact};
+use crate::phases::{ContactPhase, PhaseTimer};
 use crate::plies::{Support, ToolFriction};
 
 impl ExplicitContact {
@@ -63,6 +64,8 @@ impl ExplicitContact {
                 force: f,
             });
         }
+        // The tool pass's own friction was timed already.
+        PhaseTimer::lap(&mut self.phases, ContactPhase::Friction);
         let before = self.tool_friction.len();
         self.tool_old.clear();
         self.tool_old
@@ -91,6 +94,7 @@ impl ExplicitContact {
                 ContactStatus::Stick
             };
         }
+        PhaseTimer::lap(&mut self.phases, ContactPhase::Plies);
     }
 
     /// The plies' normal constraints with the active tool constraints as
@@ -150,5 +154,6 @@ impl ExplicitContact {
                 c.normal.dot(&axis) * lambda
             };
         }
+        PhaseTimer::lap(&mut self.phases, ContactPhase::Plies);
     }
 }

@@ -208,13 +208,12 @@ fn advice(found: &Penetration, implicit_gap_tolerance: Option<f64>) -> String {
     }
 }
 
-/// The check of a laminate at each output frame and at its end: no ply
-/// inside its neighbour deeper than `tolerance` ([`penetration_tolerance`],
-/// the same bound as for a tool), measured by [`PlyContact::max_overlap`]
-/// at `state`. The ply pass caps its sweeps, so a step it could not
-/// resolve would otherwise end "completed" with one ply through another,
-/// or write frames of plies through each other that a later step undid.
-pub(crate) fn check_plies(
+/// The check at the end of a laminate's run: no ply ends inside its
+/// neighbour deeper than `tolerance` ([`penetration_tolerance`], the same
+/// bound as for a tool), measured by [`PlyContact::max_overlap`] at
+/// `state`. The ply pass caps its sweeps, so a step it could not resolve
+/// would otherwise end "completed" with one ply through another.
+pub(crate) fn check_plies_at_end(
     plies: &PlyContact,
     state: &drape_model::State,
     tolerance: f64,
@@ -277,8 +276,8 @@ mod tests {
             &mut [],
             &mut force,
         );
-        assert!(check_plies(&plies, &state(x), 0.01).is_ok());
-        match check_plies(&plies, &overlapping, 0.01) {
+        assert!(check_plies_at_end(&plies, &state(x), 0.01).is_ok());
+        match check_plies_at_end(&plies, &overlapping, 0.01) {
             Err(crate::RunError::PlyOverlap {
                 step: 7,
                 overlap,
@@ -291,7 +290,7 @@ mod tests {
             other => panic!("{other:?}"),
         }
         // Within the tolerance it passes.
-        assert!(check_plies(&plies, &overlapping, 0.1 + 1e-9).is_ok());
+        assert!(check_plies_at_end(&plies, &overlapping, 0.1 + 1e-9).is_ok());
     }
 
     fn plane_tool() -> Tool {

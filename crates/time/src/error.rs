@@ -94,17 +94,16 @@ pub enum RunError {
         /// Which setting to change.
         advice: String,
     },
-    /// A laminate's run had, at an output frame or at its end, one ply
-    /// inside its neighbour deeper than the physical tolerance: not a
-    /// formed stack.
+    /// A laminate's run reached its end time with one ply inside its
+    /// neighbour deeper than the physical tolerance: not a formed stack.
     #[error(
-        "step {step}, t = {time:.6e} s: one ply is {overlap:.4e} mm inside its \
+        "step {step}, t = {time:.6e} s: at the end one ply is {overlap:.4e} mm inside its \
          neighbour (tolerance {tolerance:.3e} mm, the lesser of a tenth of the thickness and a \
          hundredth of the shortest element edge): the ply–ply contact was not resolved; lower \
          `simulation.safety_factor` or `simulation.time_step`"
     )]
     PlyOverlap {
-        /// The step it was found at.
+        /// The last step.
         step: u64,
         /// Its time.
         time: f64,

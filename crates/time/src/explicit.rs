@@ -882,12 +882,6 @@ impl<'m> Explicit<'m> {
                         reactions: &self.reactions,
                         contact: self.contact.as_ref().map(ExplicitContact::view),
                     });
-                    // After the frame is written: the user sees the plies
-                    // the run stops at.
-                    if let Some(plies) = self.contact.as_ref().and_then(|c| c.plies()) {
-                        let tolerance = crate::completion::penetration_tolerance(model);
-                        crate::completion::check_plies(plies, state, tolerance)?;
-                    }
                     while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
                         next_frame += 1;
                     }
@@ -936,7 +930,7 @@ impl<'m> Explicit<'m> {
             crate::completion::check_at_end(model, state, &u, None)?;
             if let Some(plies) = self.contact.as_ref().and_then(|c| c.plies()) {
                 let tolerance = crate::completion::penetration_tolerance(model);
-                crate::completion::check_plies(plies, state, tolerance)?;
+                crate::completion::check_plies_at_end(plies, state, tolerance)?;
             }
         }
         for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {

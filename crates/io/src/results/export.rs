@@ -50,7 +50,7 @@
 //! `f64` (the results module's `fmt_f64`), so re-reading reproduces every value.
 //!
 //! A laminate (a model with plies) is written as a layup instead: one set
-//! of these names per ply, prefixed by the ply's name ([`layup`]).
+//! of these names per ply, prefixed by the ply's name (the `layup` module).
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

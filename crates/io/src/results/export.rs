@@ -127,6 +127,23 @@ pub mod names {
 }
 
 impl Orientations {
+    /// Element `e`'s row of an axes distribution: its label, then its
+    /// warp and weft directions (the layup writes the same rows per ply).
+    fn axes_row(&self, s: &mut String, e: usize) {
+        let (a, b) = (self.warp[e], self.weft[e]);
+        let _ = writeln!(
+            s,
+            "{}, {}, {}, {}, {}, {}, {}",
+            self.labels[e],
+            fmt_f64(a.x),
+            fmt_f64(a.y),
+            fmt_f64(a.z),
+            fmt_f64(b.x),
+            fmt_f64(b.y),
+            fmt_f64(b.z)
+        );
+    }
+
     /// The orientations of `model` at `state` from its element `fields`
     /// (the formed mesh: current positions, labels = element index + 1).
     pub fn of_frame(model: &Model, state: &State, fields: &ElementFields, title: &str) -> Self {
@@ -327,18 +344,7 @@ impl Orientations {
             names::AXES
         );
         for e in (0..self.len()).filter(|e| !skip.contains(e)) {
-            let (a, b) = (self.warp[e], self.weft[e]);
-            let _ = writeln!(
-                s,
-                "{}, {}, {}, {}, {}, {}, {}",
-                self.labels[e],
-                fmt_f64(a.x),
-                fmt_f64(a.y),
-                fmt_f64(a.z),
-                fmt_f64(b.x),
-                fmt_f64(b.y),
-                fmt_f64(b.z)
-            );
+            self.axes_row(&mut s, e);
         }
         let _ = writeln!(
             s,

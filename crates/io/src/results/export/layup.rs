@@ -255,18 +255,7 @@ pub(super) fn to_inp_in(o: &Orientations, unit: &str, millimetres: f64) -> Strin
             axes
         );
         for e in whole() {
-            let (a, b) = (o.warp[e], o.weft[e]);
-            let _ = writeln!(
-                s,
-                "{}, {}, {}, {}, {}, {}, {}",
-                o.labels[e],
-                fmt_f64(a.x),
-                fmt_f64(a.y),
-                fmt_f64(a.z),
-                fmt_f64(b.x),
-                fmt_f64(b.y),
-                fmt_f64(b.z)
-            );
+            o.axes_row(&mut s, e);
         }
         let angle = p.name_of("YARN_ANGLE");
         let _ = writeln!(

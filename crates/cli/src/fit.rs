@@ -627,7 +627,7 @@ fn normalised(law: &ShearLocking, thickness: f64, gamma_deg: f64) -> f64 {
     thickness * law.stress(g) / g.cos()
 }
 
-fn polynomial(law: &ShearLocking) -> String {
+pub(crate) fn polynomial(law: &ShearLocking) -> String {
     law.coefficients
         .iter()
         .enumerate()

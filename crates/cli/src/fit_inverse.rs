@@ -314,16 +314,7 @@ pub fn fit(
 }
 
 fn describe(law: &ShearLocking) -> String {
-    let mut s = law
-        .coefficients
-        .iter()
-        .enumerate()
-        .map(|(k, c)| match k {
-            0 => format!("{c:.5e}·γ"),
-            _ => format!("{c:+.5e}·γ^{}", 2 * k + 1),
-        })
-        .collect::<Vec<_>>()
-        .join(" ");
+    let mut s = crate::fit::polynomial(law);
     if let Some([tau, g0]) = law.friction {
         let _ = write!(s, " + {tau:.5e}·tanh(γ/{:.3}°)", g0.to_degrees());
     }

@@ -608,6 +608,18 @@ fn tangents(n: &Vector3<f64>) -> [Vector3<f64>; 2] {
 }
 
 impl ImplicitContact {
+    /// The regularised stick rows' forces on their pairs, from the step
+    /// `dx` (both solvers: the condensed one and the active set).
+    fn add_spring_sticks(&mut self, dx: &[f64]) {
+        for row in &self.springs {
+            let pair = &mut self.pairs[row.pair as usize];
+            let i = 3 * pair.node as usize;
+            let t = row.direction;
+            let along = t.x * dx[i] + t.y * dx[i + 1] + t.z * dx[i + 2];
+            pair.stick -= t * ((row.target + along) / row.compliance);
+        }
+    }
+
     /// A pass over `node_count` nodes.
     pub fn new(tools: Vec<Tool>, node_count: usize, settings: ImplicitContactSettings) -> Self {
         let t = tools.len();
@@ -1250,13 +1262,7 @@ impl ImplicitContact {
                 pair.stick += row.direction * l;
             }
         }
-        for row in &self.springs {
-            let pair = &mut self.pairs[row.pair as usize];
-            let i = 3 * pair.node as usize;
-            let t = row.direction;
-            let along = t.x * dx[i] + t.y * dx[i + 1] + t.z * dx[i + 2];
-            pair.stick -= t * ((row.target + along) / row.compliance);
-        }
+        self.add_spring_sticks(dx);
         stats.active = self.pairs.iter().filter(|p| p.lambda > 0.0).count();
         self.scratch.tool_w = tool_r;
         self.scratch.tool_f = tool_f;

@@ -372,13 +372,7 @@ impl PlyContact {
         self.constraints.clear();
         self.pass += 1;
         self.refresh(x);
-        let inv = |i: u32| {
-            if movable[i as usize] {
-                1.0 / mass[i as usize]
-            } else {
-                0.0
-            }
-        };
+        let inv = |i: u32| inverse_mass(mass, movable, i);
         let layers = &self.layers;
         for s in self.searches.iter_mut() {
             let slave = &layers[s.slave];
@@ -676,13 +670,7 @@ impl PlyContact {
         tools: &mut [ToolFriction],
         force: &mut [Vector3<f64>],
     ) {
-        let inv = |i: u32| {
-            if movable[i as usize] {
-                1.0 / mass[i as usize]
-            } else {
-                0.0
-            }
-        };
+        let inv = |i: u32| inverse_mass(mass, movable, i);
         let relative = |v: &[Vector3<f64>], c: &Constraint| {
             let rel = v[c.slave as usize]
                 - c.masters
@@ -1080,6 +1068,16 @@ fn closest_on_triangle(
     let denom = 1.0 / (va + vb + vc);
     let (s, t) = (vb * denom, vc * denom);
     (a + ab * s + ac * t, [1.0 - s - t, s, t])
+}
+
+/// A node's inverse mass, 0 where its motion is prescribed (it takes no
+/// share of a correction).
+fn inverse_mass(mass: &[f64], movable: &[bool], i: u32) -> f64 {
+    if movable[i as usize] {
+        1.0 / mass[i as usize]
+    } else {
+        0.0
+    }
 }
 
 #[cfg(test)]

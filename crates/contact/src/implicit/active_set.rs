@@ -361,13 +361,7 @@ impl ImplicitContact {
             }
         }
         self.share_clamp();
-        for row in &self.springs {
-            let pair = &mut self.pairs[row.pair as usize];
-            let i = 3 * pair.node as usize;
-            let t = row.direction;
-            let along = t.x * dx[i] + t.y * dx[i + 1] + t.z * dx[i + 2];
-            pair.stick -= t * ((row.target + along) / row.compliance);
-        }
+        self.add_spring_sticks(dx);
         for pair in &mut self.pairs {
             let tool = &self.tools[pair.tool as usize];
             let i = 3 * pair.node as usize;

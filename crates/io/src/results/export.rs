@@ -127,6 +127,41 @@ pub mod names {
 }
 
 impl Orientations {
+    /// The formed mesh's `*NODE` and `*ELEMENT` blocks (coordinates by
+    /// `length`), one element set per kind; returns the sets written.
+    fn write_mesh(&self, s: &mut String, length: &dyn Fn(f64) -> String) -> Vec<&'static str> {
+        s.push_str("*NODE, NSET=DRAPE_NODES\n");
+        for (i, p) in self.nodes.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "{}, {}, {}, {}",
+                i + 1,
+                length(p.x),
+                length(p.y),
+                length(p.z)
+            );
+        }
+        let mut sets = Vec::new();
+        for (kind, set, corners) in [("S4R", "DRAPE_QUADS", 4), ("S3", "DRAPE_TRIANGLES", 3)] {
+            let of_kind: Vec<usize> = (0..self.elements.len())
+                .filter(|&e| self.elements[e].len() == corners)
+                .collect();
+            if of_kind.is_empty() {
+                continue;
+            }
+            sets.push(set);
+            let _ = writeln!(s, "*ELEMENT, TYPE={kind}, ELSET={set}");
+            for e in of_kind {
+                let _ = write!(s, "{}", self.labels[e]);
+                for &n in &self.elements[e] {
+                    let _ = write!(s, ", {}", n + 1);
+                }
+                s.push('\n');
+            }
+        }
+        sets
+    }
+
     /// Element `e`'s row of an axes distribution: its label, then its
     /// warp and weft directions (the layup writes the same rows per ply).
     fn axes_row(&self, s: &mut String, e: usize) {
@@ -296,35 +331,7 @@ impl Orientations {
             }
         }
         if !self.nodes.is_empty() {
-            s.push_str("*NODE, NSET=DRAPE_NODES\n");
-            for (i, p) in self.nodes.iter().enumerate() {
-                let _ = writeln!(
-                    s,
-                    "{}, {}, {}, {}",
-                    i + 1,
-                    length(p.x),
-                    length(p.y),
-                    length(p.z)
-                );
-            }
-            let mut sets = Vec::new();
-            for (kind, set, corners) in [("S4R", "DRAPE_QUADS", 4), ("S3", "DRAPE_TRIANGLES", 3)] {
-                let of_kind: Vec<usize> = (0..self.elements.len())
-                    .filter(|&e| self.elements[e].len() == corners)
-                    .collect();
-                if of_kind.is_empty() {
-                    continue;
-                }
-                sets.push(set);
-                let _ = writeln!(s, "*ELEMENT, TYPE={kind}, ELSET={set}");
-                for e in of_kind {
-                    let _ = write!(s, "{}", self.labels[e]);
-                    for &n in &self.elements[e] {
-                        let _ = write!(s, ", {}", n + 1);
-                    }
-                    s.push('\n');
-                }
-            }
+            let sets = self.write_mesh(&mut s, &length);
             let _ = writeln!(s, "*ELSET, ELSET={}\n{}", names::PLY, sets.join(", "));
         }
         if !incomplete.is_empty() {

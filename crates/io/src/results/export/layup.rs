@@ -207,33 +207,7 @@ pub(super) fn to_inp_in(o: &Orientations, unit: &str, millimetres: f64) -> Strin
         }
     }
     if !o.nodes.is_empty() {
-        s.push_str("*NODE, NSET=DRAPE_NODES\n");
-        for (i, p) in o.nodes.iter().enumerate() {
-            let _ = writeln!(
-                s,
-                "{}, {}, {}, {}",
-                i + 1,
-                length(p.x),
-                length(p.y),
-                length(p.z)
-            );
-        }
-        for (kind, set, corners) in [("S4R", "DRAPE_QUADS", 4), ("S3", "DRAPE_TRIANGLES", 3)] {
-            let of_kind: Vec<usize> = (0..o.elements.len())
-                .filter(|&e| o.elements[e].len() == corners)
-                .collect();
-            if of_kind.is_empty() {
-                continue;
-            }
-            let _ = writeln!(s, "*ELEMENT, TYPE={kind}, ELSET={set}");
-            for e in of_kind {
-                let _ = write!(s, "{}", o.labels[e]);
-                for &n in &o.elements[e] {
-                    let _ = write!(s, ", {}", n + 1);
-                }
-                s.push('\n');
-            }
-        }
+        o.write_mesh(&mut s, &length);
         for p in &o.plies {
             let _ = writeln!(s, "*ELSET, ELSET={}", abaqus_name(&p.name));
             label_lines(&mut s, o, p.elements.clone());

@@ -451,6 +451,35 @@ fn an_exponentially_growing_balance_error_stops_the_run_early() {
             "{k}"
         );
     }
+    // A first impact lifts the error from round-off to a finite one over
+    // two checks (the tray's coarse run), then it falls: not a growth.
+    let mut guard = Guard::new(&model, GuardSettings::default(), 1.0);
+    for (k, error) in [1.9e-15, 3.1e-15, 2.9e-5, 5.47e-3, 1.5e-3, 1.2e-3]
+        .into_iter()
+        .enumerate()
+    {
+        assert_eq!(
+            guard.energy(&frame(error, 1.0), 0.1 * (k + 1) as f64),
+            Ok(()),
+            "{k}"
+        );
+    }
+    // The same rise from just above round-off that keeps growing stops.
+    let mut guard = Guard::new(&model, GuardSettings::default(), 1.0);
+    let mut stopped = None;
+    for (k, error) in [1.9e-15, 3.1e-15, 2.9e-5, 5.47e-3, 1e-2, 2e-2]
+        .into_iter()
+        .enumerate()
+    {
+        if let Err(e) = guard.energy(&frame(error, 1.0), 0.1 * (k + 1) as f64) {
+            stopped = Some((k, e));
+            break;
+        }
+    }
+    assert!(
+        matches!(stopped, Some((5, Instability::EnergyGrowth { .. }))),
+        "{stopped:?}"
+    );
     // A sound run's relative error wanders, and below 1e-3 its growth does
     // not count.
     let mut guard = Guard::new(&model, GuardSettings::default(), 1.0);

@@ -248,6 +248,21 @@ impl FibreLaw {
         self.energy(-xc * sh) + self.column(xc).0 * d + 0.5 * k * d * d
     }
 
+    /// W(ε, c_new) − W(ε, c_old) ([`Self::confined_energy`]): what the
+    /// tools do to a yarn at strain ε when their gap moves its wall from
+    /// `old` to `new` clearance. Zero unless the yarn is past the nearer
+    /// of the two walls (cheap to ask of every yarn each step).
+    pub fn confinement_energy_change(&self, eps: f64, old: f64, new: f64) -> f64 {
+        if eps >= 0.0 || !self.confines() || old == new {
+            return 0.0;
+        }
+        let x = -eps / self.crimp_strain;
+        if x <= self.wall(old).0.min(self.wall(new).0) {
+            return 0.0;
+        }
+        self.confined_energy(eps, new) - self.confined_energy(eps, old)
+    }
+
     /// x_c, where the bow reaches the wall, and ε_a = (π·a_m/2L)² =
     /// ε_sh·(a_m/a₀)², for a clearance c (negative taken as 0).
     #[inline]
@@ -706,6 +721,27 @@ mod tests {
                 prop_assert!(tau < free);
             }
             prop_assert!(tau <= at_with(&law, x, c + more));
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn moving_a_wall_changes_the_energy_only_past_it(
+            x in 0.0f64..60.0,
+            old in prop_oneof![Just(f64::INFINITY), 0.0f64..3.0],
+            new in prop_oneof![Just(f64::INFINITY), 0.0f64..3.0],
+        ) {
+            let law = confined_glass();
+            let eps = -x * law.crimp_strain;
+            let change = law.confinement_energy_change(eps, old, new);
+            let exact = law.confined_energy(eps, new) - law.confined_energy(eps, old);
+            prop_assert!((change - exact).abs() <= 1e-15 * law.confined_energy(eps, 0.0));
+            // Closing in stores energy, opening gives it back.
+            let stores = if new <= old { change >= 0.0 } else { change <= 0.0 };
+            prop_assert!(stores, "{change} from {old} to {new}");
+            if x <= law.wall(old).0.min(law.wall(new).0) {
+                prop_assert_eq!(change, 0.0);
+            }
         }
     }
 

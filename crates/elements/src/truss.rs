@@ -145,6 +145,25 @@ impl TrussBatch {
         Ok(self.section[e] * self.length[e] * self.law.confined_energy(k.log_strain, clearance))
     }
 
+    /// The energy the tools put into truss `e` at positions `x` when its
+    /// clearance moves from `old` to `new` (mJ,
+    /// `FibreLaw::confinement_energy_change` over the truss's volume).
+    pub fn element_confinement_work(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+        old: f64,
+        new: f64,
+    ) -> Result<f64, ElementError> {
+        if old == new {
+            return Ok(0.0);
+        }
+        let k = self.kinematics(e, x)?;
+        Ok(self.section[e]
+            * self.length[e]
+            * self.law.confinement_energy_change(k.log_strain, old, new))
+    }
+
     /// The 6×6 tangent ∂f/∂x of truss `e` (material + geometric):
     /// K₂₂ = A₀/(λ²L₀)·((E_t − 2τ)·n⊗n + τ·I), K₁₁ = K₂₂ = −K₁₂.
     pub fn element_tangent(

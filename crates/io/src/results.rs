@@ -487,7 +487,7 @@ const SERIES: [(&str, &str); 3] = [
 
 /// The `energy.csv` header.
 const ENERGY_HEADER: &str = "time,step,kinetic,strain,internal_work,viscous,damping,external_work,\
-boundary_work,contact_work,friction_dissipation,numerical_dissipation,balance_error";
+boundary_work,contact_work,friction_dissipation,numerical_dissipation,confinement_work,balance_error";
 
 /// Maps an I/O error on `path` into a [`ResultsError`].
 fn at(path: &Path) -> impl FnOnce(std::io::Error) -> ResultsError + '_ {
@@ -697,9 +697,10 @@ impl ResultsDir {
 
     /// Writes `energy.csv`: one row per entry of `rows`, energies in mJ
     /// (N·mm), with the header
-    /// `time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,numerical_dissipation,balance_error`
-    /// (numerical dissipation: what the implicit integrator removed; zero
-    /// for explicit runs). A value that is not finite is left empty.
+    /// `time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,numerical_dissipation,confinement_work,balance_error`
+    /// (numerical dissipation: what the implicit integrator removed, zero
+    /// for explicit runs; confinement work: what the tools put into yarns
+    /// they confine, zero without). A value that is not finite is left empty.
     pub fn write_energy(&self, rows: &[EnergyRow]) -> Result<(), ResultsError> {
         let mut csv = String::with_capacity(64 + rows.len() * 200);
         csv.push_str(ENERGY_HEADER);
@@ -718,6 +719,7 @@ impl ResultsDir {
                 e.contact_work,
                 e.friction_dissipation,
                 e.numerical_dissipation,
+                e.confinement_work,
                 e.balance_error,
             ] {
                 csv.push(',');

@@ -22,7 +22,7 @@ fn a_value_that_is_not_a_number_is_left_empty() {
     out.write_energy(&rows).unwrap();
     let csv = std::fs::read_to_string(dir.join("energy.csv")).unwrap();
     let row = csv.lines().nth(1).unwrap();
-    assert_eq!(row, "0,0,,,1.5,0,0,0,0,0,0,0,0");
+    assert_eq!(row, "0,0,,,1.5,0,0,0,0,0,0,0,0,0");
     assert!(!csv.to_lowercase().contains("nan") && !csv.contains("inf"));
     drop(out);
     std::fs::remove_dir_all(&dir).unwrap();

@@ -372,6 +372,7 @@ fn writes_a_complete_results_directory() {
         contact_work: -0.25,
         friction_dissipation: 0.125,
         numerical_dissipation: 0.0625,
+        confinement_work: 0.03125,
         balance_error: -1e-9,
     };
     let rows: Vec<EnergyRow> = (0..3)
@@ -386,12 +387,12 @@ fn writes_a_complete_results_directory() {
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
         lines[0],
-        "time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,numerical_dissipation,balance_error"
+        "time,step,kinetic,strain,internal_work,viscous,damping,external_work,boundary_work,contact_work,friction_dissipation,numerical_dissipation,confinement_work,balance_error"
     );
     assert_eq!(lines.len(), 4);
     assert_eq!(
         lines[2],
-        "0.01,100,2,2,2.5,0.5,1e-12,0,3.5,-0.25,0.125,0.0625,-1e-9"
+        "0.01,100,2,2,2.5,0.5,1e-12,0,3.5,-0.25,0.125,0.0625,0.03125,-1e-9"
     );
 
     let measures = model.measures(&state, 45.0).unwrap();

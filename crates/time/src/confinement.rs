@@ -24,6 +24,7 @@
 
 use drape_contact::{ExplicitContact, Nearest};
 use drape_model::Model;
+use nalgebra::Vector3;
 
 /// The clearance a checkpoint stores for "no wall": JSON has no infinity.
 const NO_WALL_STORED: f64 = f64::MAX;
@@ -62,14 +63,32 @@ impl Confinement {
     /// Each confining batch's trusses' clearances into `truss`, from the
     /// contact pass's last gaps: a truss has the larger room of its two
     /// nodes (the less confined end: a segment bows where it has room).
-    pub fn update(&mut self, model: &Model, contact: &ExplicitContact, truss: &mut [Vec<f64>]) {
+    ///
+    /// Returns the energy the tools put into the yarns at positions `x` by
+    /// moving their walls (mJ, [`crate::Energies::confinement_work`]): a
+    /// yarn's stored energy depends on its clearance, and the contact's
+    /// nodal forces do not carry the walls' push on its bow, so without it
+    /// that energy would show as negative dissipation.
+    pub fn update(
+        &mut self,
+        model: &Model,
+        contact: &ExplicitContact,
+        x: &[Vector3<f64>],
+        truss: &mut [Vec<f64>],
+    ) -> f64 {
         self.node.resize(model.node_count(), f64::INFINITY);
         contact.clearance_into(&mut self.nearest, &mut self.node);
+        let mut work = 0.0;
         for (b, out) in model.trusses.iter().zip(truss) {
-            for (c, &[i, j]) in out.iter_mut().zip(&b.nodes) {
-                *c = self.node[i as usize].max(self.node[j as usize]);
+            for (e, (c, &[i, j])) in out.iter_mut().zip(&b.nodes).enumerate() {
+                let new = self.node[i as usize].max(self.node[j as usize]);
+                // A truss that cannot be measured fails the next force
+                // pass, which says so; it has no energy to book here.
+                work += b.element_confinement_work(e, x, *c, new).unwrap_or(0.0);
+                *c = new;
             }
         }
+        work
     }
 
     /// The clearances as a checkpoint stores them (no infinity in JSON).

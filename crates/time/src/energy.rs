@@ -12,8 +12,8 @@ pub struct Energies {
     pub strain: f64,
     /// Work of the internal forces, ∫f_int·dx.
     pub internal_work: f64,
-    /// Internal work not stored: the resin's relaxation, the dashpots of
-    /// kinked yarns (and integration error).
+    /// Internal work (and confinement work) not stored: the resin's
+    /// relaxation, the dashpots of kinked yarns (and integration error).
     pub viscous: f64,
     /// Work of the damping forces.
     pub damping: f64,
@@ -29,6 +29,13 @@ pub struct Energies {
     /// numerical damping; zero for central differences).
     #[serde(default)]
     pub numerical_dissipation: f64,
+    /// Energy the tools put into the yarns they confine by moving their
+    /// walls: the change of a confined yarn's stored energy as the tools'
+    /// gap changes at fixed strain (their push on the yarns' bows, which
+    /// no nodal force carries, so it is not in the balance error). Zero
+    /// without confined yarns.
+    #[serde(default)]
+    pub confinement_work: f64,
     /// kinetic + internal + damping + numerical − external − boundary −
     /// contact − initial kinetic.
     pub balance_error: f64,

@@ -708,9 +708,6 @@ impl<'m> Explicit<'m> {
                 for (touched, f) in self.tool_touched.iter_mut().zip(&contact.tool_force) {
                     *touched |= *f != 0.0;
                 }
-                if let Some(confinement) = &mut self.confinement {
-                    confinement.update(model, contact, &mut self.forces.truss_clearance);
-                }
                 if let Some(p) = &mut self.profiler {
                     p.lap(Pass::Contact);
                 }
@@ -722,6 +719,15 @@ impl<'m> Explicit<'m> {
                         self.x_new[i][k] = self.prescribed[j];
                         self.v_new[i][k] = (self.prescribed[j] - state.x[i][k]) / h;
                     }
+                }
+                // At the positions the next force pass sees.
+                if let Some(confinement) = &mut self.confinement {
+                    energy.confinement_work += confinement.update(
+                        model,
+                        contact,
+                        &self.x_new,
+                        &mut self.forces.truss_clearance,
+                    );
                 }
                 self.lap(Pass::BoundaryConditions);
             }
@@ -1016,7 +1022,7 @@ impl<'m> Explicit<'m> {
             .as_ref()
             .map_or(0.0, |c| c.friction_dissipation);
         e.strain = shared::strain_energy_confined(self.model, state, &self.forces.truss_clearance);
-        e.viscous = e.internal_work - e.strain;
+        e.viscous = e.internal_work + e.confinement_work - e.strain;
         e.balance_error = e.kinetic + e.internal_work + e.damping
             - e.external_work
             - e.boundary_work

@@ -649,6 +649,24 @@ fn print_summary(s: &Summary, out: &Path) {
     println!("results           {}", out.display());
 }
 
+/// What `compare SCENE` says of its forming run beside the status: why it
+/// stopped, else what its fold check or warnings say, so that a run that
+/// gathered is not reported as sound.
+fn forming_run_note(summary: &drape_io::results::Summary) -> String {
+    if let Some(reason) = &summary.reason {
+        return reason.clone();
+    }
+    let folded = summary.fold.as_ref().is_some_and(|f| f.folded);
+    match (folded, summary.warnings.len()) {
+        (true, _) => "but the fold check warns that the ply folds or gathers (see its \
+                      summary.json's warnings): its shear there is not a formed ply's"
+            .to_string(),
+        (false, 0) => "no warning".to_string(),
+        (false, 1) => "1 warning (see its summary.json)".to_string(),
+        (false, n) => format!("{n} warnings (see its summary.json)"),
+    }
+}
+
 /// The tool a kinematic drape was draped on, why, and how to choose
 /// another (nothing for a forming run).
 fn print_mould(s: &Summary) {
@@ -1162,12 +1180,7 @@ fn compare(scene_path: &Path, out: Option<PathBuf>, set: &[String]) -> Result<Ex
         "forming run       {} ({}), {}",
         report.mechanical.summary.status,
         out.join("mechanical").display(),
-        report
-            .mechanical
-            .summary
-            .reason
-            .as_deref()
-            .unwrap_or("no problem reported")
+        forming_run_note(&report.mechanical.summary)
     );
     println!(
         "max shear         run {:.2}°, net {:.2}°",

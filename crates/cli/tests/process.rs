@@ -412,6 +412,23 @@ motion = { kind = "fixed" }
         both.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o));
+    // The forming run's line says what its summary warns of.
+    let run = json(&both.join("mechanical/summary.json"));
+    let warnings = run["warnings"].as_array().unwrap().len();
+    let said = match warnings {
+        0 => "no warning".to_string(),
+        1 => "1 warning (see its summary.json)".to_string(),
+        n => format!("{n} warnings (see its summary.json)"),
+    };
+    assert_eq!(run["fold"]["folded"], false, "{run}");
+    assert!(
+        text(&o).contains(&format!(
+            "forming run       completed ({}), {said}",
+            both.join("mechanical").display()
+        )),
+        "{}",
+        text(&o)
+    );
     let scene_way = json(&both.join("comparison.json"));
     let o = drape(&[
         "compare",

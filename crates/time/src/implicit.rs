@@ -1492,14 +1492,18 @@ impl<'m> Implicit<'m> {
     }
 
     /// Reactions at the constrained components, quasi-static part
-    /// f_int − f_ext (as the explicit driver reports them).
+    /// f_int − f_ext − f_contact: a constrained component takes the tools'
+    /// force on its node too, so a clamp inside a pinch carries the
+    /// friction there. (The explicit driver reports f_int − f_ext: its
+    /// contact pass does not resolve friction along a prescribed
+    /// component, see its `compute_reactions`.)
     fn compute_reactions(&mut self) {
         for r in self.reactions.iter_mut() {
             *r = Vector3::zeros();
         }
         for c in &self.constraints.list {
             let (i, k) = (c.node as usize, c.component as usize);
-            self.reactions[i][k] = self.f_int_n[i][k] - self.f_ext_n[i][k];
+            self.reactions[i][k] = self.f_int_n[i][k] - self.f_ext_n[i][k] - self.f_c_n[i][k];
         }
     }
 }

@@ -85,7 +85,10 @@ fn run(plies: usize, overrides: &[(String, String)]) -> Run {
     let mut driver = Explicit::new(model, scene.settings.clone()).expect("driver");
     driver.enable_profile(drape_time::profile::wall_clock);
     let (start, cpu) = (Instant::now(), process_cpu());
-    let failure = driver.run(&mut state, &mut observer).err().map(|e| e.to_string());
+    let failure = driver
+        .run(&mut state, &mut observer)
+        .err()
+        .map(|e| e.to_string());
     let (wall, cpu) = (start.elapsed().as_secs_f64(), process_cpu() - cpu);
     Run {
         wall,
@@ -184,8 +187,18 @@ pub fn hemisphere_four() -> Vec<Check> {
     let completed = |r: &Run| if r.failure.is_none() { 1.0 } else { 0.0 };
     let mut checks = vec![
         Check::abs("plies in the stack", 4.0, four.plies as f64, 0.0),
-        Check::abs("the one-ply run completes (1: yes)", 1.0, completed(&one), 0.0),
-        Check::abs("the four-ply run completes (1: yes)", 1.0, completed(&four), 0.0),
+        Check::abs(
+            "the one-ply run completes (1: yes)",
+            1.0,
+            completed(&one),
+            0.0,
+        ),
+        Check::abs(
+            "the four-ply run completes (1: yes)",
+            1.0,
+            completed(&four),
+            0.0,
+        ),
         Check::abs(
             "largest overlap / ply thickness over the frames (≤ 1 %)",
             0.0,

@@ -68,6 +68,13 @@ fn a_stack_pictures_and_exports_every_ply() {
     let o = drape(&["run", &scene(&dir, 2, true), "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
 
+    // Each ply's largest overlap with the ply below over the run, within
+    // the 1 % of the 0.3 mm thickness (none below the bottom one).
+    let summary = json(&out.join("summary.json"));
+    let overlap = |p: usize| summary["plies"][p]["max_overlap_mm"].as_f64().unwrap();
+    assert_eq!(overlap(0), 0.0);
+    assert!((0.0..=3e-3).contains(&overlap(1)), "{}", overlap(1));
+
     // One picture per ply beside the overlaid one, on the same frame.
     let size = |name: &str| {
         let decoder = png::Decoder::new(std::io::BufReader::new(

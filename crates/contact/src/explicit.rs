@@ -389,6 +389,12 @@ impl ExplicitContact {
         self.plies.as_ref()
     }
 
+    /// The ply–ply contact, for the driver's overlap checks
+    /// ([`PlyContact::record_overlap`]).
+    pub fn plies_mut(&mut self) -> Option<&mut PlyContact> {
+        self.plies.as_mut()
+    }
+
     /// The pass's outputs, as a frame shows them.
     pub fn view(&self) -> crate::ContactView<'_> {
         crate::ContactView {

@@ -41,6 +41,9 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+mod overlap;
+pub use overlap::PlyOverlap;
+
 /// Sweeps allowed to the friction solve: a stack sticking on a tool
 /// needs its friction to 1e-10 (no creep); the four-ply hemisphere's
 /// steps need at most ~70.
@@ -262,6 +265,9 @@ pub struct PlyContact {
     pub totals: PlyTotals,
     /// Passes so far (the normal pass counts them).
     pass: u64,
+    /// Each interface's largest overlap over the checks so far (mm)
+    /// ([`Self::record_overlap`]).
+    overlap_peak: Vec<f64>,
 }
 
 impl PlyContact {
@@ -317,6 +323,7 @@ impl PlyContact {
             last: PlyStep::default(),
             totals: PlyTotals::default(),
             pass: 0,
+            overlap_peak: vec![0.0; interfaces.len()],
         }
     }
 
@@ -822,45 +829,6 @@ impl PlyContact {
                 pass: self.pass,
             };
         }
-    }
-
-    /// The largest overlap of any node of one ply into its neighbour (mm,
-    /// ≥ 0): how far inside the two half thicknesses the closest face is,
-    /// at `x`, over the candidates of the last broad phase.
-    pub fn max_overlap(&self, x: &[Vector3<f64>]) -> f64 {
-        let mut worst: f64 = 0.0;
-        for s in &self.searches {
-            let slave = &self.layers[s.slave];
-            let faces = &self.layers[s.master].faces;
-            for local in 0..slave.node_count as usize {
-                let p = x[slave.first_node as usize + local];
-                let range = s.cand_ptr[local] as usize..s.cand_ptr[local + 1] as usize;
-                let mut best = (f64::INFINITY, 0.0);
-                for &f in &s.cand[range] {
-                    let [a, b, c] = faces[f as usize].map(|n| x[n as usize]);
-                    let (q, _) = closest_on_triangle(&p, &a, &b, &c);
-                    let nf = (b - a).cross(&(c - a));
-                    if nf.norm() == 0.0 {
-                        continue;
-                    }
-                    let d = p - q;
-                    let n = nf.normalize() * s.side;
-                    let along = d.dot(&n);
-                    let sideways = d - n * along;
-                    if along < -s.offset || sideways.norm_squared() > s.offset * s.offset {
-                        continue;
-                    }
-                    // As the narrow phase measures it: the distance to
-                    // the closest point, negative behind the mid-surface.
-                    let gap = d.norm().copysign(along) - s.offset;
-                    if d.norm_squared() < best.0 {
-                        best = (d.norm_squared(), gap);
-                    }
-                }
-                worst = worst.max(-best.1);
-            }
-        }
-        worst
     }
 }
 

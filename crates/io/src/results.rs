@@ -328,6 +328,12 @@ pub struct PlySummary {
     pub max_slip_mm: f64,
     /// Largest contact pressure of a neighbouring ply on its nodes (MPa).
     pub max_pressure_mpa: f64,
+    /// Largest depth of a node of it or of the ply below inside the other
+    /// (mm; 0 for the bottom ply), over the run's checks so far (every
+    /// frame and at least 20 a run): a run stops when it passes a tenth
+    /// of the thinnest ply's thickness, so what is left is the margin.
+    #[serde(default)]
+    pub max_overlap_mm: f64,
 }
 
 impl PlySummary {
@@ -343,7 +349,8 @@ impl PlySummary {
             .ply_measures(x, fields)
             .into_iter()
             .zip(&model.plies)
-            .map(|(m, ply)| {
+            .enumerate()
+            .map(|(p, (m, ply))| {
                 let nodes = ply.nodes.start as usize..ply.nodes.end as usize;
                 let peak = |v: &[f64]| v[nodes.clone()].iter().fold(0.0f64, |a, &b| a.max(b));
                 let d = m.draw_in.unwrap_or(drape_model::measures::DrawIn {
@@ -363,6 +370,10 @@ impl PlySummary {
                     },
                     max_slip_mm: plies.map_or(0.0, |p| peak(&p.slip)),
                     max_pressure_mpa: plies.map_or(0.0, |p| peak(&p.pressure)),
+                    // The interface with the ply below is the one before.
+                    max_overlap_mm: plies
+                        .and_then(|c| c.overlap_peaks().get(p.checked_sub(1)?).copied())
+                        .unwrap_or(0.0),
                 }
             })
             .collect()

@@ -9,7 +9,7 @@
 //! Not here: contact enforcement itself (`drape_contact`), the start-up
 //! checks of tools against the blank ([`crate::guard::check_tools_at_start`]).
 
-use drape_contact::{PlyContact, Tool};
+use drape_contact::Tool;
 use drape_model::Model;
 use nalgebra::Vector3;
 use rayon::prelude::*;
@@ -44,7 +44,7 @@ pub fn penetration_tolerance(model: &Model) -> f64 {
 /// The shortest edge of the blank's elements in the reference
 /// configuration (mm): membranes' element edges and trusses; infinite for
 /// a model without either.
-fn shortest_edge(model: &Model) -> f64 {
+pub(crate) fn shortest_edge(model: &Model) -> f64 {
     let x = &model.x0;
     let mut shortest = f64::INFINITY;
     for batch in &model.membranes {
@@ -65,7 +65,7 @@ fn shortest_edge(model: &Model) -> f64 {
 }
 
 /// The bounding-box diagonal of the reference positions (mm).
-fn model_size(model: &Model) -> f64 {
+pub(crate) fn model_size(model: &Model) -> f64 {
     let lo = model
         .x0
         .iter()
@@ -208,90 +208,10 @@ fn advice(found: &Penetration, implicit_gap_tolerance: Option<f64>) -> String {
     }
 }
 
-/// The check at the end of a laminate's run: no ply ends inside its
-/// neighbour deeper than `tolerance` ([`penetration_tolerance`], the same
-/// bound as for a tool), measured by [`PlyContact::max_overlap`] at
-/// `state`. The ply pass caps its sweeps, so a step it could not resolve
-/// would otherwise end "completed" with one ply through another.
-pub(crate) fn check_plies_at_end(
-    plies: &PlyContact,
-    state: &drape_model::State,
-    tolerance: f64,
-) -> Result<(), crate::RunError> {
-    let overlap = plies.max_overlap(&state.x);
-    if overlap > tolerance {
-        return Err(crate::RunError::PlyOverlap {
-            step: state.step,
-            time: state.time,
-            overlap,
-            tolerance,
-        });
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use drape_contact::{PlyInterface, PlyLayer, Surface, ToolMotion};
-
-    /// Two unit squares 0.9 mm apart, offsets 0.5 mm each: 0.1 mm inside
-    /// each other until the ply pass has pushed them apart.
-    #[test]
-    fn plies_ending_inside_each_other_fail_the_run() {
-        let square = |z: f64| {
-            [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
-        };
-        let mut x = square(0.0).to_vec();
-        x.extend(square(0.9));
-        let layer = |first: u32| PlyLayer {
-            first_node: first,
-            node_count: 4,
-            faces: vec![[first, first + 1, first + 2], [first, first + 2, first + 3]],
-            half_thickness: 0.5,
-        };
-        let interface = PlyInterface {
-            lower: 0,
-            upper: 1,
-            friction: 0.0,
-        };
-        let mut plies = PlyContact::new(vec![layer(0), layer(4)], &[interface], vec![0.25; 8], 1.0);
-        let state = |x: Vec<Vector3<f64>>| drape_model::State {
-            x,
-            step: 7,
-            time: 0.5,
-            v: Vec::new(),
-            history: Vec::new(),
-        };
-        let overlapping = state(x.clone());
-        let mut v = vec![Vector3::zeros(); 8];
-        let mut force = vec![Vector3::zeros(); 8];
-        plies.normal(
-            &mut x,
-            &mut v,
-            &[1.0; 8],
-            &[true; 8],
-            1e-3,
-            1e-3,
-            &mut [],
-            &mut force,
-        );
-        assert!(check_plies_at_end(&plies, &state(x), 0.01).is_ok());
-        match check_plies_at_end(&plies, &overlapping, 0.01) {
-            Err(crate::RunError::PlyOverlap {
-                step: 7,
-                overlap,
-                tolerance,
-                ..
-            }) => {
-                assert!((overlap - 0.1).abs() < 1e-12, "{overlap}");
-                assert_eq!(tolerance, 0.01);
-            }
-            other => panic!("{other:?}"),
-        }
-        // Within the tolerance it passes.
-        assert!(check_plies_at_end(&plies, &overlapping, 0.1 + 1e-9).is_ok());
-    }
+    use drape_contact::{Surface, ToolMotion};
 
     fn plane_tool() -> Tool {
         Tool {

@@ -94,23 +94,36 @@ pub enum RunError {
         /// Which setting to change.
         advice: String,
     },
-    /// A laminate's run reached its end time with one ply inside its
-    /// neighbour deeper than the physical tolerance: not a formed stack.
+    /// A node of one ply of a laminate is inside its neighbour deeper than
+    /// the physical tolerance ([`crate::ply_overlap_tolerance`]), found at
+    /// an energy check or at the end: not a formed stack.
     #[error(
-        "step {step}, t = {time:.6e} s: at the end one ply is {overlap:.4e} mm inside its \
-         neighbour (tolerance {tolerance:.3e} mm, the lesser of a tenth of the thickness and a \
-         hundredth of the shortest element edge): the ply–ply contact was not resolved; lower \
-         `simulation.safety_factor` or `simulation.time_step`"
+        "step {step}, t = {time:.6e} s: node {node} of ply `{ply}` at ({:.3}, {:.3}, {:.3}) mm \
+         is {overlap:.4e} mm inside ply `{into}` (tolerance {tolerance:.3e} mm, the lesser of a \
+         tenth of the thinnest ply's thickness and a hundredth of the shortest element edge): \
+         the ply–ply contact did not keep the plies apart (it does not push back a node that \
+         came round a ply's free edge or a fold to the wrong side, nor one that crossed the ply \
+         within one step); hold the stack more (springs, a holder) so its flanges do not fold \
+         over, or lower `simulation.safety_factor`",
+        .at[0], .at[1], .at[2]
     )]
     PlyOverlap {
-        /// The last step.
+        /// The step of the check.
         step: u64,
         /// Its time.
         time: f64,
-        /// The largest overlap (mm).
+        /// How deep the node is (mm).
         overlap: f64,
         /// The tolerance (mm).
         tolerance: f64,
+        /// The node's ply.
+        ply: String,
+        /// The ply it is inside.
+        into: String,
+        /// The node.
+        node: usize,
+        /// Where it is (mm).
+        at: [f64; 3],
     },
     /// The settings or the model cannot run.
     #[error("cannot run: {0}")]

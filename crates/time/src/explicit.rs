@@ -570,6 +570,9 @@ impl<'m> Explicit<'m> {
         let check_dt = end / self.settings.frames.max(guard::MIN_ENERGY_CHECKS) as f64;
         let mut next_check = (state.time / check_dt).floor() + 1.0;
         self.guard.begin(state);
+        // Plies inside each other at the start (an imported blank stacked
+        // too close) are not a state to form from.
+        self.check_plies(state)?;
         let mut forced_warned = false;
         if state.step == 0 {
             energy.kinetic = kinetic0;
@@ -875,6 +878,9 @@ impl<'m> Explicit<'m> {
                 while next_check * check_dt <= state.time * (1.0 + 1e-12) {
                     next_check += 1.0;
                 }
+                // Before the frame is published or kept as the last good
+                // state.
+                self.check_plies(state)?;
                 if at_frame || at_end {
                     self.guard.accept(state);
                 }
@@ -934,10 +940,6 @@ impl<'m> Explicit<'m> {
                 c.tool_state.iter().map(|t| t.displacement).collect()
             });
             crate::completion::check_at_end(model, state, &u, None)?;
-            if let Some(plies) = self.contact.as_ref().and_then(|c| c.plies()) {
-                let tolerance = crate::completion::penetration_tolerance(model);
-                crate::completion::check_plies_at_end(plies, state, tolerance)?;
-            }
         }
         for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {
             if tool.is_force_driven() && !touched && !stopped {
@@ -959,6 +961,21 @@ impl<'m> Explicit<'m> {
             warnings: self.warnings.clone(),
             implicit: None,
         })
+    }
+
+    /// The plies' overlap check ([`crate::ply_check`]) at `state`, for a
+    /// laminate.
+    fn check_plies(&mut self, state: &State) -> Result<(), RunError> {
+        let model = self.model;
+        match self.contact.as_mut().and_then(|c| c.plies_mut()) {
+            Some(plies) => crate::ply_check::check_plies(
+                model,
+                plies,
+                state,
+                crate::ply_check::ply_overlap_tolerance(model),
+            ),
+            None => Ok(()),
+        }
     }
 
     /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`. The

@@ -57,6 +57,7 @@ mod explicit;
 pub mod guard;
 mod implicit;
 mod observer;
+mod ply_check;
 pub mod profile;
 pub mod round_off;
 pub mod saddle;
@@ -73,4 +74,5 @@ pub use observer::{
     Control, CutbackReport, DriverState, Frame, ImplicitCarry, IncrementReport, NoObserver,
     Observer, Progress,
 };
+pub use ply_check::ply_overlap_tolerance;
 pub use profile::{Pass, ProfileClock, StepProfile};

@@ -393,9 +393,15 @@ fn hemisphere_overlap() -> Vec<Check> {
     let model = &scene.model;
     let mut worst: f64 = 0.0;
     let mut frames = 0;
+    // The driver's own peak over its checks (the frames here), which
+    // summary.json reports per ply.
+    let mut driver_peak = f64::NAN;
     let mut observer = Frames(|f: &Frame<'_>| {
         worst = worst.max(overlap(f.model, &f.state.x));
         frames += 1;
+        if let Some(p) = f.contact.and_then(|c| c.plies) {
+            driver_peak = p.overlap_peaks()[0];
+        }
     });
     let mut state = model.initial_state();
     Explicit::new(model, scene.settings.clone())
@@ -404,16 +410,28 @@ fn hemisphere_overlap() -> Vec<Check> {
         .expect("run");
     let h = model.plies[0].thickness;
     note(format!(
-        "Two-ply hemisphere (16 × 16 cells, 0/90 under ±45, μ_ply = 0.2): largest overlap {:.3e} mm = {:.3e} of the ply thickness over {frames} frames.",
+        "Two-ply hemisphere (16 × 16 cells, 0/90 under ±45, μ_ply = 0.2): largest overlap {:.3e} mm = {:.3e} of the ply thickness over {frames} frames; the driver's own measure's peak over the run {:.3e} mm.",
         worst,
-        worst / h
-    ));
-    vec![Check::abs(
-        "largest overlap / ply thickness over the frames (≤ 1 %)",
-        0.0,
         worst / h,
-        1e-2,
-    )]
+        driver_peak,
+    ));
+    vec![
+        Check::abs(
+            "largest overlap / ply thickness over the frames (≤ 1 %)",
+            0.0,
+            worst / h,
+            1e-2,
+        ),
+        // The two measures differ only over a kink between faces (the
+        // driver's rounds it, this one skips it): on this run they agree
+        // to four digits at every frame.
+        Check::rel(
+            "the driver's peak overlap over the run = the largest here (mm)",
+            worst,
+            driver_peak,
+            1e-3,
+        ),
+    ]
 }
 
 /// The shipped `scenes/hemisphere-stack.toml` with its plies replaced by

@@ -1,0 +1,281 @@
+//! How far the plies of a laminate are inside each other, measured from
+//! the positions with the same contact geometry the narrow phase enforces:
+//! the check a run makes at its energy checks and at its end, and the
+//! peaks per interface that `summary.json` reports.
+//!
+//! A ply's volume here is its mid-surface grown by the two half
+//! thicknesses along the normal, ending square at the ply's free outline
+//! (as the narrow phase treats it: a ply sliding past the edge of the one
+//! below is not pushed sideways). A node of one ply is inside its
+//! neighbour by
+//! - `offset − |d|` over the face's interior and its shared edges and
+//!   vertices, d from the closest point of the mid-surface (the narrow
+//!   phase's gap, continuous across the kinks between faces);
+//! - `offset − along` over a face's free-outline edge or vertex, along the
+//!   face's normal (the square end);
+//! - `offset + |d|` when it is behind the mid-surface with its projection
+//!   inside the face: through the ply, which the narrow phase does not
+//!   push back (it would throw the node by the thickness in one step), so
+//!   only this check catches it.
+//!
+//! A node beside the ply (more than the offset sideways of the closest
+//! point), or behind an edge or vertex, is not inside it: the first
+//! measure, which took every closest point within the offset as a rounded
+//! edge and gave a node behind one the whole offset more, reported a ply
+//! whose edge hangs 0.15 mm beside the edge of the one below as 0.45 mm
+//! inside it (the two-ply hemisphere at t = 0.30 s), where no material of
+//! the two overlaps.
+//!
+//! Not for the contact's own solve: that is [`PlyContact::normal`].
+
+use nalgebra::Vector3;
+
+use super::{PlyContact, closest_on_triangle, on_outline};
+
+/// The deepest node of one ply inside its neighbour.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlyOverlap {
+    /// How deep (mm, > 0).
+    pub depth: f64,
+    /// The interface (index into those [`PlyContact::new`] was given).
+    pub interface: usize,
+    /// The ply of the node.
+    pub ply: usize,
+    /// The ply it is inside.
+    pub into: usize,
+    /// The node.
+    pub node: u32,
+    /// Where the node is (mm).
+    pub position: Vector3<f64>,
+}
+
+impl PlyContact {
+    /// The deepest node of search `k`'s slave ply inside its master at
+    /// `x`, over the candidates of the last broad phase.
+    fn deepest_of(&self, k: usize, x: &[Vector3<f64>]) -> Option<PlyOverlap> {
+        let s = &self.searches[k];
+        let slave = &self.layers[s.slave];
+        let faces = &self.layers[s.master].faces;
+        let outline = &self.outline[s.master];
+        let mut worst: Option<PlyOverlap> = None;
+        for local in 0..slave.node_count as usize {
+            let node = slave.first_node + local as u32;
+            let p = x[node as usize];
+            let range = s.cand_ptr[local] as usize..s.cand_ptr[local + 1] as usize;
+            let mut depth: f64 = 0.0;
+            for &f in &s.cand[range] {
+                let [a, b, c] = faces[f as usize].map(|n| x[n as usize]);
+                let nf = (b - a).cross(&(c - a));
+                let len = nf.norm();
+                if len == 0.0 {
+                    continue;
+                }
+                let (q, w) = closest_on_triangle(&p, &a, &b, &c);
+                depth = depth.max(node_depth(
+                    p - q,
+                    nf * (s.side / len),
+                    s.offset,
+                    w,
+                    outline[f as usize],
+                ));
+            }
+            if depth > 0.0 && worst.is_none_or(|w| depth > w.depth) {
+                worst = Some(PlyOverlap {
+                    depth,
+                    // [`Self::new`] pushes the searches in pairs, one
+                    // pair per interface in order.
+                    interface: k / 2,
+                    ply: s.slave,
+                    into: s.master,
+                    node,
+                    position: p,
+                });
+            }
+        }
+        worst
+    }
+
+    /// The deepest node of any ply inside a neighbour at `x`, over the
+    /// candidates of the last broad phase; None when no node is inside.
+    pub fn deepest_overlap(&self, x: &[Vector3<f64>]) -> Option<PlyOverlap> {
+        let mut worst: Option<PlyOverlap> = None;
+        for o in (0..self.searches.len()).filter_map(|k| self.deepest_of(k, x)) {
+            if worst.is_none_or(|w| o.depth > w.depth) {
+                worst = Some(o);
+            }
+        }
+        worst
+    }
+
+    /// The largest overlap of any node of one ply into its neighbour at
+    /// `x` (mm, ≥ 0): [`Self::deepest_overlap`]'s depth.
+    pub fn max_overlap(&self, x: &[Vector3<f64>]) -> f64 {
+        self.deepest_overlap(x).map_or(0.0, |o| o.depth)
+    }
+
+    /// [`Self::deepest_overlap`] at `x`, keeping each interface's largest
+    /// so far ([`Self::overlap_peaks`]).
+    pub fn record_overlap(&mut self, x: &[Vector3<f64>]) -> Option<PlyOverlap> {
+        // Before the first pass (a run's start) there are no candidates yet.
+        if self.reference_x.len() != x.len() {
+            self.refresh(x);
+        }
+        let mut worst: Option<PlyOverlap> = None;
+        for k in 0..self.searches.len() {
+            let Some(o) = self.deepest_of(k, x) else {
+                continue;
+            };
+            let peak = &mut self.overlap_peak[o.interface];
+            *peak = peak.max(o.depth);
+            if worst.is_none_or(|w| o.depth > w.depth) {
+                worst = Some(o);
+            }
+        }
+        worst
+    }
+
+    /// Each interface's largest overlap (mm) over the calls of
+    /// [`Self::record_overlap`] so far, in the order of the interfaces
+    /// [`Self::new`] was given.
+    pub fn overlap_peaks(&self) -> &[f64] {
+        &self.overlap_peak
+    }
+}
+
+/// How deep a node at `d` from its closest point (weights `w`) on a face
+/// of unit normal `up` (towards the node's ply) is inside that face's
+/// ply, with `offset` the two half thicknesses and `bits` the face's
+/// outline features; 0 when it is not (see the module's rules).
+fn node_depth(d: Vector3<f64>, up: Vector3<f64>, offset: f64, w: [f64; 3], bits: u8) -> f64 {
+    let along = d.dot(&up);
+    if (d - up * along).norm_squared() > offset * offset {
+        return 0.0;
+    }
+    let dist = d.norm();
+    let depth = if on_outline(bits, &w) {
+        // Past the square end.
+        return 0.0;
+    } else if along > 0.0 {
+        offset - dist
+    } else if w.iter().all(|&w| w > 0.0) && dist < offset {
+        offset + dist
+    } else {
+        return 0.0;
+    };
+    depth.max(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{PlyInterface, PlyLayer};
+
+    /// A layer of the two triangles of the quad `first`..`first + 3`,
+    /// 0.15 mm half thick.
+    fn layer(first: u32) -> PlyLayer {
+        PlyLayer {
+            first_node: first,
+            node_count: 4,
+            faces: vec![[first, first + 1, first + 2], [first, first + 2, first + 3]],
+            half_thickness: 0.15,
+        }
+    }
+
+    /// The lower ply a 10 mm square in z = 0 (normal +z), the upper one
+    /// the quad `upper`, wound so its normal points along `up`.
+    fn contact(upper: [Vector3<f64>; 4]) -> (Vec<Vector3<f64>>, PlyContact) {
+        let mut x: Vec<Vector3<f64>> = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]
+            .map(|[a, b]| Vector3::new(a, b, 0.0))
+            .to_vec();
+        x.extend(upper);
+        let interface = PlyInterface {
+            lower: 0,
+            upper: 1,
+            friction: 0.0,
+        };
+        let c = PlyContact::new(vec![layer(0), layer(4)], &[interface], vec![1.0; 8], 1.0);
+        (x, c)
+    }
+
+    /// The upper ply a 4 mm square at height `z` over the middle of the
+    /// lower one (its nodes over the lower faces' insides).
+    fn flat(z: f64) -> [Vector3<f64>; 4] {
+        [[3.0, 3.0], [7.0, 3.0], [7.0, 7.0], [3.0, 7.0]].map(|[a, b]| Vector3::new(a, b, z))
+    }
+
+    /// The upper ply hanging in the plane x = `x0` from z = `top` down
+    /// 10 mm, 6 mm wide, beside the lower ply's free edge x = 10 (its
+    /// normal +x).
+    fn hanging(x0: f64, top: f64) -> [Vector3<f64>; 4] {
+        [[2.0, top], [2.0, top - 10.0], [8.0, top - 10.0], [8.0, top]]
+            .map(|[y, z]| Vector3::new(x0, y, z))
+    }
+
+    #[test]
+    fn a_ply_beside_the_free_edge_of_its_neighbour_is_not_inside_it() {
+        // The two-ply hemisphere at t = 0.30 s: the upper ply's edge hangs
+        // 0.15 mm beside the lower ply's free edge, 0.008 mm below its
+        // mid-plane. The first measure took the edge as rounded with the
+        // 0.3 mm offset and, the node being behind the face's plane, gave
+        // it the whole offset more: 0.15 + 0.3 = 0.45 mm. No material of
+        // the two overlaps (the lower ply ends square at x = 10, the
+        // upper one's sheet is 0.15 mm thick about x = 10.15).
+        let (x, mut c) = contact(hanging(10.15, -0.008));
+        assert_eq!(c.record_overlap(&x), None);
+        assert_eq!(c.max_overlap(&x), 0.0);
+        // Moved 0.2 mm in, over the lower ply: its top node is inside the
+        // lower ply's material, 0.008 mm behind the mid-surface: the
+        // offset and that.
+        let (x, mut c) = contact(hanging(9.95, -0.008));
+        let o = c.record_overlap(&x).expect("inside");
+        assert!((o.depth - 0.308).abs() < 1e-12, "{o:?}");
+        assert_eq!((o.ply, o.into, o.interface), (1, 0, 0));
+        assert!(o.node == 4 || o.node == 7, "{o:?}");
+        assert_eq!(o.position, x[o.node as usize]);
+        assert!((c.overlap_peaks()[0] - 0.308).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_depth_over_a_face_is_the_offset_less_the_distance_and_more_behind_it() {
+        for (z, depth) in [
+            (0.4, 0.0),
+            (0.3, 0.0),
+            (0.25, 0.05),
+            (0.1, 0.2),
+            (-0.1, 0.4),
+            (-0.25, 0.55),
+            // Beyond the offset behind: another part of the ply (a fold),
+            // not this one's neighbour.
+            (-0.35, 0.0),
+        ] {
+            let (x, mut c) = contact(flat(z));
+            let found = c.record_overlap(&x).map_or(0.0, |o| o.depth);
+            assert!(
+                (found - depth).abs() < 1e-12,
+                "z = {z}: {found} against {depth}"
+            );
+        }
+        // The peak is kept: the last configuration measured nothing.
+        let (x, mut c) = contact(flat(0.1));
+        c.record_overlap(&x);
+        let (y, _) = contact(flat(0.4));
+        assert_eq!(c.record_overlap(&y), None);
+        assert!((c.overlap_peaks()[0] - 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn over_a_kink_the_depth_is_from_the_rounded_mid_surface() {
+        // The lower ply a ridge: its corners 1 and 3 lowered 5 mm, the
+        // diagonal 0–2 the crest. A node above the crest's middle is over
+        // the edge the two faces share, and its distance to the edge is
+        // what counts (the narrow phase's gap there).
+        let (mut x, mut c) = contact(flat(50.0));
+        x[1].z = -5.0;
+        x[3].z = -5.0;
+        // Over the middle of the crest 0–2, 0.2 mm up: inside by 0.1.
+        x[4] = Vector3::new(5.0, 5.0, 0.2);
+        let o = c.record_overlap(&x).expect("inside");
+        assert!((o.depth - 0.1).abs() < 1e-12, "{o:?}");
+        assert_eq!(o.node, 4);
+    }
+}

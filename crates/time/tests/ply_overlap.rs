@@ -1,0 +1,144 @@
+//! The explicit driver's check that a laminate's plies are not inside
+//! each other: a node of the top ply pushed into the bottom ply by a
+//! prescribed displacement, which the ply contact cannot undo, stops the
+//! run at the first energy check past the tolerance, naming the plies,
+//! the node and where, with the frames before it kept; pushed less, the
+//! run completes and reports the depth it reached.
+
+use drape_constitutive::Material;
+use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
+use drape_model::stack::PlyModel;
+use drape_model::{Amplitude, BoundaryCondition, Model, Motion};
+use drape_time::{Explicit, ExplicitSettings, Frame, Observer, RunError, ply_overlap_tolerance};
+use nalgebra::Vector3;
+
+/// Two 40 mm glass plies of 10 mm quads, the bottom one held, the top
+/// one's centre node moved down by `push` mm along a ramp over 0.01 s;
+/// the centre node.
+fn pushed(push: f64) -> (Model, u32) {
+    let material = Material::preset("glass-serge-4x3").expect("preset");
+    let h = material.thickness;
+    let ply = |name: &str| {
+        let blank = RectangleBlank {
+            width: 40.0,
+            height: 40.0,
+            center: Vector3::new(0.0, 0.0, 0.5 * h),
+            orientation_deg: 0.0,
+            element: ElementKind::Quad,
+            meshing: Meshing::Cells([4, 4]),
+            fibres: FibreRepresentation::Embedded,
+        };
+        PlyModel {
+            model: Model::from_mesh(
+                &blank.mesh().expect("mesh"),
+                &material,
+                FibreRepresentation::Embedded,
+            )
+            .expect("model"),
+            name: name.into(),
+            thickness: h,
+            orientation_deg: 0.0,
+            friction_below: 0.0,
+        }
+    };
+    let mut model = Model::stack(vec![ply("bottom"), ply("top")]).expect("stack");
+    let bottom: Vec<u32> = model.plies[0].nodes.clone().collect();
+    model.boundary.push(BoundaryCondition::fixed(bottom));
+    let centre = model.plies[1]
+        .nodes
+        .clone()
+        .find(|&i| model.x0[i as usize].xy().norm() < 1e-9)
+        .expect("a node at the centre");
+    model.boundary.push(BoundaryCondition {
+        nodes: vec![centre],
+        components: [false, false, true],
+        motion: Motion::Displacement {
+            value: Vector3::new(0.0, 0.0, -push),
+            amplitude: Amplitude::Ramp { duration: 0.01 },
+        },
+    });
+    (model, centre)
+}
+
+/// The times of the published frames.
+struct Times(Vec<f64>);
+impl Observer for Times {
+    fn frame(&mut self, frame: &Frame<'_>) {
+        self.0.push(frame.state.time);
+    }
+}
+
+fn settings() -> ExplicitSettings {
+    ExplicitSettings {
+        end_time: 0.01,
+        frames: 20,
+        ..ExplicitSettings::default()
+    }
+}
+
+#[test]
+fn a_ply_pushed_through_its_neighbour_stops_the_run_naming_it() {
+    let h = Material::preset("glass-serge-4x3").unwrap().thickness;
+    // The centre node's depth is 1.5·h·t/0.01: 0.075·h at the frame of
+    // t = 0.5 ms, 0.15·h at the check of 1 ms, past the tolerance of a
+    // tenth of the thickness (the quads' hundredth, 0.1 mm, is larger).
+    let (model, centre) = pushed(1.5 * h);
+    let tolerance = ply_overlap_tolerance(&model);
+    assert_eq!(tolerance, 0.1 * h);
+    let mut state = model.initial_state();
+    let mut times = Times(Vec::new());
+    let mut driver = Explicit::new(&model, settings()).expect("driver");
+    let dt = driver.stable_time_step(&model.x0);
+    let error = driver.run(&mut state, &mut times).expect_err("stopped");
+    let RunError::PlyOverlap {
+        time,
+        overlap,
+        tolerance: told,
+        ref ply,
+        ref into,
+        node,
+        at,
+        ..
+    } = error
+    else {
+        panic!("{error}");
+    };
+    assert_eq!(
+        (ply.as_str(), into.as_str(), node),
+        ("top", "bottom", centre as usize)
+    );
+    assert_eq!(told, tolerance);
+    // At the first check after 1 ms (a step may end past it).
+    assert!((0.001..0.001 + 1.01 * dt).contains(&time), "{time}");
+    assert!((overlap - 150.0 * h * time).abs() < 1e-9 * h, "{overlap}");
+    assert!(
+        (at[2] - (1.5 * h - 150.0 * h * time)).abs() < 1e-9,
+        "{at:?}"
+    );
+    let message = error.to_string();
+    for word in ["node", "`top`", "inside ply `bottom`", "tolerance"] {
+        assert!(message.contains(word), "{message}");
+    }
+    // Frames 0 and 0.5 ms were published; the state is the last of them.
+    assert_eq!(times.0.len(), 2, "{:?}", times.0);
+    assert_eq!(state.time, times.0[1]);
+}
+
+#[test]
+fn a_ply_pushed_within_the_tolerance_completes_and_reports_its_peak() {
+    let h = Material::preset("glass-serge-4x3").unwrap().thickness;
+    let (model, _) = pushed(0.05 * h);
+    let mut state = model.initial_state();
+    let mut driver = Explicit::new(&model, settings()).expect("driver");
+    driver
+        .run(&mut state, &mut Times(Vec::new()))
+        .expect("completes");
+    let peaks = driver
+        .contact()
+        .and_then(|c| c.plies())
+        .expect("plies")
+        .overlap_peaks();
+    // The centre node at the end: 0.05·h deep.
+    assert_eq!(peaks.len(), 1);
+    assert!((peaks[0] - 0.05 * h).abs() < 1e-9 * h, "{peaks:?}");
+}

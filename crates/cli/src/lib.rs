@@ -743,13 +743,10 @@ pub fn run_in(
     // Every run's end state, a failed one's last good frame included: a
     // ply folded over itself must not read as a formed one.
     let fold = fields.as_ref().map(|f| model.fold_check(&state, f));
-    warnings.extend(fold.as_ref().and_then(|f| {
-        if model.plies.is_empty() {
-            f.warning(model.features().bending)
-        } else {
-            f.warning_in_stack()
-        }
-    }));
+    warnings.extend(
+        fold.as_ref()
+            .and_then(|f| f.warning(model.features().bending)),
+    );
     if status == "completed" {
         recorder
             .reached

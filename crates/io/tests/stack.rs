@@ -7,8 +7,8 @@ use std::path::Path;
 use drape_io::scene::Scene;
 use drape_time::{Explicit, NoObserver};
 
-/// The shipped hemisphere scene, coarse and short, without bending (a
-/// stack has none yet), so both forms describe the same model.
+/// The shipped hemisphere scene, coarse and short, without bending (with
+/// it: `stack_bending.rs`).
 fn hemisphere(extra: &str) -> String {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/hemisphere-0-90.toml");
     let text = std::fs::read_to_string(path).unwrap();

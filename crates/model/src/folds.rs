@@ -245,15 +245,6 @@ impl FoldCheck {
         })
     }
 
-    /// [`Self::warning`] for a stack of plies, where yarn bending cannot be
-    /// turned on yet: the advice leaves it out.
-    pub fn warning_in_stack(&self) -> Option<String> {
-        self.warning_advising(
-            "Yarn bending is not available in a stack of plies yet, so the membranes fold at \
-             no cost: hold the stack more (holder force, springs) and refine the mesh",
-        )
-    }
-
     fn warning_advising(&self, advice: &str) -> Option<String> {
         if !self.folded {
             return None;
@@ -435,12 +426,6 @@ mod tests {
             "{text}"
         );
         assert!(c.warning(true).unwrap().contains("refine the mesh"));
-        // In a stack bending cannot be turned on: not advised.
-        let stack = c.warning_in_stack().unwrap();
-        assert!(
-            stack.contains("element 5") && !stack.contains("fabric.bending = true"),
-            "{stack}"
-        );
     }
 
     #[test]

@@ -566,16 +566,29 @@ impl Model {
         normal: Vector3<f64>,
         rigidity: [f64; 2],
     ) -> Result<(), ModelError> {
+        self.add_yarn_bending_of(0..self.membranes.len(), warp, normal, rigidity)
+    }
+
+    /// [`Self::add_yarn_bending`] on the lines of the membrane batches
+    /// `membranes` only (one ply of a stack: its own yarns, its own
+    /// rigidity).
+    pub fn add_yarn_bending_of(
+        &mut self,
+        membranes: std::ops::Range<usize>,
+        warp: Vector3<f64>,
+        normal: Vector3<f64>,
+        rigidity: [f64; 2],
+    ) -> Result<(), ModelError> {
         let n = self.node_count();
         let mut area = vec![0.0; n];
-        for b in &self.membranes {
+        for b in &self.membranes[membranes.clone()] {
             for e in 0..b.len() {
                 for (&node, a) in b.element_nodes(e).iter().zip(b.nodal_areas(e)) {
                     area[node as usize] += a;
                 }
             }
         }
-        let (triplets, _) = self.yarn_lines(warp, normal);
+        let (triplets, _) = self.yarn_lines(membranes, warp, normal);
         if triplets.is_empty() {
             return Err(ModelError::NoYarnLines);
         }
@@ -603,7 +616,18 @@ impl Model {
     /// [`YarnCoverage`]), for a warp `warp` in a blank of normal `normal`:
     /// what [`Self::add_yarn_bending`] would bend.
     pub fn yarn_coverage(&self, warp: Vector3<f64>, normal: Vector3<f64>) -> YarnCoverage {
-        let (triplets, edges) = self.yarn_lines(warp, normal);
+        self.yarn_coverage_of(0..self.membranes.len(), warp, normal)
+    }
+
+    /// [`Self::yarn_coverage`] of the membrane batches `membranes` only
+    /// (one ply of a stack): what [`Self::add_yarn_bending_of`] would bend.
+    pub fn yarn_coverage_of(
+        &self,
+        membranes: std::ops::Range<usize>,
+        warp: Vector3<f64>,
+        normal: Vector3<f64>,
+    ) -> YarnCoverage {
+        let (triplets, edges) = self.yarn_lines(membranes.clone(), warp, normal);
         let n = self.node_count();
         // A node on an edge that only one element owns is on the blank's
         // outline, where a line ends and no triplet can sit.
@@ -620,7 +644,7 @@ impl Model {
         for t in &triplets {
             family[t.nodes[1] as usize][t.family as usize] = true;
         }
-        let used = self.node_use();
+        let used = self.node_use(membranes);
         let inner = (0..n).filter(|&j| used[j] && !on_outline[j]);
         YarnCoverage {
             interior_nodes: inner.clone().count(),
@@ -629,10 +653,10 @@ impl Model {
         }
     }
 
-    /// Which nodes some membrane uses.
-    fn node_use(&self) -> Vec<bool> {
+    /// Which nodes some membrane of the batches `membranes` uses.
+    fn node_use(&self, membranes: std::ops::Range<usize>) -> Vec<bool> {
         let mut used = vec![false; self.node_count()];
-        for b in &self.membranes {
+        for b in &self.membranes[membranes] {
             for e in 0..b.len() {
                 for &node in b.element_nodes(e) {
                     used[node as usize] = true;
@@ -642,16 +666,17 @@ impl Model {
         used
     }
 
-    /// The yarn-line triplets of the membranes' edges (see
-    /// `drape_elements::yarn_triplets`), and those edges, each as its
-    /// sorted node pair once per element that has it, sorted.
+    /// The yarn-line triplets of the edges of the membrane batches
+    /// `membranes` (see `drape_elements::yarn_triplets`), and those edges,
+    /// each as its sorted node pair once per element that has it, sorted.
     fn yarn_lines(
         &self,
+        membranes: std::ops::Range<usize>,
         warp: Vector3<f64>,
         normal: Vector3<f64>,
     ) -> (Vec<drape_elements::YarnTriplet>, Vec<[u32; 2]>) {
         let mut edges = Vec::new();
-        for b in &self.membranes {
+        for b in &self.membranes[membranes] {
             for e in 0..b.len() {
                 let nodes = b.element_nodes(e);
                 for (k, &a) in nodes.iter().enumerate() {

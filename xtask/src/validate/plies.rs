@@ -515,7 +515,7 @@ fn hemisphere_friction() -> Vec<Check> {
         .map(|p| format!("{} {:.2}°", p.name, p.max_shear_deg))
         .collect();
     note(format!(
-        "Two-ply hemisphere [0/90 + ±45], 24 × 24 cells, {} threads (a shared, loaded machine: times are indicative):\n\n{table}\nFour plies [0/45/90/−45] at μ_ply = 0.2: completed in {four_s:.1} s against {one:.1} s for one ply ({:.1}×); max shear per ply {}.",
+        "Two-ply hemisphere [0/90 + ±45], 24 × 24 cells, yarn bending on in every ply (the preset's rigidity), {} threads (a shared, loaded machine: times are indicative):\n\n{table}\nFour plies [0/45/90/−45] at μ_ply = 0.2: completed in {four_s:.1} s against {one:.1} s for one ply ({:.1}×); max shear per ply {}.",
         rayon::current_num_threads(),
         four_s / one,
         shears.join(", ")
@@ -528,13 +528,26 @@ fn hemisphere_friction() -> Vec<Check> {
     )]
 }
 
-/// A run's shear per frame: (time, |elements| shear angles in degrees),
-/// and its element centroids at the end.
-struct ShearRun {
-    frames: Vec<(f64, Vec<f64>)>,
+/// One output frame of a run: its time, each element's shear angle
+/// (degrees) and centroid, and the punch's displacement.
+struct ShearFrame {
+    time: f64,
+    shear: Vec<f64>,
     centroid: Vec<Vector3<f64>>,
+    punch: f64,
+}
+
+/// A run's frames and its plies' element ranges and thicknesses.
+struct ShearRun {
+    frames: Vec<ShearFrame>,
     plies: Vec<std::ops::Range<usize>>,
     thickness: Vec<f64>,
+}
+
+impl ShearRun {
+    fn elements(&self) -> usize {
+        self.frames[0].shear.len()
+    }
 }
 
 /// Runs the scene `text` (read as if from `path`) to its end.
@@ -542,14 +555,16 @@ fn shear_run(text: &str, path: &std::path::Path) -> ShearRun {
     let scene = drape_io::scene::Scene::parse(text, path, &[]).expect("scene");
     let model = &scene.model;
     let mut frames = Vec::new();
-    let mut centroid = Vec::new();
     let mut observer = Frames(|f: &Frame<'_>| {
         let fields = f.model.element_fields(f.state).expect("fields");
-        frames.push((
-            f.state.time,
-            fields.shear.iter().map(|g| g.to_degrees()).collect(),
-        ));
-        centroid = fields.centroid;
+        frames.push(ShearFrame {
+            time: f.state.time,
+            shear: fields.shear.iter().map(|g| g.to_degrees()).collect(),
+            centroid: fields.centroid,
+            punch: f.model.tools[0]
+                .prescribed_displacement(f.state.time)
+                .expect("a moving punch"),
+        });
     });
     let mut state = model.initial_state();
     Explicit::new(model, scene.settings.clone())
@@ -558,7 +573,6 @@ fn shear_run(text: &str, path: &std::path::Path) -> ShearRun {
         .expect("run");
     ShearRun {
         frames,
-        centroid,
         plies: model.plies.iter().map(|p| p.elements.clone()).collect(),
         thickness: model.plies.iter().map(|p| p.thickness).collect(),
     }
@@ -577,20 +591,31 @@ fn rms_max(a: &[f64], b: &[f64], elements: impl Iterator<Item = (usize, usize)>)
 }
 
 /// The two-ply hemisphere [0/90 + ±45] (`scenes/hemisphere-stack.toml`,
-/// 24 × 24 cells) at μ_ply = 0 against each ply formed alone on a mould
-/// offset by the other ply's thickness: the bottom ply (it alone touches
-/// the punch; nothing lies under it) on the same punch, the top one on a
-/// punch whose radius is the bottom ply's thickness larger (same pole: the
-/// top ply's blank starts one mean thickness higher in the stack, so the
-/// pair is the same, translated). The tools' contact offset in a stack is
-/// its largest half thickness: both plies have the same thickness here, so
-/// it is each ply's own. Same mesh per ply, element by element: the RMS of
-/// the difference of the shear angle over the ply's elements, per frame;
-/// at the end split into the elements on the punch's dome and the rest
-/// (the flange hanging free, where the plies still touch each other).
-/// Beside it, each ply alone against itself on a punch 1 µm larger: the
-/// scene's own sensitivity, the floor under which no comparison of runs
-/// of it can go.
+/// 24 × 24 cells, yarn bending on as the preset gives it) at μ_ply = 0
+/// against each ply formed alone on a mould offset by the other ply's
+/// thickness: the bottom ply (it alone touches the punch; nothing lies
+/// under it) on the same punch, the top one on a punch whose radius is the
+/// bottom ply's thickness larger (same pole: the top ply's blank starts
+/// one mean thickness higher in the stack, so the pair is the same,
+/// translated). The tools' contact offset in a stack is its largest half
+/// thickness: both plies have the same thickness here, so it is each
+/// ply's own. Same mesh per ply, element by element: the RMS of the
+/// difference of the shear angle over the ply's elements, per frame, and
+/// split into the elements on the punch's dome at that frame (within 1 mm
+/// of the sphere the ply lies on, above its equator: where the rigid punch
+/// alone sets each ply's shape, so only friction could couple the plies)
+/// and the rest (the flanges, where the plies hang on each other and
+/// share one shape whatever μ_ply). Beside it, each ply alone against
+/// itself on a punch 1 µm larger: the scene's own sensitivity, the floor
+/// under which no comparison of runs of it can go.
+///
+/// Other scenes measured (2026-11-28, not kept): the 0/90 ply alone
+/// formed 13× slower (13 s, past the driver's quasi-static bound of 9 s)
+/// still folds in its flanges (6380 mm² wavier than 45°) and repeats
+/// itself to 0.78° RMS only; the whole case at 40 × 40 cells (the
+/// single-ply scenes' mesh, where a ply alone does not fold) has floors
+/// of 1.39° and 0.96° and differences of 3.32° and 1.63°. Neither makes
+/// the comparison sharper, so the case keeps the shipped 24 × 24.
 ///
 /// Checks: the bound, each ply's RMS at the end ≤ 0.5°.
 fn hemisphere_frictionless() -> Vec<Check> {
@@ -601,14 +626,18 @@ fn hemisphere_frictionless() -> Vec<Check> {
         "friction = 0.2                            # Coulomb μ between neighbouring plies";
     assert!(text.contains(mu_line), "the shipped stack scene changed");
     let stack = shear_run(&text.replace(mu_line, "friction = 0"), &path);
-    // One ply: [fabric] alone, without yarn bending as a stack has none.
+    // One ply: [fabric] alone, with yarn bending as each ply of the stack
+    // has it (the preset's rigidity, on by default).
     let head = &text[..text.find("\n[stack]\n").expect("[stack]") + 1];
     let tail = &text[text.find("[[tools]]").expect("tools")..];
-    let fabric = head.replacen("blank = {", "bending = false\nblank = {", 1);
-    assert_ne!(fabric, head);
+    assert!(
+        !text.lines().any(|l| l.trim_start().starts_with("bending")),
+        "the shipped stack scene sets bending"
+    );
+    let fabric = head.to_owned();
     let radius = "radius = 120,";
     assert!(
-        tail.contains(radius),
+        tail.contains(radius) && tail.contains("pole = [0, 0, -0.2]"),
         "the shipped stack scene's punch changed"
     );
     let bottom = shear_run(&format!("{fabric}{tail}"), &path);
@@ -635,76 +664,93 @@ fn hemisphere_frictionless() -> Vec<Check> {
     let floors = [nudged(&fabric, 120.0), nudged(&top_fabric, 120.0 + h0)];
     let singles = [&bottom, &top];
     for (p, single) in singles.iter().enumerate() {
-        assert_eq!(
-            single.centroid.len(),
-            stack.plies[p].len(),
-            "ply {p}'s mesh"
-        );
+        assert_eq!(single.elements(), stack.plies[p].len(), "ply {p}'s mesh");
         assert_eq!(single.frames.len(), stack.frames.len());
     }
     let mut table = String::from(
-        "| t (s) | RMS Δγ 0/90 (°) | max \\|Δγ\\| 0/90 (°) | alone vs alone +1 µm, RMS 0/90 (°) | RMS Δγ ±45 (°) | max \\|Δγ\\| ±45 (°) | alone vs alone +1 µm, RMS ±45 (°) |\n|---|---|---|---|---|---|---|\n",
+        "| t (s) | RMS Δγ 0/90 (°) | on the dome / off it (elements) | max \\|Δγ\\| 0/90 (°) | alone vs alone +1 µm, RMS 0/90 (°) | RMS Δγ ±45 (°) | on the dome / off it (elements) | max \\|Δγ\\| ±45 (°) | alone vs alone +1 µm, RMS ±45 (°) |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut floor_end = [0.0; 2];
     let mut end = [0.0; 2];
-    for (k, (t, shear)) in stack.frames.iter().enumerate() {
-        let mut row = format!("| {t:.2} |");
+    let mut dome_end = [(0.0, 0.0, 0usize); 2];
+    // The last frame at which each ply alone still repeats itself (floor
+    // under REPEATS in both): what the stack differs by there is no noise.
+    const REPEATS: f64 = 0.05;
+    let mut repeatable: Option<(f64, [(f64, f64); 2])> = None;
+    let mut steady = true;
+    for (k, frame) in stack.frames.iter().enumerate() {
+        let mut row = format!("| {:.2} |", frame.time);
+        let mut split = [(0.0, 0.0); 2];
         for (p, single) in singles.iter().enumerate() {
             let first = stack.plies[p].start;
-            let (rms, max) = rms_max(
-                shear,
-                &single.frames[k].1,
-                (0..single.centroid.len()).map(|e| (first + e, e)),
-            );
-            let n = single.centroid.len();
+            let n = single.elements();
+            let alone = &single.frames[k];
+            let (rms, max) = rms_max(&frame.shear, &alone.shear, (0..n).map(|e| (first + e, e)));
+            // The dome of the sphere this ply lies on alone, where its
+            // punch is now (the pole at −0.2 mm, risen by the stroke).
+            let radius = 120.0 + [0.0, h0][p];
+            let centre = Vector3::new(0.0, 0.0, -0.2 - radius + alone.punch);
+            let sphere = radius + 0.5 * stack.thickness[p];
+            let on: Vec<bool> = alone
+                .centroid
+                .iter()
+                .map(|c| ((c - centre).norm() - sphere).abs() < 1.0 && c.z > centre.z - 1.0)
+                .collect();
+            let on = &on;
+            let pick = |want: bool| {
+                (0..n)
+                    .filter(move |&e| on[e] == want)
+                    .map(move |e| (first + e, e))
+            };
+            let (dome, dome_max) = rms_max(&frame.shear, &alone.shear, pick(true));
+            let (flange, _) = rms_max(&frame.shear, &alone.shear, pick(false));
+            let count = on.iter().filter(|&&o| o).count();
             let (floor, _) = rms_max(
-                &floors[p].frames[k].1,
-                &single.frames[k].1,
+                &floors[p].frames[k].shear,
+                &alone.shear,
                 (0..n).map(|e| (e, e)),
             );
-            row.push_str(&format!(" {rms:.3} | {max:.2} | {floor:.3} |"));
+            row.push_str(&format!(
+                " {rms:.3} | {dome:.3} / {flange:.3} ({count} / {}) | {max:.2} | {floor:.3} |",
+                n - count
+            ));
             end[p] = rms;
             floor_end[p] = floor;
+            dome_end[p] = (dome, dome_max, count);
+            split[p] = (dome, flange);
+            steady &= floor < REPEATS;
+        }
+        if steady {
+            repeatable = Some((frame.time, split));
         }
         if k % 2 == 0 || k + 1 == stack.frames.len() {
             table.push_str(&row);
             table.push('\n');
         }
     }
-    // The dome at the end: the punch's pole has risen by its stroke.
-    assert!(tail.contains("pole = [0, 0, -0.2]") && tail.contains("distance = 300,"));
-    let centre = Vector3::new(0.0, 0.0, -0.2 + 300.0 - 120.0);
-    let mut split = String::new();
-    for (p, single) in singles.iter().enumerate() {
-        let sphere = 120.0 + [0.0, h0][p] + 0.5 * stack.thickness[p];
-        let on: Vec<bool> = single
-            .centroid
-            .iter()
-            .map(|c| ((c - centre).norm() - sphere).abs() < 1.0 && c.z > centre.z - 1.0)
-            .collect();
-        let first = stack.plies[p].start;
-        let (s_end, o_end) = (
-            &stack.frames.last().unwrap().1,
-            &single.frames.last().unwrap().1,
-        );
-        let on = &on;
-        let pick = |want: bool| {
-            (0..on.len())
-                .filter(move |&e| on[e] == want)
-                .map(move |e| (first + e, e))
-        };
-        let (dome, dome_max) = rms_max(s_end, o_end, pick(true));
-        let (flange, _) = rms_max(s_end, o_end, pick(false));
-        split.push_str(&format!(
-            "{}: on the dome {} elements, RMS {dome:.3}° (largest {dome_max:.2}°); off it {} elements, RMS {flange:.3}°. ",
-            ["0/90", "±45"][p],
-            on.iter().filter(|&&o| o).count(),
-            on.iter().filter(|&&o| !o).count(),
-        ));
-    }
+    let floor = if floor_end.iter().all(|&f| f < 0.1) {
+        "well under the issue's 0.5°: the comparison resolves it"
+    } else if floor_end.iter().all(|&f| f < 0.5) {
+        "under the issue's 0.5° but not far: the comparison resolves it only roughly"
+    } else {
+        "above the issue's 0.5°: on this scene the comparison cannot resolve 0.5°"
+    };
+    let before = match repeatable {
+        Some((t, [(d0, f0), (d1, f1)])) => format!(
+            "Up to t = {t:.2} s each ply alone repeats itself within {REPEATS}° RMS, so what the stack differs by there is no noise: on the dome {d0:.3}° (0/90) and {d1:.3}° (±45), off it {f0:.3}° and {f1:.3}°. "
+        ),
+        None => String::new(),
+    };
     note(format!(
-        "Two-ply hemisphere [0/90 + ±45] at μ_ply = 0 against each ply alone (24 × 24 cells, the shipped stack scene; the top ply alone on a punch {h0} mm larger in radius): the shear difference per element over time, and beside it that of each ply alone against itself on a punch 1 µm larger (the scene's own sensitivity: no yarn bending, folding flanges, a stroke ~10× faster than quasi-static)\n\n{table}\nAt the end, {split}The noise floor at the end, {:.2}° and {:.2}° RMS, is above the issue's 0.5°: on this scene the comparison cannot resolve 0.5°.",
-        floor_end[0], floor_end[1]
+        "Two-ply hemisphere [0/90 + ±45] at μ_ply = 0 against each ply alone (24 × 24 cells, the shipped stack scene, yarn bending on in every run as the preset's rigidity gives it; the top ply alone on a punch {h0} mm larger in radius): the shear difference per element over time, on the punch's dome and off it (the flanges, where the plies hang on each other: there they share one shape at any μ_ply, so only the dome tests that no friction couples them), and beside it that of each ply alone against itself on a punch 1 µm larger (the scene's own sensitivity)\n\n{table}\nAt the end, on the dome: 0/90 RMS {:.3}° (largest {:.2}°, {} elements), ±45 RMS {:.3}° (largest {:.2}°, {} elements). {before}The noise floor at the end, {:.3}° and {:.3}° RMS, is {floor}.",
+        dome_end[0].0,
+        dome_end[0].1,
+        dome_end[0].2,
+        dome_end[1].0,
+        dome_end[1].1,
+        dome_end[1].2,
+        floor_end[0],
+        floor_end[1]
     ));
     vec![
         Check::abs(

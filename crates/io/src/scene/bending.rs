@@ -11,7 +11,7 @@
 //! without a word.
 
 use drape_constitutive::Material;
-use drape_model::Model;
+use drape_model::{Model, YarnCoverage};
 use nalgebra::Vector3;
 
 use super::{FabricSpec, Locator, SceneError};
@@ -23,12 +23,47 @@ pub(super) fn yarn_bending(
     model: &Model,
     at: &Locator<'_>,
 ) -> Result<Option<[f64; 2]>, SceneError> {
-    const FIELD: &str = "fabric.bending";
-    match fabric.bending {
+    let theta = fabric.orientation_deg.to_radians();
+    let warp = Vector3::new(theta.cos(), theta.sin(), 0.0);
+    decide(
+        at,
+        &Whose {
+            field: "fabric.bending",
+            ply: None,
+        },
+        fabric.bending,
+        material,
+        || model.yarn_coverage(warp, Vector3::z()),
+    )
+}
+
+/// Whose bending setting it is, for the messages: its field, and the ply
+/// of a stack it is for (`None` for `[fabric]`'s one blank).
+pub(super) struct Whose<'a> {
+    pub(super) field: &'a str,
+    pub(super) ply: Option<&'a str>,
+}
+
+/// The rigidities to bend one blank (a `[fabric]`, or one ply of a stack)
+/// with, from its `bending` setting, its material and how far its mesh
+/// lines follow its yarns; `None` for no bending.
+pub(super) fn decide(
+    at: &Locator<'_>,
+    whose: &Whose<'_>,
+    setting: Option<bool>,
+    material: &Material,
+    coverage: impl FnOnce() -> YarnCoverage,
+) -> Result<Option<[f64; 2]>, SceneError> {
+    let field = whose.field;
+    let (blank, in_ply) = match whose.ply {
+        None => ("the blank".to_owned(), String::new()),
+        Some(name) => (format!("ply `{name}`"), format!(" in ply `{name}`")),
+    };
+    match setting {
         Some(false) => Ok(None),
         Some(true) => material.bending_rigidity.map(Some).ok_or_else(|| {
             at.error(
-                FIELD,
+                field,
                 "yarn bending needs the material's `bending_rigidity = [warp, weft]` (N·mm); \
                  this material has none",
             )
@@ -36,30 +71,31 @@ pub(super) fn yarn_bending(
         None => {
             let Some(rigidity) = material.bending_rigidity else {
                 at.warn(
-                    FIELD,
-                    "yarn bending is off: the material has no `bending_rigidity = [warp, weft]` \
-                     (N·mm), and a membrane without it folds at no cost; give it one, or set \
-                     `bending = false` to say that this is meant",
+                    field,
+                    format!(
+                        "yarn bending is off{}: the material has no `bending_rigidity = [warp, \
+                         weft]` (N·mm), and a membrane without it folds at no cost; give it one, \
+                         or set `bending = false` to say that this is meant",
+                        in_ply
+                    ),
                 );
                 return Ok(None);
             };
-            let theta = fabric.orientation_deg.to_radians();
-            let warp = Vector3::new(theta.cos(), theta.sin(), 0.0);
-            let coverage = model.yarn_coverage(warp, Vector3::z());
+            let coverage = coverage();
             if coverage.is_complete() {
                 return Ok(Some(rigidity));
             }
             at.warn(
-                FIELD,
+                field,
                 format!(
-                    "yarn bending is off: it acts along mesh lines that follow the yarns, and \
-                     {} of the blank's {} interior nodes have a warp and a weft line through \
+                    "yarn bending is off{}: it acts along mesh lines that follow the yarns, and \
+                     {} of {blank}'s {} interior nodes have a warp and a weft line through \
                      them (a mesh file, or embedded fibres at an angle to the grid); the \
                      membrane can fold at no cost, and the run's fold check says if it did. \
                      Mesh the blank along the yarns (a rectangle blank, θ = 0 or 90 for \
                      embedded fibres) to have it, or set `bending = false` to say that this is \
                      meant",
-                    coverage.covered_nodes, coverage.interior_nodes
+                    in_ply, coverage.covered_nodes, coverage.interior_nodes
                 ),
             );
             Ok(None)

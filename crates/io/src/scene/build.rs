@@ -620,9 +620,12 @@ pub(super) fn build(
 
     let fabric = &spec.fabric;
     let material = material(at, "fabric", &fabric.material, fabric.yarn_buckling)?;
-    let (mut model, default_pin) = match &spec.stack {
+    let (mut model, default_pin, ply_bending) = match &spec.stack {
         Some(stack) => super::stack::build(at, spec, stack, &material)?,
-        None => fabric_blank(at, "fabric", fabric, &material)?,
+        None => {
+            let (model, pin) = fabric_blank(at, "fabric", fabric, &material)?;
+            (model, pin, Vec::new())
+        }
     };
 
     for (i, t) in spec.tools.iter().enumerate() {
@@ -996,7 +999,10 @@ pub(super) fn build(
     }
     // After the boundary conditions: lines are clamped at the fixed nodes.
     let bending = match &spec.stack {
-        Some(_) => super::stack::no_bending(at, fabric)?,
+        Some(_) => {
+            super::stack::add_bending(at, &mut model, &ply_bending)?;
+            None
+        }
         None => yarn_bending(fabric, &material, &model, at)?,
     };
     if let Some(rigidity) = bending {

@@ -3,6 +3,8 @@
 //! between neighbouring plies; built into one model by
 //! [`drape_model::Model::stack`].
 //!
+//! Each ply bends its own yarns (`bending`, as `[fabric]`'s, per ply).
+//!
 //! Not here: the ply–ply contact (`drape_contact::PlyContact`) and the
 //! per-ply results.
 
@@ -13,6 +15,7 @@ use drape_model::stack::PlyModel;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+use super::bending::{Whose, decide};
 use super::build::{fabric_blank, material};
 use super::{BlankSpec, FabricSpec, Locator, MaterialSpec, SceneError, SceneFile, Solver};
 
@@ -57,6 +60,23 @@ pub struct PlySpec {
     /// Coulomb coefficient against the ply below (not on the bottom ply).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub friction: Option<f64>,
+    /// Yarn bending of this ply (as `fabric.bending`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bending: Option<bool>,
+}
+
+/// One ply's yarn bending, decided with its blank and added once the
+/// boundary conditions are known (lines are clamped at fixed nodes).
+#[derive(Debug, Clone)]
+pub(super) struct PlyBending {
+    /// The ply (index into `Model::plies`).
+    ply: usize,
+    /// Its warp in the blank plane.
+    warp: Vector3<f64>,
+    /// [warp, weft] (N·mm).
+    rigidity: [f64; 2],
+    /// The field its errors name.
+    field: String,
 }
 
 fn coefficient(at: &Locator<'_>, field: &str, mu: f64) -> Result<f64, SceneError> {
@@ -70,13 +90,15 @@ fn coefficient(at: &Locator<'_>, field: &str, mu: f64) -> Result<f64, SceneError
     }
 }
 
-/// The stacked model and the bottom ply's default pin (as one blank's).
+/// The stacked model, the bottom ply's default pin (as one blank's) and
+/// the plies' yarn bending to add after the boundary conditions
+/// ([`add_bending`]).
 pub(super) fn build(
     at: &Locator<'_>,
     spec: &SceneFile,
     stack: &StackSpec,
     fabric_material: &Material,
-) -> Result<(Model, Vector3<f64>), SceneError> {
+) -> Result<(Model, Vector3<f64>, Vec<PlyBending>), SceneError> {
     if stack.ply.is_empty() || stack.ply.len() > MAX_PLIES {
         return Err(at.error(
             "stack",
@@ -97,6 +119,7 @@ pub(super) fn build(
     let default_friction = coefficient(at, "stack.friction", stack.friction)?;
     let fabric = &spec.fabric;
     let mut plies = Vec::with_capacity(stack.ply.len());
+    let mut settings = Vec::with_capacity(stack.ply.len());
     let mut pin = Vector3::zeros();
     for (i, p) in stack.ply.iter().enumerate() {
         let here = format!("stack.ply[{i}]");
@@ -180,6 +203,11 @@ pub(super) fn build(
         if i == 0 {
             pin = ply_pin;
         }
+        let field = match p.bending {
+            Some(_) => format!("{here}.bending"),
+            None => "fabric.bending".to_owned(),
+        };
+        settings.push((p.bending.or(fabric.bending), field, material.clone()));
         plies.push(PlyModel {
             model,
             name,
@@ -189,30 +217,45 @@ pub(super) fn build(
         });
     }
     let model = Model::stack(plies).map_err(|e| at.error("stack", e.to_string()))?;
-    Ok((model, pin))
-}
-
-/// A stack has no yarn bending yet (each ply would need its own lines):
-/// `bending = true` is refused, unset it is off with a note.
-pub(super) fn no_bending(
-    at: &Locator<'_>,
-    fabric: &FabricSpec,
-) -> Result<Option<[f64; 2]>, SceneError> {
-    match fabric.bending {
-        Some(true) => Err(at.error(
-            "fabric.bending",
-            "yarn bending is not available in a stack of plies yet: set `bending = false` or \
-             leave it out",
-        )),
-        Some(false) => Ok(None),
-        None => {
-            at.warn(
-                "stack",
-                "yarn bending is off in a stack of plies (not available yet)",
-            );
-            Ok(None)
+    // Each ply bends its own yarns: its lines through its own nodes along
+    // its own warp, with its own material's rigidity; decided as a
+    // `[fabric]` blank's would be.
+    let mut bending = Vec::new();
+    for (i, (setting, field, material)) in settings.into_iter().enumerate() {
+        let ply = &model.plies[i];
+        let theta = ply.orientation_deg.to_radians();
+        let warp = Vector3::new(theta.cos(), theta.sin(), 0.0);
+        let whose = Whose {
+            field: &field,
+            ply: Some(&ply.name),
+        };
+        let coverage = || model.yarn_coverage_of(ply.membranes.clone(), warp, Vector3::z());
+        if let Some(rigidity) = decide(at, &whose, setting, &material, coverage)? {
+            bending.push(PlyBending {
+                ply: i,
+                warp,
+                rigidity,
+                field,
+            });
         }
     }
+    Ok((model, pin, bending))
+}
+
+/// Adds the plies' yarn bending to `model` (after its boundary conditions:
+/// lines are clamped at the nodes they fix).
+pub(super) fn add_bending(
+    at: &Locator<'_>,
+    model: &mut Model,
+    bending: &[PlyBending],
+) -> Result<(), SceneError> {
+    for b in bending {
+        let membranes = model.plies[b.ply].membranes.clone();
+        model
+            .add_yarn_bending_of(membranes, b.warp, Vector3::z(), b.rigidity)
+            .map_err(|e| at.error(&b.field, format!("ply `{}`: {e}", model.plies[b.ply].name)))?;
+    }
+    Ok(())
 }
 
 /// The plies' blank meshes as absolute paths (for a resolved scene).

@@ -439,46 +439,29 @@ fn an_exponentially_growing_balance_error_stops_the_run_early() {
         }
         other => panic!("{other:?}"),
     }
+    // The first check (of relative errors at 10 %, 20 %, … of the run)
+    // that stops a fresh guard, and why.
+    let first_stop = |errors: &[f64]| {
+        let mut guard = Guard::new(&model, GuardSettings::default(), 1.0);
+        errors.iter().enumerate().find_map(|(k, &error)| {
+            guard
+                .energy(&frame(error, 1.0), 0.1 * (k + 1) as f64)
+                .err()
+                .map(|e| (k, e))
+        })
+    };
     // An impact makes the error jump once: no steady growth.
-    let mut guard = Guard::new(&model, GuardSettings::default(), 1.0);
-    for (k, error) in [1e-8, 2e-8, 3e-3, 3.1e-3, 3.3e-3, 3.2e-3]
-        .into_iter()
-        .enumerate()
-    {
-        assert_eq!(
-            guard.energy(&frame(error, 1.0), 0.1 * (k + 1) as f64),
-            Ok(()),
-            "{k}"
-        );
-    }
+    let impact = first_stop(&[1e-8, 2e-8, 3e-3, 3.1e-3, 3.3e-3, 3.2e-3]);
+    assert_eq!(impact, None);
     // A first impact lifts the error from round-off to a finite one over
     // two checks (the tray's coarse run), then it falls: not a growth.
-    let mut guard = Guard::new(&model, GuardSettings::default(), 1.0);
-    for (k, error) in [1.9e-15, 3.1e-15, 2.9e-5, 5.47e-3, 1.5e-3, 1.2e-3]
-        .into_iter()
-        .enumerate()
-    {
-        assert_eq!(
-            guard.energy(&frame(error, 1.0), 0.1 * (k + 1) as f64),
-            Ok(()),
-            "{k}"
-        );
-    }
+    let first = first_stop(&[1.9e-15, 3.1e-15, 2.9e-5, 5.47e-3, 1.5e-3, 1.2e-3]);
+    assert_eq!(first, None);
     // The same rise from just above round-off that keeps growing stops.
-    let mut guard = Guard::new(&model, GuardSettings::default(), 1.0);
-    let mut stopped = None;
-    for (k, error) in [1.9e-15, 3.1e-15, 2.9e-5, 5.47e-3, 1e-2, 2e-2]
-        .into_iter()
-        .enumerate()
-    {
-        if let Err(e) = guard.energy(&frame(error, 1.0), 0.1 * (k + 1) as f64) {
-            stopped = Some((k, e));
-            break;
-        }
-    }
+    let growing = first_stop(&[1.9e-15, 3.1e-15, 2.9e-5, 5.47e-3, 1e-2, 2e-2]);
     assert!(
-        matches!(stopped, Some((5, Instability::EnergyGrowth { .. }))),
-        "{stopped:?}"
+        matches!(growing, Some((5, Instability::EnergyGrowth { .. }))),
+        "{growing:?}"
     );
     // A sound run's relative error wanders, and below 1e-3 its growth does
     // not count.

@@ -298,8 +298,9 @@ pub struct NewtonRecord {
     /// Pairs whose friction state (stick, slip, released) the return
     /// mapping changed at this iterate.
     pub friction_changes: usize,
-    /// Pressed pairs that stick and that slip at this iterate.
+    /// Pressed pairs that stick at this iterate.
     pub sticking: usize,
+    /// Pressed pairs that slip at this iterate.
     pub slipping: usize,
     /// The largest μ·|Δλ_N| of a slipping pair in the step that led here
     /// (N): friction the step took at the old λ_N.
@@ -307,18 +308,21 @@ pub struct NewtonRecord {
     /// Friction state of the node with the largest residual: 0 no
     /// pressed pair, 1 stick, 2 slip.
     pub worst_contact: u8,
-    /// Largest penetration and stick-law violation (mm), force-driven
-    /// tools' largest imbalance (N).
+    /// Largest penetration (mm).
     pub penetration: f64,
+    /// Largest violation of a sticking pair's stick law (mm).
     pub stick_slip: f64,
+    /// Force-driven tools' largest imbalance (N).
     pub imbalance: f64,
     /// The increment's size (s).
     pub h: f64,
-    /// The step that led here against the one before it: the cosine of
-    /// their angle and the ratio of their lengths (0 for the first), and
-    /// the fraction of it taken (line search, cycle halving).
+    /// The cosine of the angle between the Newton step that led here and
+    /// the one before it (0 for the first of an attempt): near 1 with
+    /// shrinking steps, Newton falls short along one direction.
     pub step_cosine: f64,
+    /// The ratio of their lengths (0 for the first).
     pub step_ratio: f64,
+    /// The fraction of the Newton step taken (line search, cycle halving).
     pub step_taken: f64,
 }
 

@@ -304,6 +304,8 @@ struct Pair {
     /// The normal row's linearised gap after the last active-set system
     /// (the gap at the linearisation before one).
     predicted: f64,
+    /// λ_N before the last solve (for [`ImplicitContact::slip_lag`]).
+    lambda_before: f64,
 }
 
 impl Pair {
@@ -895,6 +897,7 @@ impl ImplicitContact {
                     multiplier: 0.0,
                     active: false,
                     predicted: gap,
+                    lambda_before: 0.0,
                 };
                 if old < self.pairs.len() && (self.pairs[old].tool, self.pairs[old].node) == key {
                     let o = &self.pairs[old];
@@ -910,6 +913,7 @@ impl ImplicitContact {
                     pair.trial = o.trial;
                     pair.multiplier = o.multiplier;
                     pair.active = o.active;
+                    pair.lambda_before = o.lambda_before;
                 } else if carried < self.carried.len()
                     && (self.carried[carried].tool, self.carried[carried].node) == key
                 {
@@ -1251,6 +1255,7 @@ impl ImplicitContact {
             .count();
         // Multipliers back to the pairs.
         for pair in &mut self.pairs {
+            pair.lambda_before = pair.lambda;
             pair.lambda = 0.0;
             pair.stick = Vector3::zeros();
         }
@@ -1771,6 +1776,36 @@ impl ImplicitContact {
     /// Whether a force-driven tool is among the tools.
     pub fn couples_tools(&self) -> bool {
         self.has_free_tools()
+    }
+
+    /// The largest change μ·|Δλ_N| of a slipping pair's friction force in
+    /// the last solve (N): the force the Newton step took as a fixed load
+    /// at the old λ_N, so what the next residual finds at that node when
+    /// the slip force lags behind the multipliers (a diagnosis).
+    pub fn slip_lag(&self) -> f64 {
+        self.pairs
+            .iter()
+            .filter(|p| p.friction == Friction::Slip && p.lambda > self.force_floor)
+            .map(|p| self.tools[p.tool as usize].friction * (p.lambda - p.lambda_before).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// Pressed pairs (λ_N above the force floor) that stick and that slip.
+    pub fn friction_census(&self) -> (usize, usize) {
+        let pressed = self.pairs.iter().filter(|p| p.lambda > self.force_floor);
+        pressed.fold((0, 0), |(stick, slip), p| match p.friction {
+            Friction::Stick => (stick + 1, slip),
+            Friction::Slip => (stick, slip + 1),
+        })
+    }
+
+    /// The friction state of node `node`'s pressed pair, if any (the
+    /// first such pair's, tool by tool).
+    pub fn friction_at(&self, node: u32) -> Option<Friction> {
+        self.pairs
+            .iter()
+            .find(|p| p.node == node && p.lambda > self.force_floor)
+            .map(|p| p.friction)
     }
 }
 

@@ -323,3 +323,60 @@ fn a_tight_frame_spacing_converges_as_a_coarse_one_does() {
         "{largest:e} {fine_off:e} > {bound:e}"
     );
 }
+
+/// Newton accepts an iterate whose last correction is above the
+/// displacement tolerance when its residual is within the force tolerance
+/// and fell tenfold or more in that step: the next correction, estimated
+/// as the last one times that contraction, is what the test compares.
+/// Checked against Newton run to 1e-13: the accepted positions are within
+/// the displacement tolerance of the converged ones, and the estimate
+/// was used (the accepted iterate's last correction is above it).
+#[test]
+fn an_iterate_accepted_on_the_estimated_next_correction_is_within_tolerance() {
+    let model = clamped_strip(FibreRepresentation::Trusses, Vector3::new(0.4, 0.1, 0.0));
+    let run = |tolerance: f64| {
+        let settings = ImplicitSettings {
+            end_time: 1.0,
+            frames: 1,
+            initial_increment: Some(1.0),
+            max_increment: Some(1.0),
+            force_tolerance: tolerance,
+            displacement_tolerance: tolerance,
+            ..ImplicitSettings::default()
+        };
+        let mut driver = Implicit::new(&model, settings).unwrap();
+        driver.record_newton();
+        let mut state = model.initial_state();
+        let summary = driver.run(&mut state, &mut NoObserver).unwrap();
+        assert_eq!(summary.steps, 1);
+        (state.x, driver.newton_record().to_vec())
+    };
+    let tolerance = 1e-6;
+    let (accepted, record) = run(tolerance);
+    let (converged, _) = run(1e-13);
+    let increment = accepted
+        .iter()
+        .zip(&model.x0)
+        .map(|(a, b)| (a - b).amax())
+        .fold(0.0, f64::max);
+    let last = record.last().unwrap();
+    let corrections: Vec<f64> = record.iter().map(|r| r.correction).collect();
+    assert!(
+        last.correction > tolerance * increment,
+        "the estimate was not needed: corrections {corrections:?}"
+    );
+    let off = accepted
+        .iter()
+        .zip(&converged)
+        .map(|(a, b)| (a - b).amax())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "accepted {off:.3e} mm off, tolerance {:.3e} mm, corrections {corrections:?}",
+        tolerance * increment
+    );
+    assert!(
+        off <= tolerance * increment,
+        "accepted {off:.3e} mm from the converged positions (tolerance {:.3e} mm); corrections {corrections:?}",
+        tolerance * increment
+    );
+}

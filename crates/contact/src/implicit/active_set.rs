@@ -346,6 +346,7 @@ impl ImplicitContact {
                 changes += 1;
             }
             pair.active = h;
+            pair.lambda_before = pair.lambda;
             pair.lambda = 0.0;
             pair.multiplier = 0.0;
             pair.stick = Vector3::zeros();

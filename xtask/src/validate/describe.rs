@@ -22,6 +22,10 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "two-ply hemisphere [0/90 + ±45] at μ_ply = 0: each ply's shear against that ply formed alone on a mould offset by the other ply's thickness",
             "the single-ply runs, element by element (same mesh), yarn bending on in all: RMS of the shear difference ≤ 0.5° (the issue's bound); per frame in a note, on the punch's dome and off it, beside each single run against itself on a punch 1 µm larger (the noise floor)",
         ),
+        "plies/held-frictionless" => (
+            "deep drawing (punch, die, force-driven holder) of two plies [0/90 + ±45] at μ_ply = 0, both held by tools everywhere: each ply's shear against that ply drawn alone on the tools offset by the other ply's thickness",
+            "the single-ply runs, element by element (same mesh, stroke, mass scaling), the offset tools frictionless: RMS of the shear difference ≤ 0.5° (the issue's bound); per frame in a note, in the die's opening and on the flange, beside each single run against itself on a punch 1 µm larger (the noise floor)",
+        ),
         "plies/hemisphere-four" => (
             "four plies [0/45/90/−45] formed together on the hemisphere, and the bottom ply alone, on 2 threads",
             "the plies' distance from the positions: overlap ≤ 1 % of the thickness; no capped ply solve; full: wall time ≤ 5× one ply's",

@@ -21,6 +21,7 @@ use nalgebra::{Matrix3, Vector3};
 use super::{Case, Check, note};
 
 mod four;
+mod held;
 
 /// The cases of this module.
 pub const CASES: &[Case] = &[
@@ -48,6 +49,11 @@ pub const CASES: &[Case] = &[
         name: "plies/hemisphere-frictionless",
         quick: false,
         run: hemisphere_frictionless,
+    },
+    Case {
+        name: "plies/held-frictionless",
+        quick: false,
+        run: held::held_frictionless,
     },
     Case {
         name: "plies/hemisphere-four",

@@ -23,7 +23,7 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "the single-ply runs, element by element (same mesh), yarn bending on in all: RMS of the shear difference ≤ 0.5° (the issue's bound); per frame in a note, on the punch's dome and off it, beside each single run against itself on a punch 1 µm larger (the noise floor)",
         ),
         "plies/held-frictionless" => (
-            "deep drawing (punch, die, force-driven holder) of two plies [0/90 + ±45] at μ_ply = 0, both held by tools everywhere: each ply's shear against that ply drawn alone on the tools offset by the other ply's thickness",
+            "deep drawing (punch, die, fixed holder) of two plies [0/90 + ±45] at μ_ply = 0, both held by tools everywhere: each ply's shear against that ply drawn alone on the tools offset by the other ply's thickness",
             "the single-ply runs, element by element (same mesh, stroke, mass scaling), the offset tools frictionless: RMS of the shear difference ≤ 0.5° (the issue's bound); per frame in a note, in the die's opening and on the flange, beside each single run against itself on a punch 1 µm larger (the noise floor)",
         ),
         "plies/hemisphere-four" => (

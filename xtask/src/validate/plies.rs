@@ -558,6 +558,16 @@ impl ShearRun {
 
 /// Runs the scene `text` (read as if from `path`) to its end.
 fn shear_run(text: &str, path: &std::path::Path) -> ShearRun {
+    let (run, error) = try_shear_run(text, path);
+    if let Some(error) = error {
+        panic!("run: {error}");
+    }
+    run
+}
+
+/// Runs the scene `text` (read as if from `path`) until it ends or stops
+/// on an error: the frames so far and the error, if any.
+fn try_shear_run(text: &str, path: &std::path::Path) -> (ShearRun, Option<String>) {
     let scene = drape_io::scene::Scene::parse(text, path, &[]).expect("scene");
     let model = &scene.model;
     let mut frames = Vec::new();
@@ -573,15 +583,17 @@ fn shear_run(text: &str, path: &std::path::Path) -> ShearRun {
         });
     });
     let mut state = model.initial_state();
-    Explicit::new(model, scene.settings.clone())
+    let error = Explicit::new(model, scene.settings.clone())
         .expect("driver")
         .run(&mut state, &mut observer)
-        .expect("run");
-    ShearRun {
+        .err()
+        .map(|e| format!("{e:?}"));
+    let run = ShearRun {
         frames,
         plies: model.plies.iter().map(|p| p.elements.clone()).collect(),
         thickness: model.plies.iter().map(|p| p.thickness).collect(),
-    }
+    };
+    (run, error)
 }
 
 /// Root mean square and largest magnitude of `a − b` over `elements`.

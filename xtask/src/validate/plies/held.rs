@@ -195,10 +195,11 @@ fn split(
 /// by 0.56° and 0.85° RMS where each ply alone repeats itself to 0.03° and
 /// 0.09°, at t = 0.45 s by 7.5° and 10.6° (floors 5.6° and 1.0°: past
 /// t ≈ 0.35 s the single 0/90 ply is itself too sensitive to resolve
-/// 0.5°). The difference starts inside the die's opening, where the plies
-/// span free between the punch's shoulder and the die's fillet (no tool
-/// holds them on both faces there, so each ply's shape is the pair's, as
-/// on the hemisphere's free flanges).
+/// 0.5°). The difference starts inside the die's opening (at t = 0.2 s
+/// 0.32° there against 0.11° on the flange, 0/90); a likely reading, not
+/// separated here: there the plies span free between the punch's shoulder
+/// and the die's fillet, held by no tool on either face, so each ply's
+/// shape is the pair's, as on the hemisphere's free flanges.
 ///
 /// Checks: the stack draws the whole stroke; the bound, each
 /// ply's RMS ≤ 0.5° at the last frame the stack reached (the end, unless

@@ -215,11 +215,12 @@ fn regions(
 /// by 0.56° and 0.85° RMS where each ply alone repeats itself to 0.03° and
 /// 0.09°, at t = 0.45 s by 7.5° and 10.6° (floors 5.6° and 1.0°: past
 /// t ≈ 0.35 s the single 0/90 ply is itself too sensitive to resolve
-/// 0.5°). The difference starts inside the die's opening (at t = 0.2 s
-/// 0.32° there against 0.11° on the flange, 0/90); a likely reading, not
-/// separated here: there the plies span free between the punch's shoulder
-/// and the die's fillet, held by no tool on either face, so each ply's
-/// shape is the pair's, as on the hemisphere's free flanges.
+/// 0.5°). By region (the single run's centroids) at t = 0.25 s, 0/90 /
+/// ±45: on the punch 0.50° / 0.24°, free in the die's opening (off the
+/// punch: the wall spanning to the die's fillet, held by no tool on
+/// either face) 1.01° / 1.35°, on the flange 0.38° / 0.72°. The free span
+/// leads, as the hanging flanges do on the hemisphere: there each ply's
+/// shape is the pair's whatever μ_ply, and it feeds back onto the rest.
 ///
 /// At the shipped 40 × 40 cells (about 8 min) the stack stops earlier,
 /// at t = 0.342 s, on the same kind of fault (a top-ply node at

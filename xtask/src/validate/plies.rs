@@ -3,7 +3,8 @@
 //! under a normal load (the sled), a two-ply stack on an incline (which
 //! interface slides first), no interpenetration of two plies formed
 //! together over the hemisphere, and two plies without friction between
-//! them against each ply formed alone.
+//! them against each ply formed alone (on the free hemisphere, and drawn
+//! through a die under a holder in [`held`]).
 //!
 //! References come from closed formulas evaluated here (μN, the rigid
 //! slide of a constant or ramped force, the friction angle atan μ) and,

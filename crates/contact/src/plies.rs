@@ -128,6 +128,11 @@ struct Hit {
     nodes: [u32; 3],
     w: [f64; 3],
     found: bool,
+    /// The node is inside the face's ply on the far side of its
+    /// mid-surface from the side it was last seen on ([`Search::side`]):
+    /// it came round a free edge or a fold, and goes back by a shift of
+    /// its position, not a velocity ([`PlyContact::normal`]).
+    recover: bool,
 }
 
 impl Hit {
@@ -137,6 +142,7 @@ impl Hit {
         nodes: [0; 3],
         w: [0.0; 3],
         found: false,
+        recover: false,
     };
 }
 
@@ -163,6 +169,11 @@ struct Search {
     /// at the last pass it was constrained, and that pass's number: the
     /// next pass's solves start from them.
     warm: Vec<Warm>,
+    /// Each slave node's side of the master ply (+1 the side its faces'
+    /// normals point to, the stacking order; −1 the other) where it was
+    /// last seen near the master clear of its material: the side a node
+    /// found inside the master's material is pushed out to.
+    side_seen: Vec<i8>,
 }
 
 impl Default for Hit {
@@ -188,6 +199,8 @@ struct Constraint {
     /// (`u32::MAX`: none, a row of a lower node alone).
     slip_node: u32,
     search: u32,
+    /// A node back to its side ([`Hit::recover`]).
+    recover: bool,
 }
 
 /// A constraint's forces at a pass, for the next pass to start from.
@@ -246,6 +259,9 @@ pub struct PlyContact {
     reference_x: Vec<Vector3<f64>>,
     constraints: Vec<Constraint>,
     dx: Vec<Vector3<f64>>,
+    /// The part of each node's `dx` that moves it back to its side of a
+    /// ply it came round ([`Hit::recover`]): a position correction only.
+    shift: Vec<Vector3<f64>>,
     /// Each constraint's tangential force in the friction solve.
     f_t: Vec<Vector3<f64>>,
     /// Each node's reference area (for the pressure).
@@ -295,6 +311,7 @@ impl PlyContact {
                     cand_ptr: vec![0; count + 1],
                     hits: vec![Hit::NONE; count],
                     warm: vec![Warm::default(); count],
+                    side_seen: vec![1; count],
                     boxes: vec![[0.0; 6]; layers[master].faces.len()],
                     ..Search::default()
                 });
@@ -314,6 +331,7 @@ impl PlyContact {
             reference_x: Vec::new(),
             constraints: Vec::with_capacity(2 * n),
             dx: vec![Vector3::zeros(); n],
+            shift: vec![Vector3::zeros(); n],
             f_t: Vec::with_capacity(2 * n),
             area,
             slip: vec![0.0; n],
@@ -389,16 +407,23 @@ impl PlyContact {
             let (side, offset, reach) = (s.side, s.offset, s.offset + self.margin);
             s.hits
                 .par_iter_mut()
+                .zip(s.side_seen.par_iter_mut())
                 .enumerate()
                 .with_min_len(NODES_PER_TASK)
-                .for_each(|(local, hit)| {
+                .for_each(|(local, (hit, seen))| {
                     *hit = Hit::NONE;
                     let range = ptr[local] as usize..ptr[local + 1] as usize;
                     if range.is_empty() {
                         return;
                     }
                     let p = x[slave.first_node as usize + local];
+                    // The node's own side: the face normals' side unless
+                    // it was last seen clear on the other.
+                    let own = f64::from(*seen);
                     let mut best = f64::INFINITY;
+                    // The closest face's side and whether the node is
+                    // clear of it there (for the side memory).
+                    let mut closest: Option<(f64, bool)> = None;
                     for &f in &cand[range] {
                         let tri = faces[f as usize];
                         let [a, b, c] = tri.map(|n| x[n as usize]);
@@ -413,44 +438,65 @@ impl PlyContact {
                         if len == 0.0 || dist == 0.0 {
                             continue;
                         }
-                        let up = nf * (side / len);
+                        let up = nf * (own * side / len);
                         let along = d.dot(&up);
-                        // A node behind the face's mid-surface came round
-                        // the ply's edge or from another part of it (a
-                        // fold): no step moves a node that deep into its
-                        // neighbour, and pushing it through would throw it
-                        // by the plies' thickness in one step. A node
-                        // beside the face (past the ply's free edge, its
-                        // offset mostly sideways) is not on it either.
-                        if along <= 0.0 || (d - up * along).norm_squared() > offset * offset {
+                        // A node beside the face (past the ply's free
+                        // edge, its offset mostly sideways) is not on it.
+                        if (d - up * along).norm_squared() > offset * offset {
                             continue;
                         }
-                        // The distance to the closest point and its
-                        // direction: continuous across the kinks between
-                        // faces (a face's own normal would turn by the
-                        // kink as the node passes a vertex and push it
-                        // each time), the face's normal inside a face. On
-                        // the ply's free outline the face's normal: the
-                        // ply ends there square, not rounded, so a ply
-                        // sliding past the edge of the one below is not
-                        // pushed sideways.
-                        let (normal, gap) = if on_outline(outline[f as usize], &w) {
-                            (up, along - offset)
+                        let outline_hit = on_outline(outline[f as usize], &w);
+                        let r = dist.sqrt();
+                        let (normal, gap, recover) = if along > 0.0 {
+                            // The distance to the closest point and its
+                            // direction: continuous across the kinks
+                            // between faces (a face's own normal would
+                            // turn by the kink as the node passes a vertex
+                            // and push it each time), the face's normal
+                            // inside a face. On the ply's free outline the
+                            // face's normal: the ply ends there square,
+                            // not rounded, so a ply sliding past the edge
+                            // of the one below is not pushed sideways.
+                            if outline_hit {
+                                (up, along - offset, false)
+                            } else {
+                                (d / r, r - offset, false)
+                            }
+                        } else if outline_hit {
+                            // Behind the square end of the ply: not in it.
+                            continue;
+                        } else if r < offset {
+                            // Inside the ply beyond its mid-surface: it
+                            // came round the ply's free edge or a fold
+                            // (no step moves a node that deep), and goes
+                            // back out on its own side, not the nearer
+                            // one, which would put it through the ply.
+                            (up, along - offset, true)
                         } else {
-                            let r = dist.sqrt();
-                            (d / r, r - offset)
+                            // Clear of the ply on the other side: the
+                            // side memory turns if this face is the
+                            // closest.
+                            best = dist;
+                            *hit = Hit::NONE;
+                            closest = Some((-own, r - offset <= reach));
+                            continue;
                         };
                         if gap > reach {
                             continue;
                         }
                         best = dist;
+                        closest = Some((own, gap >= 0.0));
                         *hit = Hit {
                             gap,
                             normal,
                             nodes: tri,
                             w,
                             found: true,
+                            recover,
                         };
+                    }
+                    if let Some((s, true)) = closest {
+                        *seen = if s > 0.0 { 1 } else { -1 };
                     }
                 });
         }
@@ -512,7 +558,7 @@ impl PlyContact {
                 // forming run the plies press on each other much as they
                 // did a step ago.
                 let warm = s.warm[local];
-                let mu = if warm.pass + 1 == self.pass {
+                let mu = if warm.pass + 1 == self.pass && !hit.recover {
                     warm.normal * dt * tau
                 } else {
                     0.0
@@ -533,6 +579,7 @@ impl PlyContact {
                     ],
                     slip_node,
                     search: k as u32,
+                    recover: hit.recover,
                 });
             }
         }
@@ -562,6 +609,26 @@ impl PlyContact {
                 for k in 0..3 {
                     self.dx[c.masters[k] as usize] -= c.normal * (c.mu * c.w[k] * c.inv[k + 1]);
                 }
+            }
+        }
+        // A node that came round to the wrong side of a ply is moved back
+        // out on its side before the solve, by the row's own projection
+        // (its masses' shares), as a shift of position only: its depth is
+        // up to the plies' thickness, which as a velocity (dx/dt) would
+        // throw it at metres a second. The row stays in the solve with
+        // the shift in its gap, so the others cannot push it back in.
+        for c in &self.constraints {
+            if !c.recover {
+                continue;
+            }
+            let d = c.normal * (-c.gap * c.mass);
+            let s = d * c.inv[0];
+            self.dx[c.slave as usize] += s;
+            self.shift[c.slave as usize] += s;
+            for k in 0..3 {
+                let m = d * (c.w[k] * c.inv[k + 1]);
+                self.dx[c.masters[k] as usize] -= m;
+                self.shift[c.masters[k] as usize] -= m;
             }
         }
         // Converged when what is left of every violation is 1e-8 of the
@@ -612,14 +679,16 @@ impl PlyContact {
             }
         }
         let lambda_scale = 1.0 / (dt * tau);
+        let shift = &mut self.shift;
         for c in &self.constraints {
             for i in std::iter::once(c.slave).chain(c.masters) {
                 let i = i as usize;
                 if dx[i] != Vector3::zeros() {
                     x[i] += dx[i];
-                    v[i] += dx[i] / dt;
+                    v[i] += (dx[i] - shift[i]) / dt;
                     dx[i] = Vector3::zeros();
                 }
+                shift[i] = Vector3::zeros();
             }
             if c.mu > 0.0 {
                 let f = c.normal * (c.mu * lambda_scale);
@@ -1047,6 +1116,9 @@ fn inverse_mass(mass: &[f64], movable: &[bool], i: u32) -> f64 {
         0.0
     }
 }
+
+#[cfg(test)]
+mod side_tests;
 
 #[cfg(test)]
 mod tests {

@@ -11,6 +11,15 @@
 //! the face's mid-surface: g = (xₛ − Σ wⱼxⱼ)·n − (hₐ + h_b)/2 ≥ 0, with wⱼ
 //! the barycentric weights of the closest point.
 //!
+//! Which side of a ply a node belongs on is remembered per node (a side
+//! memory, as shell contact codes keep): the stacking side at the start,
+//! turned only when the node is seen near the ply clear of it on the
+//! other side. A node found inside a ply beyond its mid-surface, which no
+//! step's motion does (it came round the ply's free edge, or a fold came
+//! over it), is put back out on its remembered side, not the nearer one
+//! (which is through the ply), by a shift of position alone: the shift is
+//! up to the plies' thickness, and as a velocity it would throw the node.
+//!
 //! Stick is exact, not regularised: the normal multipliers make the gap
 //! zero at the end of the step and the friction multiplier makes the
 //! relative tangential velocity zero unless that needs more than μλ (as

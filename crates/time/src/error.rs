@@ -101,9 +101,9 @@ pub enum RunError {
         "step {step}, t = {time:.6e} s: node {node} of ply `{ply}` at ({:.3}, {:.3}, {:.3}) mm \
          is {overlap:.4e} mm inside ply `{into}` (tolerance {tolerance:.3e} mm, the lesser of a \
          tenth of the thinnest ply's thickness and a hundredth of the shortest element edge): \
-         the ply–ply contact did not keep the plies apart (it does not push back a node that \
-         came round a ply's free edge or a fold to the wrong side, nor one that crossed the ply \
-         within one step); hold the stack more (springs, a holder) so its flanges do not fold \
+         the ply–ply contact did not keep the plies apart (it puts a node that came round a \
+         ply's free edge or a fold into the ply back on its side, but not one whose motion is \
+         prescribed, nor one that crossed the whole ply within one step); hold the stack more (springs, a holder) so its flanges do not fold \
          over, or lower `simulation.safety_factor`",
         .at[0], .at[1], .at[2]
     )]

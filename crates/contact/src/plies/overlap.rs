@@ -14,9 +14,9 @@
 //! - `offset − along` over a face's free-outline edge or vertex, along the
 //!   face's normal (the square end);
 //! - `offset + |d|` when it is behind the mid-surface with its projection
-//!   inside the face: through the ply, which the narrow phase does not
-//!   push back (it would throw the node by the thickness in one step), so
-//!   only this check catches it.
+//!   inside the face: through the ply (the narrow phase puts such a node
+//!   back on the side it remembers for it, so this measure, which has no
+//!   memory, is what a node left there by the last step shows).
 //!
 //! A node beside the ply (more than the offset sideways of the closest
 //! point), or behind an edge or vertex, is not inside it: the first

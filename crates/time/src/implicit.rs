@@ -145,7 +145,10 @@ const QUADRATIC: f64 = 0.1;
 /// see docs/notes/implicit-solver.md): the 10 × 10 physical-mass
 /// hemisphere 0/90 took 85 increments, 730 + 50 Newton iterations and
 /// 814 factorisations instead of 120, 1 058 + 75 and 1 139, ±45 81, 809 +
-/// 25 and 866 instead of 117, 965 + 150 and 1 124. Tried beside it: the
+/// 25 and 866 instead of 117, 965 + 150 and 1 124; the shipped
+/// hemisphere-0-90 140 increments, 1 639 + 375 Newton iterations, 2 103
+/// factorisations and 68 s of user CPU instead of 241, 2 567 + 650, 3 442
+/// and 116 s (run side by side). Tried beside it: the
 /// secant xₙ + (h/h_{n−1})·(xₙ − x_{n−1}) did as well on 10 × 10 but needs
 /// x_{n−1} in the checkpoint to resume bit for bit; Newmark's a_{n+1} = 0
 /// predictor, xₙ + h·vₙ + (½ − β)·h²·aₙ, was dropped earlier (on the

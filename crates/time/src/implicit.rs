@@ -18,8 +18,8 @@
 //! M·a₀ = f₀ + contact (a touching node gets its reaction and friction
 //! first), without which the velocity would drift by O(h·Δa₀).
 //!
-//! **Newton.** Predictor x_{n+1} = xₙ + h·vₙ + ½h²·aₙ, prescribed components
-//! at their values; then iterations with the tangent K̂ =
+//! **Newton.** Predictor x_{n+1} = xₙ + h·vₙ (see [`predictor`]), prescribed
+//! components at their values; then iterations with the tangent K̂ =
 //! ((1 − α_m)/(βh²) + c·γ/(βh))·M + sym(∂f_int/∂x) (see
 //! [`crate::tangent`]), factorised each iteration with the symbolic
 //! analysis reused. Converged when, together: the largest residual
@@ -134,6 +134,33 @@ const CYCLE: f64 = 0.5;
 /// correction test; with the estimate 241 increments, 2 567 + 650 Newton
 /// iterations and 3 442 factorisations against 256, 2 764 + 700 and 3 588.
 const QUADRATIC: f64 = 0.1;
+
+/// The predictor of an increment, xₙ + h·vₙ: constant velocity, not
+/// constant acceleration (xₙ + h·vₙ + ½h²·aₙ, as it was). The Bossak
+/// acceleration at ρ∞ = 0 is a poor guess of the next one (its high
+/// frequencies are what the scheme damps, and a pressed node's normal
+/// component is reset to the tool's at each commit), and forming is
+/// quasi-static: ½h²·aₙ mostly moved the folding skirt away from its
+/// answer. Measured 2026-11-28 (one thread, active set, `DRAPE_NEWTON_TRACE`;
+/// see docs/notes/implicit-solver.md): the 10 × 10 physical-mass
+/// hemisphere 0/90 took 85 increments, 730 + 50 Newton iterations and
+/// 814 factorisations instead of 120, 1 058 + 75 and 1 139, ±45 81, 809 +
+/// 25 and 866 instead of 117, 965 + 150 and 1 124; the shipped
+/// hemisphere-0-90 140 increments, 1 639 + 375 Newton iterations, 2 103
+/// factorisations and 68 s of user CPU instead of 241, 2 567 + 650, 3 442
+/// and 116 s (run side by side). Tried beside it: the
+/// secant xₙ + (h/h_{n−1})·(xₙ − x_{n−1}) did as well on 10 × 10 but needs
+/// x_{n−1} in the checkpoint to resume bit for bit; Newmark's a_{n+1} = 0
+/// predictor, xₙ + h·vₙ + (½ − β)·h²·aₙ, was dropped earlier (on the
+/// hemisphere 40 × 40 as shipped: 2 300 increments and 434 cutbacks
+/// against 1 193 and 215). Carrying the friction states to the predictor
+/// by the return mapping there, or holding the rows pressed at tₙ at the
+/// first iteration whatever their predicted gap, did not help (the note).
+/// Force-driven tools keep their constant-acceleration predictor
+/// (`drape_contact`'s `begin`).
+fn predictor(x_n: Vector3<f64>, v_n: Vector3<f64>, h: f64) -> Vector3<f64> {
+    x_n + v_n * h
+}
 
 /// The default elastic slip of a sticking pair at the friction limit (mm).
 ///
@@ -1190,20 +1217,15 @@ impl<'m> Implicit<'m> {
         let inc = self.increment(state.time, h);
         let t1 = inc.t_new;
         let settings = self.settings.clone();
-        // Predictor: constant acceleration; prescribed components at their
-        // values. (Newmark's a_{n+1} = 0 predictor, xₙ + h·vₙ + (½ − β)·h²·aₙ,
-        // was measured and dropped: on the hemisphere 40 × 40 as shipped it
-        // cut the CPU to t = 0.6 s by 22 %, but the whole stroke took 2 300
-        // increments, 434 cutbacks and 556 s of one core instead of 1 193,
-        // 215 and 335 s: the folding skirt's stick/slip chatter, not the
-        // start of Newton, sets the cost.)
+        // Predictor: constant velocity (see `predictor`); prescribed
+        // components at their values.
         {
-            let (x_n, v_n, a_n) = (&state.x, &state.v, &self.acceleration);
+            let (x_n, v_n) = (&state.x, &state.v);
             self.x
                 .par_iter_mut()
                 .with_min_len(1024)
                 .enumerate()
-                .for_each(|(i, x)| *x = x_n[i] + v_n[i] * h + a_n[i] * (0.5 * h * h));
+                .for_each(|(i, x)| *x = predictor(x_n[i], v_n[i], h));
         }
         for c in &self.constraints.list {
             let (i, k) = (c.node as usize, c.component as usize);

@@ -1,0 +1,318 @@
+//! One Newton attempt at an increment of the implicit driver: the
+//! iterations from the predictor to convergence or to a reason to cut the
+//! increment (the driver's `advance` decides what to do with either).
+
+use super::*;
+
+impl Implicit<'_> {
+    /// One attempt at the increment of size `h` from `state`; the iterate
+    /// is left in `self.x`, `self.v`, `self.a`, the forces in the force
+    /// pass and the contact pass.
+    pub(super) fn attempt(&mut self, state: &State, h: f64) -> Result<Converged, Failure> {
+        let model = self.model;
+        let inc = self.increment(state.time, h);
+        let t1 = inc.t_new;
+        let settings = self.settings.clone();
+        // Predictor: constant velocity (see `predictor`); prescribed
+        // components at their values.
+        {
+            let (x_n, v_n) = (&state.x, &state.v);
+            self.x
+                .par_iter_mut()
+                .with_min_len(1024)
+                .enumerate()
+                .for_each(|(i, x)| *x = predictor(x_n[i], v_n[i], h));
+        }
+        for c in &self.constraints.list {
+            let (i, k) = (c.node as usize, c.component as usize);
+            self.x[i][k] = Constraints::position(model, c, state.x[i][k], state.time, h);
+        }
+        shared::external_forces(model, t1, &mut self.f_ext);
+        if let Some(contact) = &mut self.contact {
+            contact.begin(&self.x, &self.constraints.movable, inc);
+        }
+        let mass_factor = inc.mass_factor() + settings.damping * self.gamma / (self.beta * h);
+        let heaviest = self.mass.iter().copied().fold(0.0, f64::max);
+        let floor = 1e-6 * self.size;
+        let mut step_taken = false;
+        let mut alpha = 1.0;
+        let mut merit_prev = f64::INFINITY;
+        let mut correction = 0.0f64;
+        let mut newton = 0usize;
+        self.tangent.begin_attempt();
+        let mut contact_iterations = 0usize;
+        let mut active_changes = 0usize;
+        let mut step_changes = 0usize;
+        let factorisations_before = self.tangent.factorisations + self.saddle.factorisations;
+        let mut switched = 0usize;
+        // The residuals over their force scale of the last two iterations,
+        // oldest first.
+        let mut residuals = [f64::INFINITY; 2];
+        // Whether the last step was the whole Newton step (not halved for
+        // a cycle).
+        let mut full_step = true;
+        let fail =
+            |newton: usize, totals: &mut ImplicitTotals, reason: Cutback, message: String| {
+                totals.wasted_iterations += newton as u64;
+                Err(Failure { reason, message })
+            };
+        loop {
+            let evaluated = self.forces.evaluate(
+                model,
+                &self.x,
+                None,
+                &state.history,
+                h,
+                state.step + 1,
+                t1,
+                None,
+            );
+            let mut friction_changes = 0;
+            if !self.pressure.is_empty() {
+                // The pressures follow the iterate: f_ext of x_{n+1}.
+                shared::external_forces(model, t1, &mut self.f_ext);
+                self.pressure.add_into(model, &self.x, t1, &mut self.f_ext);
+            }
+            let (res, node, scale) = match evaluated {
+                Ok(()) => {
+                    if let Some(contact) = &mut self.contact {
+                        if step_taken {
+                            // Stick and slip settle pair by pair, but pairs
+                            // at the edge of the friction cone that slip
+                            // together can cycle stick → slip → stick until
+                            // the attempt is cut. After `SETTLE` iterations
+                            // a slip must run along its friction force by a
+                            // `SETTLED_REVERSAL` fraction of the
+                            // increment's motion before the pair sticks
+                            // again.
+                            let reversal = if newton >= SETTLE {
+                                SETTLED_REVERSAL
+                                    * self
+                                        .x
+                                        .iter()
+                                        .zip(&state.x)
+                                        .map(|(a, b)| (a - b).amax())
+                                        .fold(0.0, f64::max)
+                            } else {
+                                0.0
+                            };
+                            friction_changes = contact.update_friction(&self.x, reversal);
+                        }
+                        contact.linearise(&self.x, &state.x);
+                    }
+                    self.residual(state, &inc)
+                }
+                Err(e) => (f64::NAN, usize::MAX, {
+                    if !(step_taken && alpha > 1.0 / 16.0) {
+                        return fail(
+                            newton,
+                            &mut self.totals,
+                            Cutback::ElementFailure,
+                            e.to_string(),
+                        );
+                    }
+                    f64::NAN
+                }),
+            };
+            // More than doubled, or not finite. A residual that rises
+            // because contact or friction states changed is the next
+            // iteration's business, not the step length's.
+            let worse = (res > 2.0 * merit_prev || res.is_nan())
+                && (friction_changes == 0 || !res.is_finite());
+            if step_taken
+                && worse
+                && alpha > 1.0 / 16.0
+                && (res > settings.force_tolerance * scale || res.is_nan())
+            {
+                // Line search: halve the step.
+                alpha *= 0.5;
+                for (i, x) in self.x.iter_mut().enumerate() {
+                    for k in 0..3 {
+                        x[k] = self.x_step[i][k] + alpha * self.dx[3 * i + k];
+                    }
+                }
+                if let Some(contact) = &mut self.contact {
+                    contact.apply_step(-alpha);
+                }
+                correction *= 0.5;
+                continue;
+            }
+            if !res.is_finite() {
+                return fail(
+                    newton,
+                    &mut self.totals,
+                    Cutback::NotFinite,
+                    format!("the residual is not finite after {newton} iterations"),
+                );
+            }
+            if let Some(contact) = &mut self.contact {
+                contact.set_force_floor(settings.force_tolerance * scale);
+            }
+            let increment = self
+                .x
+                .iter()
+                .zip(&state.x)
+                .map(|(a, b)| (a - b).amax())
+                .fold(0.0, f64::max);
+            let (pen, stick_slip, imbalance) = self.contact.as_ref().map_or((0.0, 0.0, 0.0), |c| {
+                let (p, s) = c.violation();
+                (p, s, c.tool_imbalance())
+            });
+            if let Some(record) = &mut self.record {
+                let contact = self.contact.as_ref();
+                let (sticking, slipping) = contact.map_or((0, 0), |c| c.friction_census());
+                let worst_contact = match contact.and_then(|c| c.friction_at(node as u32)) {
+                    None => 0,
+                    Some(drape_contact::Friction::Stick) => 1,
+                    Some(drape_contact::Friction::Slip) => 2,
+                };
+                record.push(NewtonRecord {
+                    increment: state.step + 1,
+                    iteration: newton,
+                    residual: res,
+                    scale,
+                    correction,
+                    active_changes: step_changes,
+                    friction_changes,
+                    sticking,
+                    slipping,
+                    slip_lag: if newton > 0 {
+                        contact.map_or(0.0, |c| c.slip_lag())
+                    } else {
+                        0.0
+                    },
+                    worst_contact,
+                    penetration: pen,
+                    stick_slip,
+                    imbalance,
+                    h,
+                    step_cosine: self.step_angle.0,
+                    step_ratio: self.step_angle.1,
+                    step_taken: alpha * self.step_angle.2,
+                });
+            }
+            if friction_changes > 0 {
+                switched += 1;
+            }
+            // Where the last full step cut the residual at least tenfold,
+            // the next correction is estimated as the last one times that
+            // contraction (see `QUADRATIC`), and need not be taken to be
+            // shown small.
+            let contraction = res / merit_prev;
+            let next_correction = if alpha == 1.0 && full_step && contraction <= QUADRATIC {
+                correction * contraction
+            } else {
+                correction
+            };
+            let forces_pass = (res <= settings.force_tolerance * scale
+                && (newton == 0
+                    || next_correction <= settings.displacement_tolerance * increment.max(floor)))
+                || (newton > 0 && {
+                    // Below the tolerance f64 cannot go: a small enough
+                    // increment puts the inertia term's round-off above it
+                    // (see `crate::round_off`).
+                    let coordinate = self.x.iter().map(|x| x.amax()).fold(0.0, f64::max);
+                    RoundOffFloor::new(
+                        heaviest * mass_factor + self.tangent.max_stiffness,
+                        coordinate,
+                        scale,
+                    )
+                    .reached(res, correction)
+                });
+            let converged = forces_pass
+                && pen <= settings.gap_tolerance
+                && stick_slip <= settings.gap_tolerance
+                && friction_changes == 0
+                && imbalance <= settings.force_tolerance * scale;
+            if converged {
+                self.totals.newton_iterations += newton as u64;
+                self.totals.contact_iterations += contact_iterations as u64;
+                return Ok(Converged {
+                    newton,
+                    active_changes,
+                    factorisations: (self.tangent.factorisations + self.saddle.factorisations
+                        - factorisations_before) as usize,
+                    switched,
+                    contact_iterations,
+                });
+            }
+            if newton >= settings.max_iterations {
+                let reason = if friction_changes > 0 {
+                    Cutback::FrictionChatter
+                } else {
+                    Cutback::NewtonLimit
+                };
+                return fail(
+                    newton,
+                    &mut self.totals,
+                    reason,
+                    format!(
+                        "{newton} Newton iterations: residual {res:.3e} N at node {node} (force scale {scale:.3e} N), \
+                         last correction {correction:.3e} mm, penetration {pen:.3e} mm, \
+                         stick slip {stick_slip:.3e} mm, {friction_changes} friction states changed"
+                    ),
+                );
+            }
+            // The Newton step.
+            let step = match (&self.contact, settings.contact_solver) {
+                (Some(_), ContactSolver::ActiveSet) => self.active_set_step(state, h, mass_factor),
+                _ => self.condensed_step(state, h, mass_factor),
+            };
+            match step {
+                Ok(counts) => {
+                    contact_iterations += counts.solves;
+                    active_changes += counts.active_changes;
+                    step_changes = counts.active_changes;
+                }
+                Err((reason, message)) => {
+                    return fail(newton, &mut self.totals, reason, message);
+                }
+            }
+            // A residual not below `CYCLE` times the one two iterations
+            // back: Newton is cycling between contact or friction states
+            // (see `CYCLE`); half the step breaks the cycle.
+            let relative = res / scale;
+            if self.record.is_some() {
+                // The step against the last one (see `NewtonRecord`).
+                let dot: f64 = self
+                    .dx
+                    .iter()
+                    .zip(&self.dx_before)
+                    .map(|(a, b)| a * b)
+                    .sum();
+                let a: f64 = self.dx.iter().map(|a| a * a).sum::<f64>().sqrt();
+                let b: f64 = self.dx_before.iter().map(|b| b * b).sum::<f64>().sqrt();
+                self.step_angle = if newton > 0 && a > 0.0 && b > 0.0 {
+                    (dot / (a * b), a / b, 1.0)
+                } else {
+                    (0.0, 0.0, 1.0)
+                };
+                self.dx_before.clone_from(&self.dx);
+            }
+            let halved = newton >= 3 && relative >= CYCLE * residuals[0];
+            if halved {
+                self.step_angle.2 = 0.5;
+                self.dx.iter_mut().for_each(|d| *d *= 0.5);
+                if let Some(contact) = &mut self.contact {
+                    contact.scale_step(0.5);
+                }
+            }
+            full_step = !halved;
+            residuals = [residuals[1], relative];
+            newton += 1;
+            self.x_step.copy_from_slice(&self.x);
+            for (i, x) in self.x.iter_mut().enumerate() {
+                for k in 0..3 {
+                    x[k] += self.dx[3 * i + k];
+                }
+            }
+            if let Some(contact) = &mut self.contact {
+                contact.apply_step(1.0);
+            }
+            alpha = 1.0;
+            merit_prev = res;
+            step_taken = true;
+            correction = self.dx.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+        }
+    }
+}

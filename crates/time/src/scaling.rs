@@ -95,10 +95,25 @@ impl LoadTiming {
                 self.end_time
             )
         };
+        // A load that would carry a free ply far past the part in the run
+        // (a vacuum) is told by the time it takes to cross the travel.
+        let example = if free <= self.distance {
+            format!(
+                "in the run's {t:.3} s a free ply moves {scaled:.2} mm instead of {free:.2} mm",
+                t = self.end_time,
+                scaled = free / self.ratio,
+            )
+        } else {
+            let cross = (2.0 * self.distance / self.acceleration).sqrt();
+            format!(
+                "a free ply crosses the {d:.1} mm in {scaled:.2e} s instead of {cross:.2e} s",
+                d = self.distance,
+                scaled = cross * self.ratio.sqrt(),
+            )
+        };
         format!(
             "mass scaling makes the blank {r:.1}× as heavy while {loads} {verb} on the physical \
-             mass: free motion under {loads} is √{r:.1} = {s:.2}× slower (in the run's {t:.3} s \
-             a free ply moves {scaled:.2} mm instead of {free:.2} mm). Quasi-static forming under \
+             mass: free motion under {loads} is √{r:.1} = {s:.2}× slower ({example}). Quasi-static forming under \
              this load (the scaled inertia of a smooth-step motion over the {d:.1} mm the ply may \
              have to travel at most {share:.0} % of the load) needs a process time of at least \
              {needed:.3} s: {verdict}",
@@ -110,8 +125,6 @@ impl LoadTiming {
                 "acts"
             },
             s = self.ratio.sqrt(),
-            t = self.end_time,
-            scaled = free / self.ratio,
             d = self.distance,
             share = 100.0 * INERTIA_SHARE,
         )
@@ -206,6 +219,18 @@ mod tests {
         let areal = Material::preset("glass-serge-4x3").unwrap().areal_density();
         assert!((timing.acceleration - 0.1 / areal).abs() < 1e-9 * timing.acceleration);
         assert!((timing.ratio - 50.0).abs() < 1e-12);
+        // A vacuum would fling a free ply kilometres in the run: the
+        // message gives the time to cross the travel instead.
+        let cross = (2.0 * timing.distance / timing.acceleration).sqrt();
+        let part = format!(
+            "a free ply crosses the 500.0 mm in {:.2e} s instead of {cross:.2e} s",
+            cross * 50f64.sqrt()
+        );
+        assert!(
+            timing.message().contains(&part),
+            "`{part}` in: {}",
+            timing.message()
+        );
     }
 
     #[test]

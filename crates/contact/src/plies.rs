@@ -496,11 +496,8 @@ impl PlyContact {
             let slave = &layers[s.slave];
             // The search the other way of the same interface ([`Self::new`]
             // pushes them in pairs, the upper ply's nodes first).
-            let (other, other_slave) = if s.side > 0.0 {
-                (&self.searches[k + 1], &layers[s.master])
-            } else {
-                (&self.searches[k - 1], &layers[s.master])
-            };
+            let other = &self.searches[if s.side > 0.0 { k + 1 } else { k - 1 }];
+            let other_slave = &layers[s.master];
             for (local, hit) in s.hits.iter().enumerate() {
                 if !hit.found {
                     continue;

@@ -611,6 +611,7 @@ impl<'m> Implicit<'m> {
             warnings.push(timing.message());
         }
         let guard = Guard::new(model, settings.guard.clone(), settings.end_time);
+        let trace = trace::path();
         Ok(Self {
             model,
             settings,
@@ -639,8 +640,8 @@ impl<'m> Implicit<'m> {
             reactions: zeros,
             resume: None,
             totals: ImplicitTotals::default(),
-            record: trace::path().map(|_| Vec::new()),
-            trace: trace::path(),
+            record: trace.as_ref().map(|_| Vec::new()),
+            trace,
             dx_before: Vec::new(),
             step_angle: (0.0, 0.0, 1.0),
             kinetic0: 0.0,

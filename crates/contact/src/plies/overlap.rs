@@ -15,8 +15,8 @@
 //!   face's normal (the square end);
 //! - `offset + |d|` when it is behind the mid-surface with its projection
 //!   inside the face: through the ply (the narrow phase puts such a node
-//!   back on the side it remembers for it, so this measure, which has no
-//!   memory, is what a node left there by the last step shows).
+//!   back out on its stacking side, so this is what a node left there by
+//!   the last step shows).
 //!
 //! A node beside the ply (more than the offset sideways of the closest
 //! point), or behind an edge or vertex, is not inside it: the first
@@ -98,13 +98,9 @@ impl PlyContact {
     /// The deepest node of any ply inside a neighbour at `x`, over the
     /// candidates of the last broad phase; None when no node is inside.
     pub fn deepest_overlap(&self, x: &[Vector3<f64>]) -> Option<PlyOverlap> {
-        let mut worst: Option<PlyOverlap> = None;
-        for o in (0..self.searches.len()).filter_map(|k| self.deepest_of(k, x)) {
-            if worst.is_none_or(|w| o.depth > w.depth) {
-                worst = Some(o);
-            }
-        }
-        worst
+        (0..self.searches.len())
+            .filter_map(|k| self.deepest_of(k, x))
+            .reduce(|w, o| if o.depth > w.depth { o } else { w })
     }
 
     /// The largest overlap of any node of one ply into its neighbour at

@@ -106,9 +106,10 @@ impl LoadTiming {
         } else {
             let cross = (2.0 * self.distance / self.acceleration).sqrt();
             format!(
-                "a free ply crosses the {d:.1} mm in {scaled:.2e} s instead of {cross:.2e} s",
+                "a free ply crosses the {d:.1} mm in {} instead of {}",
+                seconds(cross * self.ratio.sqrt()),
+                seconds(cross),
                 d = self.distance,
-                scaled = cross * self.ratio.sqrt(),
             )
         };
         format!(
@@ -128,6 +129,15 @@ impl LoadTiming {
             d = self.distance,
             share = 100.0 * INERTIA_SHARE,
         )
+    }
+}
+
+/// A duration for a message: 0.123 s, or 1.23e-4 s below 10 ms.
+fn seconds(t: f64) -> String {
+    if t >= 0.01 {
+        format!("{t:.3} s")
+    } else {
+        format!("{t:.2e} s")
     }
 }
 
@@ -223,8 +233,9 @@ mod tests {
         // message gives the time to cross the travel instead.
         let cross = (2.0 * timing.distance / timing.acceleration).sqrt();
         let part = format!(
-            "a free ply crosses the 500.0 mm in {:.2e} s instead of {cross:.2e} s",
-            cross * 50f64.sqrt()
+            "a free ply crosses the 500.0 mm in {} instead of {}",
+            seconds(cross * 50f64.sqrt()),
+            seconds(cross)
         );
         assert!(
             timing.message().contains(&part),

@@ -10,9 +10,9 @@
 //! | `cutbacks.csv` | implicit runs: every increment cut back, when and why | [`ResultsDir::write_cutbacks`] |
 //! | `profiles.csv` | shear along the blank's diagonal and median | [`ResultsDir::write_profiles`] |
 //! | `summary.json` | derived measures and run statistics ([`Summary`]) | [`ResultsDir::write_summary`] |
-//! | `shear_map.png`, `profiles.png` | pictures | [`ResultsDir::write_pictures`] |
-//! | `waviness_map.png` (a laminate: `waviness_map_<ply>.png`), `shear_map_<ply>.png` | pictures, one per ply of a laminate | [`ResultsDir::write_pictures`] |
-//! | `shear_3d.png` (a laminate: `shear_3d_<ply>.png`) | the formed part seen obliquely, with the tools' outline | [`ResultsDir::write_view`] |
+//! | `shear_map.png`, `waviness_map.png`, `profiles.png` | pictures | [`ResultsDir::write_pictures`] |
+//! | `shear_map_<ply>.png`, `waviness_map_<ply>.png` | a laminate's pictures per ply (the second in place of `waviness_map.png`) | [`ResultsDir::write_pictures`] |
+//! | `shear_3d.png` (a laminate: `shear_3d_<ply>.png` per ply instead) | the formed part seen obliquely, with the tools' outline | [`ResultsDir::write_view`] |
 //! | `frames/trusses_NNNNN.vtu`, `trusses.pvd` | the fibre trusses as lines (models with trusses) | [`ResultsDir::write_frame`] |
 //! | `frames/tools_NNNNN.vtu`, `tools.pvd` | the tools' surfaces where they are at each frame | [`ResultsDir::write_tools`] |
 //! | `orientations.inp`, `orientations.csv` | draped fibre orientations for structural analysis | [`ResultsDir::write_orientations`] |

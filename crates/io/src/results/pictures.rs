@@ -467,7 +467,11 @@ pub(super) fn waviness_map(
             }],
         );
     };
-    let (cells, values, area) = ply_cells(model, fields, p)?;
+    let PlyCells {
+        cells,
+        waviness: values,
+        area,
+    } = ply_cells(model, fields, p)?;
     let (ply_largest, wavy) = drape_model::measures::wrinkle_indicator(values, area);
     maps::flat_maps_of(
         &model.x0,
@@ -489,13 +493,22 @@ pub(super) fn waviness_map(
     )
 }
 
-/// The elements of `ply` (node lists, in [`ElementFields`] order) with
-/// their waviness and reference area: what its waviness map draws.
+/// What a ply's waviness map draws.
+struct PlyCells<'a> {
+    /// Its elements' nodes, in [`ElementFields`] order.
+    cells: Vec<Vec<u32>>,
+    /// Their waviness (degrees)...
+    waviness: &'a [f64],
+    /// ...and reference area (mm²).
+    area: &'a [f64],
+}
+
+/// The elements of `ply` with their waviness and reference area.
 fn ply_cells<'a>(
     model: &Model,
     fields: &'a ElementFields,
     ply: &drape_model::stack::Ply,
-) -> Result<(Vec<Vec<u32>>, &'a [f64], &'a [f64])> {
+) -> Result<PlyCells<'a>> {
     let e = ply.elements.clone();
     let (Some(values), Some(area)) = (fields.waviness.get(e.clone()), fields.area.get(e.clone()))
     else {
@@ -528,7 +541,11 @@ fn ply_cells<'a>(
             e.len()
         ));
     }
-    Ok((cells, values, area))
+    Ok(PlyCells {
+        cells,
+        waviness: values,
+        area,
+    })
 }
 
 /// The viridis colour bar of `label` over `[lo, hi]` in the right-hand
@@ -783,18 +800,20 @@ mod tests {
         }
         assert_eq!(all.len(), 4 + 9);
         for ply in &model.plies {
-            let (cells, values, area) = ply_cells(&model, &fields, ply).unwrap();
-            assert_eq!(cells, all[ply.elements.clone()], "{}", ply.name);
-            assert!(cells.iter().flatten().all(|n| ply.nodes.contains(n)));
-            assert_eq!(values, &fields.waviness[ply.elements.clone()]);
-            assert_eq!(area, &fields.area[ply.elements.clone()]);
+            let drawn = ply_cells(&model, &fields, ply).unwrap();
+            assert_eq!(drawn.cells, all[ply.elements.clone()], "{}", ply.name);
+            assert!(drawn.cells.iter().flatten().all(|n| ply.nodes.contains(n)));
+            assert_eq!(drawn.waviness, &fields.waviness[ply.elements.clone()]);
+            assert_eq!(drawn.area, &fields.area[ply.elements.clone()]);
         }
         assert_eq!(model.plies[0].elements, 0..4);
         assert_eq!(model.plies[1].elements, 4..13);
         // Fields of another model are an error, not a panic.
         let mut short = fields.clone();
         short.waviness.truncate(5);
-        let e = ply_cells(&model, &short, &model.plies[1]).unwrap_err();
+        let Err(e) = ply_cells(&model, &short, &model.plies[1]) else {
+            panic!("short fields accepted");
+        };
         assert!(e.contains("ply `high`"), "{e}");
     }
 

@@ -58,7 +58,7 @@ pub use overlap::PlyOverlap;
 
 /// Sweeps allowed to the friction solve: a stack sticking on a tool
 /// needs its friction to [`FRICTION_TOLERANCE`] (no creep beyond it);
-/// the four-ply hemisphere's steps took at most 98 over the first 0.3 s
+/// the four-ply hemisphere's steps took at most 100 over the first 0.3 s
 /// (12 × 12 and 24 × 24 cells).
 const FRICTION_SWEEPS: usize = 500;
 
@@ -359,9 +359,9 @@ impl PlyContact {
             searches,
             margin,
             tolerance: NORMAL_TOLERANCE,
-            // The four-ply hemisphere's steps took at most 128 over the
-            // first 0.3 s (at 1e-8, 21 843 of the whole 24 × 24 stroke's
-            // 50 454 ran out); a step that runs out is counted
+            // The four-ply hemisphere's steps took at most 119 over the
+            // whole 12 × 12 stroke (at 1e-8 and 1.3, 21 843 of the 24 × 24
+            // stroke's 50 454 ran out); a step that runs out is counted
             // ([`PlyTotals::normal_capped`]) and what it leaves is the
             // next step's gap.
             max_sweeps: 200,

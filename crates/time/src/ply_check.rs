@@ -23,7 +23,7 @@ use crate::completion::{model_size, shortest_edge};
 /// The bound of the tools' end check ([`crate::completion::penetration_tolerance`])
 /// on the thinnest ply: a tenth of its thickness (the thickness scatter
 /// of a ply, 5–10 %, so a state within it is one the plies could reach,
-/// and far above what the ply pass leaves: its rows are solved to 1e-8 of
+/// and far above what the ply pass leaves: its rows are solved to 1e-6 of
 /// a step's violation, and the hemisphere stacks peak at 1e-4 of the
 /// thickness) and a hundredth of the shortest element edge (a node that
 /// far off tilts its elements by 0.6°, below what the shear results

@@ -154,6 +154,11 @@ pub const CASES: &[Case] = &[
         quick: true,
         run: hemisphere_agreement_coarse_active_set,
     },
+    Case {
+        name: "implicit/active-set-hemisphere-agreement",
+        quick: false,
+        run: hemisphere_agreement_active_set,
+    },
 ];
 
 fn incline() -> Vec<Check> {
@@ -401,6 +406,13 @@ fn hemisphere_agreement_coarse_active_set() -> Vec<Check> {
     ];
     let mut checks = agreement("hemisphere-0-90", &coarse, Gate::Checked);
     checks.extend(agreement("hemisphere-45", &coarse, Gate::Checked));
+    checks
+}
+
+fn hemisphere_agreement_active_set() -> Vec<Check> {
+    let physical = [PHYSICAL_MASS, ("simulation.contact_solver", "active_set")];
+    let mut checks = agreement("hemisphere-0-90", &physical, Gate::Checked);
+    checks.extend(agreement("hemisphere-45", &physical, Gate::Checked));
     checks
 }
 

@@ -1,7 +1,7 @@
-//! A laminate end to end: a two-ply run writes one shear map per ply and
-//! its orientations as a layup (a `ply` column in the table), and `drape
-//! export --onto` carries every ply onto a structural mesh; a one-ply run
-//! writes no per-ply picture.
+//! A laminate end to end: a two-ply run writes one shear map, oblique
+//! view and waviness map per ply and its orientations as a layup (a `ply`
+//! column in the table), and `drape export --onto` carries every ply onto
+//! a structural mesh; a one-ply run writes no per-ply picture.
 
 use std::path::Path;
 
@@ -89,6 +89,14 @@ fn a_stack_pictures_and_exports_every_ply() {
     assert_eq!(size("shear_map_p45.png"), whole);
     let bytes = |name: &str| std::fs::read(out.join(name)).unwrap();
     assert_ne!(bytes("shear_map_p0.png"), bytes("shear_map_p45.png"));
+    // The oblique view and the waviness map one per ply only: overlaid,
+    // the plies speckle through each other (3D) or the top one hides the
+    // rest (the flat blank).
+    for picture in ["shear_3d", "waviness_map"] {
+        assert!(!out.join(format!("{picture}.png")).exists(), "{picture}");
+        let [p0, p45] = ["p0", "p45"].map(|p| bytes(&format!("{picture}_{p}.png")));
+        assert_ne!(p0, p45, "{picture}");
+    }
 
     // The table: a ply column, each ply's rows with its own warp.
     let csv = std::fs::read_to_string(out.join("orientations.csv")).unwrap();
@@ -150,6 +158,7 @@ fn a_stack_pictures_and_exports_every_ply() {
     // One ply, as [fabric] or as a stack of one: no picture per ply, the
     // one-ply files, the same bytes both ways.
     let mut tables = Vec::new();
+    let mut views = Vec::new();
     for stack in [false, true] {
         let one = dir.join(format!("one-{stack}"));
         let o = drape(&[
@@ -159,16 +168,28 @@ fn a_stack_pictures_and_exports_every_ply() {
             one.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", text(&o));
-        let pictures: Vec<String> = std::fs::read_dir(&one)
+        let mut pictures: Vec<String> = std::fs::read_dir(&one)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .filter(|n| n.starts_with("shear_map"))
+            .filter(|n| n.ends_with(".png"))
             .collect();
-        assert_eq!(pictures, ["shear_map.png"]);
+        pictures.sort();
+        assert_eq!(
+            pictures,
+            [
+                "profiles.png",
+                "shear_3d.png",
+                "shear_map.png",
+                "waviness_map.png"
+            ]
+        );
+        let read = |name: &str| std::fs::read(one.join(name)).unwrap();
+        views.push([read("shear_3d.png"), read("waviness_map.png")]);
         let csv = std::fs::read_to_string(one.join("orientations.csv")).unwrap();
         assert!(csv.starts_with("element,x_mm,"));
         tables.push(csv);
     }
     assert_eq!(tables[0], tables[1]);
+    assert!(views[0] == views[1], "one ply's pictures differ as a stack");
     std::fs::remove_dir_all(dir).unwrap();
 }

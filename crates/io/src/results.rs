@@ -10,8 +10,9 @@
 //! | `cutbacks.csv` | implicit runs: every increment cut back, when and why | [`ResultsDir::write_cutbacks`] |
 //! | `profiles.csv` | shear along the blank's diagonal and median | [`ResultsDir::write_profiles`] |
 //! | `summary.json` | derived measures and run statistics ([`Summary`]) | [`ResultsDir::write_summary`] |
-//! | `shear_map.png`, `profiles.png` | pictures | [`ResultsDir::write_pictures`] |
-//! | `shear_3d.png` | the formed part seen obliquely, with the tools' outline | [`ResultsDir::write_view`] |
+//! | `shear_map.png`, `waviness_map.png`, `profiles.png` | pictures | [`ResultsDir::write_pictures`] |
+//! | `shear_map_<ply>.png`, `waviness_map_<ply>.png` | a laminate's pictures per ply (the second in place of `waviness_map.png`) | [`ResultsDir::write_pictures`] |
+//! | `shear_3d.png` (a laminate: `shear_3d_<ply>.png` per ply instead) | the formed part seen obliquely, with the tools' outline | [`ResultsDir::write_view`] |
 //! | `frames/trusses_NNNNN.vtu`, `trusses.pvd` | the fibre trusses as lines (models with trusses) | [`ResultsDir::write_frame`] |
 //! | `frames/tools_NNNNN.vtu`, `tools.pvd` | the tools' surfaces where they are at each frame | [`ResultsDir::write_tools`] |
 //! | `orientations.inp`, `orientations.csv` | draped fibre orientations for structural analysis | [`ResultsDir::write_orientations`] |
@@ -478,14 +479,56 @@ const OUTPUT_FILES: [&str; 13] = [
 /// The shear map of one ply of a laminate, `shear_map_<ply>.png` (a
 /// ply's name holds no path separator: the scene refuses one).
 pub fn ply_picture(ply: &str) -> String {
-    format!("shear_map_{ply}.png")
+    ply_picture_of(PlyPicture::ShearMap, ply)
 }
 
-/// Whether `name` is a ply's shear map ([`ply_picture`]) of an earlier run.
+/// The pictures a laminate has one of per ply.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlyPicture {
+    /// `shear_map_<ply>.png`, beside the plies overlaid in `shear_map.png`.
+    ShearMap,
+    /// `shear_3d_<ply>.png`, in place of `shear_3d.png`.
+    Shear3d,
+    /// `waviness_map_<ply>.png`, in place of `waviness_map.png`.
+    WavinessMap,
+}
+
+impl PlyPicture {
+    const ALL: [Self; 3] = [Self::ShearMap, Self::Shear3d, Self::WavinessMap];
+
+    /// The one-ply file's name without `.png`.
+    fn stem(self) -> &'static str {
+        match self {
+            Self::ShearMap => "shear_map",
+            Self::Shear3d => "shear_3d",
+            Self::WavinessMap => "waviness_map",
+        }
+    }
+}
+
+/// The file of `picture` for the ply named `ply`: `<stem>_<ply>.png`.
+pub fn ply_picture_of(picture: PlyPicture, ply: &str) -> String {
+    format!("{}_{ply}.png", picture.stem())
+}
+
+/// Whether `name` is a ply's picture ([`ply_picture_of`]) of an earlier run.
 fn is_ply_picture(name: &str) -> bool {
-    name.strip_prefix("shear_map_")
-        .and_then(|rest| rest.strip_suffix(".png"))
-        .is_some_and(|ply| !ply.is_empty())
+    PlyPicture::ALL.iter().any(|p| {
+        name.strip_prefix(p.stem())
+            .and_then(|rest| rest.strip_prefix('_'))
+            .and_then(|rest| rest.strip_suffix(".png"))
+            .is_some_and(|ply| !ply.is_empty())
+    })
+}
+
+/// The plies a laminate pictures one by one: none for one ply (a stack of
+/// one is pictured as `[fabric]` is, byte for byte).
+fn pictured_plies(model: &Model) -> &[drape_model::stack::Ply] {
+    if model.plies.len() > 1 {
+        &model.plies
+    } else {
+        &[]
+    }
 }
 
 /// The series a results folder holds: the `.pvd` file and the prefix of
@@ -812,7 +855,8 @@ impl ResultsDir {
 
     /// Writes `shear_map.png` (the formed part seen from above, coloured by
     /// shear angle, with a colour bar), for a laminate one such map per
-    /// ply ([`ply_picture`]), `waviness_map.png` and `profiles.png`.
+    /// ply ([`ply_picture`]), `waviness_map.png` (for a laminate, one per
+    /// ply instead: `waviness_map_<ply>.png`) and `profiles.png`.
     ///
     /// The shear map projects the current positions on the x–y plane and
     /// paints each membrane element with the viridis colour of its
@@ -839,13 +883,8 @@ impl ResultsDir {
                 source: std::io::Error::other(e),
             })?;
         crate::atomic::write(&path, &png).map_err(at(&path))?;
-        // A laminate's plies overlap in the picture above: one each too
-        // (a stack of one ply is pictured as `[fabric]` is).
-        let plies = if model.plies.len() > 1 {
-            &model.plies[..]
-        } else {
-            &[]
-        };
+        // A laminate's plies overlap in the picture above: one each too.
+        let plies = pictured_plies(model);
         for ply in plies {
             let path = self.dir.join(ply_picture(&ply.name));
             let png =
@@ -856,12 +895,25 @@ impl ResultsDir {
                     })?;
             crate::atomic::write(&path, &png).map_err(at(&path))?;
         }
-        let path = self.dir.join("waviness_map.png");
-        let png = pictures::waviness_map(model, fields, measures).map_err(|e| ResultsError {
-            path: path.clone(),
-            source: std::io::Error::other(e),
-        })?;
-        crate::atomic::write(&path, &png).map_err(at(&path))?;
+        // A laminate's waviness one ply per picture only: on the flat
+        // blank the plies lie on one another and the top one hides the rest.
+        let wavy: Vec<(String, Option<&drape_model::stack::Ply>)> = if plies.is_empty() {
+            vec![("waviness_map.png".to_owned(), None)]
+        } else {
+            plies
+                .iter()
+                .map(|p| (ply_picture_of(PlyPicture::WavinessMap, &p.name), Some(p)))
+                .collect()
+        };
+        for (name, ply) in wavy {
+            let path = self.dir.join(name);
+            let png =
+                pictures::waviness_map(model, fields, measures, ply).map_err(|e| ResultsError {
+                    path: path.clone(),
+                    source: std::io::Error::other(e),
+                })?;
+            crate::atomic::write(&path, &png).map_err(at(&path))?;
+        }
         let path = self.dir.join("profiles.png");
         let png = pictures::profiles(measures, state.time).map_err(|e| ResultsError {
             path: path.clone(),
@@ -873,7 +925,9 @@ impl ResultsDir {
     /// Writes `shear_3d.png`: the formed part seen obliquely (azimuth −60°,
     /// elevation 35°), coloured by |γ| with a colour bar, over the outline
     /// of the tools of `tools`, each displaced by its entry of
-    /// `displacements` along its axis.
+    /// `displacements` along its axis. For a laminate, one such view per
+    /// ply instead, `shear_3d_<ply>.png` ([`ply_picture_of`]), each on the
+    /// frame and colour scale of the whole laminate.
     pub fn write_view(
         &self,
         model: &Model,
@@ -882,20 +936,35 @@ impl ResultsDir {
         tools: &ToolMeshes,
         displacements: &[f64],
     ) -> Result<(), ResultsError> {
-        let path = self.dir.join("shear_3d.png");
-        let png = pictures::oblique::oblique_view(
-            model,
-            state,
-            fields,
-            tools,
-            displacements,
-            self.shear_range,
-        )
-        .map_err(|e| ResultsError {
-            path: path.clone(),
-            source: std::io::Error::other(e),
-        })?;
-        crate::atomic::write(&path, &png).map_err(at(&path))
+        // A laminate one ply per picture only: its plies, a fraction of a
+        // millimetre apart, speckle through each other in one view.
+        let plies = pictured_plies(model);
+        let views: Vec<(String, Option<&drape_model::stack::Ply>)> = if plies.is_empty() {
+            vec![("shear_3d.png".to_owned(), None)]
+        } else {
+            plies
+                .iter()
+                .map(|p| (ply_picture_of(PlyPicture::Shear3d, &p.name), Some(p)))
+                .collect()
+        };
+        for (name, ply) in views {
+            let path = self.dir.join(name);
+            let png = pictures::oblique::oblique_view(
+                model,
+                state,
+                fields,
+                tools,
+                displacements,
+                self.shear_range,
+                ply,
+            )
+            .map_err(|e| ResultsError {
+                path: path.clone(),
+                source: std::io::Error::other(e),
+            })?;
+            crate::atomic::write(&path, &png).map_err(at(&path))?;
+        }
+        Ok(())
     }
 
     /// Writes `orientations.inp` and `orientations.csv` (see

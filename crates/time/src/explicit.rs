@@ -276,7 +276,8 @@ impl<'m> Explicit<'m> {
         }
     }
 
-    /// The per-pass profile of the steps run since [`Self::enable_profile`].
+    /// The per-pass profile of the steps run since [`Self::enable_profile`],
+    /// those of a run that stopped on an error included.
     pub fn profile(&self) -> Option<&StepProfile> {
         self.profiler.as_ref().map(|p| &p.profile)
     }
@@ -505,13 +506,31 @@ impl<'m> Explicit<'m> {
         state: &mut State,
         observer: &mut dyn Observer,
     ) -> Result<RunSummary, RunError> {
+        let first = state.step;
         let result = self.advance(state, observer);
         if let Err(e) = &result {
+            // The steps taken up to the failure, which `advance` left
+            // without closing the profile: a run that stops is one whose
+            // profile is wanted (before the fall-back rewinds the step).
+            self.end_profile(state.step.saturating_sub(first));
             if !matches!(e, RunError::Setup(_)) {
                 self.guard.fall_back(state);
             }
         }
         result
+    }
+
+    /// Stops the profile's clock after `steps` steps and adds the contact
+    /// phases' times to it; nothing when no profile is running.
+    fn end_profile(&mut self, steps: u64) {
+        let Some(p) = self.profiler.as_mut().filter(|p| p.is_active()) else {
+            return;
+        };
+        p.end(steps, self.contact.as_ref().and_then(|c| c.phase_times()));
+        if let Some(c) = &mut self.contact {
+            // The phases were added to the profile: count afresh.
+            c.time_phases(Some(p.clock()));
+        }
     }
 
     fn advance(
@@ -915,14 +934,7 @@ impl<'m> Explicit<'m> {
             }
             self.lap(Pass::Output);
         }
-        let contact_phases = self.contact.as_ref().and_then(|c| c.phase_times());
-        if let Some(p) = &mut self.profiler {
-            p.end(steps, contact_phases);
-        }
-        if let (Some(p), Some(c)) = (&self.profiler, &mut self.contact) {
-            // The phases were added to the profile: count afresh.
-            c.time_phases(Some(p.clock()));
-        }
+        self.end_profile(steps);
         let energy = self.energies_at(state, &energy, kinetic0, dt_prev);
         if stopped {
             // A run stopped between checks still reports only what passes.

@@ -248,6 +248,12 @@ impl Profiler {
         self.clock
     }
 
+    /// Whether steps are being timed (between [`Self::begin`] and
+    /// [`Self::end`]).
+    pub(crate) fn is_active(&self) -> bool {
+        self.active
+    }
+
     /// Starts timing steps: laps count from now.
     pub(crate) fn begin(&mut self) {
         self.last = (self.clock)();

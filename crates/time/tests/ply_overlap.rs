@@ -3,13 +3,20 @@
 //! prescribed displacement, which the ply contact cannot undo, stops the
 //! run at the first energy check past the tolerance, naming the plies,
 //! the node and where, with the frames before it kept; pushed less, the
-//! run completes and reports the depth it reached.
+//! run completes and reports the depth it reached. A run stopped so
+//! keeps the step profile of the steps it took.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
 
 use drape_constitutive::Material;
+use drape_contact::ContactPhase;
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::stack::PlyModel;
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion};
-use drape_time::{Explicit, ExplicitSettings, Frame, Observer, RunError, ply_overlap_tolerance};
+use drape_time::{
+    Explicit, ExplicitSettings, Frame, Observer, Pass, RunError, ply_overlap_tolerance,
+};
 use nalgebra::Vector3;
 
 /// Two 40 mm glass plies of 10 mm quads, the bottom one held, the top
@@ -122,6 +129,40 @@ fn a_ply_pushed_through_its_neighbour_stops_the_run_naming_it() {
     // Frames 0 and 0.5 ms were published; the state is the last of them.
     assert_eq!(times.0.len(), 2, "{:?}", times.0);
     assert_eq!(state.time, times.0[1]);
+}
+
+/// A profile clock that advances by a microsecond at each reading: every
+/// timed interval is at least one tick, whatever the machine's load.
+fn ticks() -> Duration {
+    static TICKS: AtomicU64 = AtomicU64::new(0);
+    Duration::from_micros(TICKS.fetch_add(1, Ordering::Relaxed))
+}
+
+#[test]
+fn a_run_stopped_by_a_ply_overlap_keeps_its_step_profile() {
+    let h = Material::preset("glass-serge-4x3").unwrap().thickness;
+    let (model, _) = pushed(1.5 * h);
+    let mut state = model.initial_state();
+    let mut driver = Explicit::new(&model, settings()).expect("driver");
+    driver.enable_profile(ticks);
+    let error = driver
+        .run(&mut state, &mut Times(Vec::new()))
+        .expect_err("stopped");
+    let RunError::PlyOverlap { step, .. } = error else {
+        panic!("{error}");
+    };
+    let profile = driver.profile().expect("profiled");
+    // Every step up to the check that stopped it, from the start.
+    assert!(step > 10, "{step}");
+    assert_eq!(profile.steps, step);
+    assert!(profile.step_time() > Duration::ZERO);
+    // The ply pass's phase is in it, within the contact pass, within the
+    // steps' time.
+    let plies = profile.contact_time(ContactPhase::Plies);
+    assert!(plies > Duration::ZERO);
+    assert!(plies <= profile.time(Pass::Contact));
+    let passes: Duration = Pass::ALL.iter().map(|&p| profile.time(p)).sum();
+    assert!(passes <= profile.total, "{passes:?} > {:?}", profile.total);
 }
 
 #[test]

@@ -432,10 +432,16 @@ pub(super) fn shear_map(
 /// The colours run from 0 to the largest waviness, but at least to twice
 /// the wrinkle threshold, so that the few tenths of a degree a smooth part
 /// has stay dark instead of filling the scale.
+///
+/// With `ply` (`waviness_map_<ply>.png` of a laminate), that ply's
+/// elements only, on the frame and colour scale of the whole laminate:
+/// on the flat blank the plies lie on one another, and the top one would
+/// hide a fold of the one below.
 pub(super) fn waviness_map(
     model: &Model,
     fields: &ElementFields,
     measures: &Measures,
+    ply: Option<&drape_model::stack::Ply>,
 ) -> Result<Vec<u8>> {
     let threshold = drape_model::measures::WRINKLE_THRESHOLD_DEG;
     let largest = fields
@@ -443,22 +449,103 @@ pub(super) fn waviness_map(
         .iter()
         .filter(|v| v.is_finite())
         .fold(0.0f64, |a, &b| a.max(b));
-    maps::flat_maps(
-        model,
+    let Some(p) = ply else {
+        return maps::flat_maps(
+            model,
+            &[maps::MapPanel {
+                title: format!(
+                    "Waviness, flat blank: largest {}°, {} mm² above {}°",
+                    human(largest),
+                    human(measures.wrinkle_area),
+                    human(threshold)
+                ),
+                values: &fields.waviness,
+                label: "waviness (deg)".into(),
+                signed: false,
+                scale: Some(largest.max(2.0 * threshold)),
+                range: None,
+            }],
+        );
+    };
+    let PlyCells {
+        cells,
+        waviness: values,
+        area,
+    } = ply_cells(model, fields, p)?;
+    let (ply_largest, wavy) = drape_model::measures::wrinkle_indicator(values, area);
+    maps::flat_maps_of(
+        &model.x0,
+        &cells,
         &[maps::MapPanel {
             title: format!(
-                "Waviness, flat blank: largest {}°, {} mm² above {}°",
-                human(largest),
-                human(measures.wrinkle_area),
+                "Ply {}: waviness, flat blank: largest {}°, {} mm² above {}°",
+                p.name,
+                human(ply_largest),
+                human(wavy),
                 human(threshold)
             ),
-            values: &fields.waviness,
+            values,
             label: "waviness (deg)".into(),
             signed: false,
             scale: Some(largest.max(2.0 * threshold)),
             range: None,
         }],
     )
+}
+
+/// What a ply's waviness map draws.
+struct PlyCells<'a> {
+    /// Its elements' nodes, in [`ElementFields`] order.
+    cells: Vec<Vec<u32>>,
+    /// Their waviness (degrees)...
+    waviness: &'a [f64],
+    /// ...and reference area (mm²).
+    area: &'a [f64],
+}
+
+/// The elements of `ply` with their waviness and reference area.
+fn ply_cells<'a>(
+    model: &Model,
+    fields: &'a ElementFields,
+    ply: &drape_model::stack::Ply,
+) -> Result<PlyCells<'a>> {
+    let e = ply.elements.clone();
+    let (Some(values), Some(area)) = (fields.waviness.get(e.clone()), fields.area.get(e.clone()))
+    else {
+        return Err(format!(
+            "ply `{}` has elements {}..{} of {} with fields",
+            ply.name,
+            e.start,
+            e.end,
+            fields.waviness.len().min(fields.area.len())
+        ));
+    };
+    let mut cells = Vec::with_capacity(e.len());
+    for b in ply.membranes.clone() {
+        let batch = model.membranes.get(b).ok_or_else(|| {
+            format!(
+                "ply `{}` names membrane batch {b} of {}",
+                ply.name,
+                model.membranes.len()
+            )
+        })?;
+        for k in 0..batch.len() {
+            cells.push(batch.element_nodes(k).to_vec());
+        }
+    }
+    if cells.len() != e.len() {
+        return Err(format!(
+            "ply `{}`: its batches hold {} elements, not its {}",
+            ply.name,
+            cells.len(),
+            e.len()
+        ));
+    }
+    Ok(PlyCells {
+        cells,
+        waviness: values,
+        area,
+    })
 }
 
 /// The viridis colour bar of `label` over `[lo, hi]` in the right-hand
@@ -665,6 +752,70 @@ fn profile_lines(title: &str, lines: &[ProfileLine]) -> Result<Vec<u8>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A laminate of two 40 mm plies, 2 × 2 quads under 3 × 3 (their
+    /// element sets differ in size), flat, each element's shear its index
+    /// in hundredths of a radian (the top ply has the largest).
+    pub(super) fn two_plies() -> (Model, State, ElementFields) {
+        use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
+        use drape_model::stack::PlyModel;
+        let material = drape_constitutive::Material::preset("glass-serge-4x3").unwrap();
+        let h = material.thickness;
+        let ply = |name: &str, cells: usize| {
+            let blank = RectangleBlank {
+                width: 40.0,
+                height: 40.0,
+                center: nalgebra::Vector3::zeros(),
+                orientation_deg: 0.0,
+                element: ElementKind::Quad,
+                meshing: Meshing::Cells([cells, cells]),
+                fibres: FibreRepresentation::Embedded,
+            };
+            let mesh = blank.mesh().unwrap();
+            PlyModel {
+                model: Model::from_mesh(&mesh, &material, FibreRepresentation::Embedded).unwrap(),
+                name: name.into(),
+                thickness: h,
+                orientation_deg: 0.0,
+                friction_below: 0.0,
+            }
+        };
+        let model = Model::stack(vec![ply("low", 2), ply("high", 3)]).unwrap();
+        let state = model.initial_state();
+        let mut fields = model.element_fields(&state).unwrap();
+        for (k, g) in fields.shear.iter_mut().enumerate() {
+            *g = 0.01 * k as f64;
+        }
+        (model, state, fields)
+    }
+
+    #[test]
+    fn each_ply_s_waviness_map_draws_that_ply_s_elements() {
+        let (model, _, fields) = two_plies();
+        let mut all = Vec::new();
+        for b in &model.membranes {
+            for e in 0..b.len() {
+                all.push(b.element_nodes(e).to_vec());
+            }
+        }
+        assert_eq!(all.len(), 4 + 9);
+        for ply in &model.plies {
+            let drawn = ply_cells(&model, &fields, ply).unwrap();
+            assert_eq!(drawn.cells, all[ply.elements.clone()], "{}", ply.name);
+            assert!(drawn.cells.iter().flatten().all(|n| ply.nodes.contains(n)));
+            assert_eq!(drawn.waviness, &fields.waviness[ply.elements.clone()]);
+            assert_eq!(drawn.area, &fields.area[ply.elements.clone()]);
+        }
+        assert_eq!(model.plies[0].elements, 0..4);
+        assert_eq!(model.plies[1].elements, 4..13);
+        // Fields of another model are an error, not a panic.
+        let mut short = fields.clone();
+        short.waviness.truncate(5);
+        let Err(e) = ply_cells(&model, &short, &model.plies[1]) else {
+            panic!("short fields accepted");
+        };
+        assert!(e.contains("ply `high`"), "{e}");
+    }
 
     #[test]
     fn viridis_ends_and_clamps() {

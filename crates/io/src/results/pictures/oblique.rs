@@ -11,12 +11,17 @@
 //! the viewer and one facing away) and their open edges, clipped to the
 //! part's surroundings. A small triad shows the axes.
 //!
+//! A laminate's plies are drawn one per picture (`shear_3d_<ply>.png`):
+//! a fraction of a millimetre apart, painted together by their centroids'
+//! depth, the plies' elements would show through each other in specks.
+//!
 //! What it is not: no hidden-line removal for the tools' outline (the part
 //! is painted over it, which is what hides what the part hides) and no
 //! perspective.
 
 use std::collections::HashMap;
 
+use drape_model::stack::Ply;
 use drape_model::{ElementFields, Model, State};
 use nalgebra::Vector3;
 use plotters::prelude::*;
@@ -98,46 +103,85 @@ fn outline(
         .collect()
 }
 
-/// `shear_3d.png` of `model` at `state`, the tools of `tools` displaced by
-/// `displacements` along their axes, the colours over the |γ| `range`
-/// (None: 0 to the largest).
-pub(in crate::results) fn oblique_view(
+/// One element as the view sees it.
+struct Patch {
+    /// Its index in [`ElementFields`] order (which the tests check).
+    #[cfg_attr(not(test), allow(dead_code))]
+    element: usize,
+    /// Its corners on the screen (mm).
+    corners: Vec<(f64, f64)>,
+    /// |γ| in degrees.
+    value: f64,
+    /// Its centroid's distance towards the viewer, for painting far to near.
+    depth: f64,
+}
+
+/// What a view draws: the elements of the picture, far to near, and the
+/// frame and colour scale it shares with the other plies' pictures.
+struct Patches {
+    /// The elements drawn, far to near.
+    drawn: Vec<Patch>,
+    /// The screen's extent of every element of the model (empty ranges,
+    /// ∞ to −∞, when none is finite).
+    u: [f64; 2],
+    v: [f64; 2],
+    /// The largest finite |γ| of every element of the model (degrees).
+    vmax_all: f64,
+}
+
+/// The elements of `model` at `state` seen along the view (with `ply`,
+/// that ply's only); the frame and the largest shear are the whole
+/// model's either way, so that the plies' pictures share them.
+fn view_patches(
     model: &Model,
     state: &State,
     fields: &ElementFields,
-    tools: &ToolMeshes,
-    displacements: &[f64],
-    range: Option<[f64; 2]>,
-) -> Result<Vec<u8>> {
+    ply: Option<&Ply>,
+) -> Result<Patches> {
     let [right, up, towards] = view_axes();
     let screen = |p: &Vector3<f64>| (p.dot(&right), p.dot(&up));
-    struct Patch {
-        corners: Vec<(f64, f64)>,
-        value: f64,
-        depth: f64,
-    }
-    let mut patches = Vec::with_capacity(fields.shear.len());
+    let mut drawn = Vec::with_capacity(fields.shear.len());
+    let (mut u, mut v) = (
+        [f64::INFINITY, f64::NEG_INFINITY],
+        [f64::INFINITY, f64::NEG_INFINITY],
+    );
+    let mut vmax_all = 0.0f64;
+    let mut element = 0;
     for batch in &model.membranes {
         for e in 0..batch.len() {
+            let k = element;
+            element += 1;
             let nodes = batch.element_nodes(e);
             let mut corners = Vec::with_capacity(nodes.len());
             let mut centroid = Vector3::zeros();
             for &n in nodes {
                 let p = state.x.get(n as usize).ok_or_else(|| {
                     format!(
-                        "element {} names a node beyond the state's {}",
-                        patches.len(),
+                        "element {k} names a node beyond the state's {}",
                         state.x.len()
                     )
                 })?;
                 corners.push(screen(p));
                 centroid += p;
             }
+            for &(a, b) in &corners {
+                if a.is_finite() && b.is_finite() {
+                    u = [u[0].min(a), u[1].max(a)];
+                    v = [v[0].min(b), v[1].max(b)];
+                }
+            }
             let value = fields
                 .shear
-                .get(patches.len())
+                .get(k)
                 .map_or(f64::NAN, |g| g.abs().to_degrees());
-            patches.push(Patch {
+            if value.is_finite() {
+                vmax_all = vmax_all.max(value);
+            }
+            if ply.is_some_and(|p| !p.elements.contains(&k)) {
+                continue;
+            }
+            drawn.push(Patch {
+                element: k,
                 corners,
                 value,
                 depth: (centroid / nodes.len() as f64).dot(&towards),
@@ -145,23 +189,45 @@ pub(in crate::results) fn oblique_view(
         }
     }
     // Far to near: the nearer element hides the farther.
-    patches.sort_by(|a, b| a.depth.total_cmp(&b.depth));
+    drawn.sort_by(|a, b| a.depth.total_cmp(&b.depth));
+    Ok(Patches {
+        drawn,
+        u,
+        v,
+        vmax_all,
+    })
+}
+
+/// `shear_3d.png` of `model` at `state`, the tools of `tools` displaced by
+/// `displacements` along their axes, the colours over the |γ| `range`
+/// (None: 0 to the largest).
+///
+/// With `ply` (`shear_3d_<ply>.png` of a laminate), that ply's elements
+/// only, on the frame and colour scale of the whole laminate, so that the
+/// plies' pictures compare pixel for pixel and colour for colour.
+pub(in crate::results) fn oblique_view(
+    model: &Model,
+    state: &State,
+    fields: &ElementFields,
+    tools: &ToolMeshes,
+    displacements: &[f64],
+    range: Option<[f64; 2]>,
+    ply: Option<&Ply>,
+) -> Result<Vec<u8>> {
+    let [right, up, towards] = view_axes();
+    let screen = |p: &Vector3<f64>| (p.dot(&right), p.dot(&up));
+    let Patches {
+        drawn: patches,
+        u,
+        v,
+        vmax_all,
+    } = view_patches(model, state, fields, ply)?;
     let vmax = patches
         .iter()
         .map(|p| p.value)
         .filter(|v| v.is_finite())
         .fold(0.0, f64::max);
-    let scale = shear_scale(range, vmax);
-    let (mut u, mut v) = (
-        [f64::INFINITY, f64::NEG_INFINITY],
-        [f64::INFINITY, f64::NEG_INFINITY],
-    );
-    for &(a, b) in patches.iter().flat_map(|p| &p.corners) {
-        if a.is_finite() && b.is_finite() {
-            u = [u[0].min(a), u[1].max(a)];
-            v = [v[0].min(b), v[1].max(b)];
-        }
-    }
+    let scale = shear_scale(range, if ply.is_some() { vmax_all } else { vmax });
     // The tools' surroundings: 25 % of the part's size around it.
     let pad = 0.25 * (u[1] - u[0]).max(v[1] - v[0]).max(1.0);
     let (ub, vb) = ([u[0] - pad, u[1] + pad], [v[0] - pad, v[1] + pad]);
@@ -177,11 +243,19 @@ pub(in crate::results) fn oblique_view(
         }
     }
 
-    let title = format!(
-        "Shear angle |γ|, oblique view   (time {} s, largest {}°)",
-        human(state.time),
-        human(vmax)
-    );
+    let title = match ply {
+        None => format!(
+            "Shear angle |γ|, oblique view   (time {} s, largest {}°)",
+            human(state.time),
+            human(vmax)
+        ),
+        Some(p) => format!(
+            "Ply {}: shear angle |γ|, oblique view   (time {} s, largest {}°)",
+            p.name,
+            human(state.time),
+            human(vmax)
+        ),
+    };
     render(MAP_SIZE, |root| {
         let (w, _) = MAP_SIZE;
         let body = root.titled(&title, (FAMILY, 24)).map_err(drawing)?;
@@ -279,6 +353,36 @@ pub(in crate::results) fn oblique_view(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_ply_s_view_draws_that_ply_s_elements_on_the_laminate_s_frame() {
+        let (model, state, fields) = super::super::tests::two_plies();
+        let elements = |p: &Patches| {
+            let mut e: Vec<usize> = p.drawn.iter().map(|d| d.element).collect();
+            e.sort_unstable();
+            e
+        };
+        let all = view_patches(&model, &state, &fields, None).unwrap();
+        assert_eq!(elements(&all), (0..13).collect::<Vec<_>>());
+        // The top ply's last element: 0.12 rad.
+        assert!((all.vmax_all - 0.12f64.to_degrees()).abs() < 1e-12);
+        for ply in &model.plies {
+            let one = view_patches(&model, &state, &fields, Some(ply)).unwrap();
+            assert_eq!(
+                elements(&one),
+                ply.elements.clone().collect::<Vec<_>>(),
+                "{}",
+                ply.name
+            );
+            // Far to near, each patch its own element's shear.
+            assert!(one.drawn.windows(2).all(|w| w[0].depth <= w[1].depth));
+            for d in &one.drawn {
+                assert_eq!(d.value, fields.shear[d.element].abs().to_degrees());
+            }
+            // The whole laminate's frame and largest shear.
+            assert_eq!((one.u, one.v, one.vmax_all), (all.u, all.v, all.vmax_all));
+        }
+    }
 
     #[test]
     fn the_view_axes_are_orthonormal_and_z_is_up() {

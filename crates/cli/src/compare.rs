@@ -20,6 +20,10 @@
 //! RMS of their difference along the diagonal is the measure the
 //! implicit/explicit agreement cases of `cargo xtask validate` check.
 //!
+//! Two laminates compare ply by ply, by name ([`plies`]): each ply's
+//! shear, profiles and picture (`comparison_<ply>.png` in place of
+//! `comparison.png`), and `comparison.csv` with a `ply` column.
+//!
 //! Any two folders compare: two forming runs of one scene with different
 //! settings (a sweep's runs), two meshes of one part, a forming run and a
 //! kinematic drape (`drape kinematic`), whose nets are drawn on the flat
@@ -33,6 +37,9 @@ use drape_io::results::read::{VtuFrame, read_last_frame, read_summary};
 use drape_io::results::{MapPanel, ResultsError, Summary, write_flat_maps_of};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
+
+mod plies;
+pub use plies::PlyDifference;
 
 /// What stops a comparison of two folders.
 #[derive(Debug, thiserror::Error)]
@@ -56,7 +63,20 @@ const COMPARISON_FILES: [&str; 3] = ["comparison.json", "comparison.csv", "compa
 /// folder), and the files named in `more`, so that a comparison that fails
 /// cannot leave one that looks like its own.
 pub(crate) fn clear_comparison(out: &Path, more: &[&str]) -> Result<(), ResultsError> {
-    for name in COMPARISON_FILES.iter().chain(more) {
+    // An earlier comparison of laminates drew one picture per ply.
+    let per_ply: Vec<String> = std::fs::read_dir(out)
+        .into_iter()
+        .flatten()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("comparison_") && n.ends_with(".png"))
+        .collect();
+    let per_ply = per_ply.iter().map(String::as_str);
+    for name in COMPARISON_FILES
+        .iter()
+        .copied()
+        .chain(more.iter().copied())
+        .chain(per_ply)
+    {
         let path = out.join(name);
         match std::fs::remove_file(&path) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
@@ -150,9 +170,14 @@ pub struct RunComparisonSummary {
     pub rms_difference_deg: f64,
     /// Mean of γ_B − γ_A (degrees).
     pub mean_difference_deg: f64,
-    /// The shear profiles both runs sampled at the same distances.
+    /// The shear profiles both runs sampled at the same distances (empty
+    /// for two laminates: each ply's are in `plies`).
     #[serde(default)]
     pub profiles: Vec<ProfileDifference>,
+    /// Two laminates: each ply of A with B's ply of the same name, A's
+    /// order (empty for one ply).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub plies: Vec<PlyDifference>,
 }
 
 /// One shear profile of `profiles.csv` (signed γ against the initial
@@ -259,26 +284,43 @@ fn same_mesh(a: &VtuFrame, a0: &[Vector3<f64>], b: &VtuFrame, b0: &[Vector3<f64>
         .all(|(p, q)| (p - q).norm() <= 1e-9 * size)
 }
 
-/// A folder's `profiles.csv` as (line, distance, γ) rows; an empty list
-/// when the folder has none (a run without a rectangular blank writes only
-/// the header; a kinematic drape's folder has no file).
-fn read_profiles(dir: &Path) -> Result<Vec<(String, f64, f64)>, CompareError> {
+/// One row of `profiles.csv`: (ply, line, distance, γ), the ply empty
+/// for one ply's file.
+type ProfileRow = (String, String, f64, f64);
+
+/// A folder's `profiles.csv` as rows; an empty list when the folder has
+/// none (a run without a rectangular blank writes only the header; a
+/// kinematic drape's folder has no file). A laminate's file (header
+/// `ply,line,...`) has a ply name first.
+fn read_profiles(dir: &Path) -> Result<Vec<ProfileRow>, CompareError> {
     let path = dir.join("profiles.csv");
     let Ok(text) = std::fs::read_to_string(&path) else {
         return Ok(Vec::new());
     };
+    let laminate = text.starts_with("ply,");
     let mut rows = Vec::new();
     for (k, line) in text.lines().enumerate().skip(1) {
         let fields: Vec<&str> = line.split(',').collect();
         let number = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite());
-        let row = match fields.as_slice() {
-            [name, d, g] => number(d)
+        let row = match (laminate, fields.as_slice()) {
+            (false, [name, d, g]) => number(d)
                 .zip(number(g))
-                .map(|(d, g)| ((*name).to_owned(), d, g)),
+                .map(|(d, g)| (String::new(), (*name).to_owned(), d, g)),
+            (true, [ply, name, d, g]) => number(d)
+                .zip(number(g))
+                .map(|(d, g)| ((*ply).to_owned(), (*name).to_owned(), d, g)),
             _ => None,
         };
         match row {
             Some(row) => rows.push(row),
+            None if laminate => {
+                return Err(CompareError::Input(format!(
+                    "{} line {}: expected a ply name, a line name and two finite numbers \
+                     (ply,line,distance_mm,shear_deg), found {line:?}",
+                    path.display(),
+                    k + 1
+                )));
+            }
             None => {
                 return Err(CompareError::Input(format!(
                     "{} line {}: expected a line name and two finite numbers \
@@ -290,6 +332,15 @@ fn read_profiles(dir: &Path) -> Result<Vec<(String, f64, f64)>, CompareError> {
         }
     }
     Ok(rows)
+}
+
+/// The rows of `rows` of the ply `ply` ("" for one ply's file) as (line,
+/// distance, γ).
+fn ply_rows(rows: &[ProfileRow], ply: &str) -> Vec<(String, f64, f64)> {
+    rows.iter()
+        .filter(|r| r.0 == ply)
+        .map(|r| (r.1.clone(), r.2, r.3))
+        .collect()
 }
 
 /// The profiles of A and B compared line by line, where both sampled a
@@ -364,36 +415,56 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
             / cell.len() as f64
     };
     let centroid0: Vec<Vector3<f64>> = fa.cells.iter().map(|c| centroid(&a0, c)).collect();
-    let same = same_mesh(&fa, &a0, &fb, &b0);
-    let b_deg = if same {
-        gb.clone()
-    } else {
-        let field = SurfaceField::new(&b0, &fb.cells, std::slice::from_ref(&gb))
-            .map_err(|e| input(format!("{}: {e}", b.display())))?;
-        let area: f64 = fb
-            .cells
-            .iter()
-            .map(|c| {
-                let p = |k: usize| b0[c[k] as usize];
-                if c.len() == 4 {
-                    0.5 * (p(2) - p(0)).cross(&(p(3) - p(1))).norm()
+    let (pa, pb) = (
+        plies::run_plies(a, &sa, &fa)?,
+        plies::run_plies(b, &sb, &fb)?,
+    );
+    let (ra, rb) = (read_profiles(a)?, read_profiles(b)?);
+    let mut ply_differences = Vec::new();
+    // Each of A's elements' ply, for a laminate's table.
+    let mut ply_of = Vec::new();
+    let (b_deg, same) = match (
+        plies::match_plies((a, pa.as_ref()), (b, pb.as_ref()))?,
+        &pa,
+        &pb,
+    ) {
+        (Some(matched), Some(pa), Some(pb)) => {
+            let mut b_deg = vec![f64::NAN; ga.len()];
+            ply_of = vec![""; ga.len()];
+            let mut all_same = true;
+            for (k, &j) in matched.iter().enumerate() {
+                let (ca, cb) = (&pa.cells[k], &pb.cells[j]);
+                let same = plies::same_cells((&fa, &a0, ca), (&fb, &b0, cb));
+                if same {
+                    for (&i, &m) in ca.iter().zip(cb) {
+                        b_deg[i] = gb[m];
+                    }
                 } else {
-                    0.5 * (p(1) - p(0)).cross(&(p(2) - p(0))).norm()
+                    let cells: Vec<Vec<u32>> = cb.iter().map(|&c| fb.cells[c].clone()).collect();
+                    let values: Vec<f64> = cb.iter().map(|&c| gb[c]).collect();
+                    let at: Vec<Vector3<f64>> = ca.iter().map(|&c| centroid0[c]).collect();
+                    for (&i, v) in ca.iter().zip(carried(&b0, &cells, &values, &at, b)?) {
+                        b_deg[i] = v;
+                    }
                 }
-            })
-            .sum();
-        let reach = 0.5 * (area / fb.cells.len().max(1) as f64).sqrt();
-        centroid0
-            .iter()
-            .map(|c| {
-                let s = field.sample(c);
-                if s.distance <= reach {
-                    s.values[0]
-                } else {
-                    f64::NAN
-                }
-            })
-            .collect()
+                all_same &= same;
+                let name = &pa.names[k];
+                ca.iter().for_each(|&i| ply_of[i] = name.as_str());
+                let mut d = PlyDifference::of(name, same, ca, &ga, &b_deg, &centroid0);
+                d.profiles = profile_differences(&ply_rows(&ra, name), &ply_rows(&rb, name));
+                ply_differences.push(d);
+            }
+            (b_deg, all_same)
+        }
+        _ => {
+            let same = same_mesh(&fa, &a0, &fb, &b0);
+            let b_deg = if same {
+                gb.clone()
+            } else {
+                carried(&b0, &fb.cells, &gb, &centroid0, b)?
+            };
+            (b_deg, same)
+        }
     };
     let mut summary = RunComparisonSummary {
         run_a: a.display().to_string(),
@@ -401,7 +472,12 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
         status_a: sa.status.clone(),
         status_b: sb.status.clone(),
         measures: measures(&sa, &sb),
-        profiles: profile_differences(&read_profiles(a)?, &read_profiles(b)?),
+        profiles: if ply_differences.is_empty() {
+            profile_differences(&ply_rows(&ra, ""), &ply_rows(&rb, ""))
+        } else {
+            Vec::new()
+        },
+        plies: ply_differences,
         same_mesh: same,
         elements: ga.len(),
         ..RunComparisonSummary::default()
@@ -460,7 +536,13 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
     // No NaN in a table: a value that cannot be had is an empty field.
     let number = |v: f64| drape_io::finite::or_empty(v, |v| v.to_string());
     let mut csv = String::from("element,x0_mm,y0_mm,z0_mm,a_deg,b_deg,difference_deg\n");
+    if !ply_of.is_empty() {
+        csv.insert_str(0, "ply,");
+    }
     for (e, c) in centroid0.iter().enumerate() {
+        if let Some(ply) = ply_of.get(e) {
+            let _ = write!(csv, "{ply},");
+        }
         let _ = writeln!(
             csv,
             "{e},{},{},{},{},{},{}",
@@ -488,37 +570,58 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
             |n| n.to_string_lossy().into_owned(),
         )
     };
-    write_flat_maps_of(
-        &out.join("comparison.png"),
-        &a0,
-        &fa.cells,
-        &[
-            MapPanel {
-                title: format!("A: {} ({}): |γ|", name(a), sa.status),
-                values: &ma,
-                label: "|γ| (deg)".into(),
-                signed: false,
-                scale: Some(shared),
-                range: None,
-            },
-            MapPanel {
-                title: format!("B: {} ({}): |γ|", name(b), sb.status),
-                values: &mb,
-                label: "|γ| (deg)".into(),
-                signed: false,
-                scale: Some(shared),
-                range: None,
-            },
-            MapPanel {
-                title: "Difference: |γ| B − |γ| A".into(),
-                values: &difference,
-                label: "difference (deg)".into(),
-                signed: true,
-                scale: None,
-                range: None,
-            },
-        ],
-    )?;
+    // The three panels of A's elements `cells` (all for one ply), titled
+    // with `ply` (a laminate's).
+    let picture = |file: &str, cells: &[usize], ply: &str| {
+        let pick = |v: &[f64]| -> Vec<f64> { cells.iter().map(|&e| v[e]).collect() };
+        let (ma, mb, difference) = (pick(&ma), pick(&mb), pick(&difference));
+        let cells: Vec<Vec<u32>> = cells.iter().map(|&e| fa.cells[e].clone()).collect();
+        write_flat_maps_of(
+            &out.join(file),
+            &a0,
+            &cells,
+            &[
+                MapPanel {
+                    title: format!("A: {} ({}): |γ|{ply}", name(a), sa.status),
+                    values: &ma,
+                    label: "|γ| (deg)".into(),
+                    signed: false,
+                    scale: Some(shared),
+                    range: None,
+                },
+                MapPanel {
+                    title: format!("B: {} ({}): |γ|{ply}", name(b), sb.status),
+                    values: &mb,
+                    label: "|γ| (deg)".into(),
+                    signed: false,
+                    scale: Some(shared),
+                    range: None,
+                },
+                MapPanel {
+                    title: format!("Difference: |γ| B − |γ| A{ply}"),
+                    values: &difference,
+                    label: "difference (deg)".into(),
+                    signed: true,
+                    scale: None,
+                    range: None,
+                },
+            ],
+        )
+    };
+    match &pa {
+        // A laminate one ply per picture, on the laminate's colour scale:
+        // on one flat blank the top ply would hide the others.
+        Some(pa) if !summary.plies.is_empty() => {
+            for (name, cells) in pa.names.iter().zip(&pa.cells) {
+                picture(
+                    &format!("comparison_{name}.png"),
+                    cells,
+                    &format!(", ply {name}"),
+                )?;
+            }
+        }
+        _ => picture("comparison.png", &(0..ga.len()).collect::<Vec<_>>(), "")?,
+    }
     write_json(out, &summary)?;
     Ok(RunComparison {
         summary,
@@ -528,6 +631,44 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
         b_deg,
         centroid0,
     })
+}
+
+/// B's values `values` on its cells `cells` (reference points `b0`)
+/// carried to the points `at` by closest point on B's reference surface:
+/// NaN farther than half B's typical element size (B's blank does not
+/// reach there). `b` names B's folder in an error.
+fn carried(
+    b0: &[Vector3<f64>],
+    cells: &[Vec<u32>],
+    values: &[f64],
+    at: &[Vector3<f64>],
+    b: &Path,
+) -> Result<Vec<f64>, CompareError> {
+    let field = SurfaceField::new(b0, cells, &[values.to_vec()])
+        .map_err(|e| CompareError::Input(format!("{}: {e}", b.display())))?;
+    let area: f64 = cells
+        .iter()
+        .map(|c| {
+            let p = |k: usize| b0[c[k] as usize];
+            if c.len() == 4 {
+                0.5 * (p(2) - p(0)).cross(&(p(3) - p(1))).norm()
+            } else {
+                0.5 * (p(1) - p(0)).cross(&(p(2) - p(0))).norm()
+            }
+        })
+        .sum();
+    let reach = 0.5 * (area / cells.len().max(1) as f64).sqrt();
+    Ok(at
+        .iter()
+        .map(|c| {
+            let s = field.sample(c);
+            if s.distance <= reach {
+                s.values[0]
+            } else {
+                f64::NAN
+            }
+        })
+        .collect())
 }
 
 #[cfg(test)]

@@ -1304,6 +1304,28 @@ fn compare_folders(a: &Path, b: &Path, out: Option<PathBuf>) -> Result<ExitCode>
             p.line, p.points, p.max_abs_difference_deg, p.rms_difference_deg
         );
     }
+    // Two laminates: each ply with B's ply of its name.
+    for p in &s.plies {
+        println!(
+            "ply {}: {} of {} elements compared ({}); |γB − γA| largest {:.3}°, rms {:.3}°",
+            p.name,
+            p.compared,
+            p.elements,
+            if p.same_mesh {
+                "the same mesh"
+            } else {
+                "B's ply carried onto A's by closest point"
+            },
+            p.max_abs_difference_deg,
+            p.rms_difference_deg
+        );
+        for d in &p.profiles {
+            println!(
+                "  shear along its {}: {} points compared; |γB − γA| largest {:.3}°, rms {:.3}°",
+                d.line, d.points, d.max_abs_difference_deg, d.rms_difference_deg
+            );
+        }
+    }
     for (name, status) in [("A", &s.status_a), ("B", &s.status_b)] {
         if status != "completed" {
             eprintln!(

@@ -1,7 +1,10 @@
 //! A laminate end to end: a two-ply run writes one shear map, oblique
 //! view and waviness map per ply and its orientations as a layup (a `ply`
 //! column in the table), and `drape export --onto` carries every ply onto
-//! a structural mesh; a one-ply run writes no per-ply picture.
+//! a structural mesh; a one-ply run writes no per-ply picture. Its shear
+//! profiles are each ply's own (`profiles.csv` with a `ply` column,
+//! `profiles_<ply>.png`), and `drape compare` of two laminates compares
+//! them ply by ply, by name.
 
 use std::path::Path;
 
@@ -92,10 +95,30 @@ fn a_stack_pictures_and_exports_every_ply() {
     // The oblique view and the waviness map one per ply only: overlaid,
     // the plies speckle through each other (3D) or the top one hides the
     // rest (the flat blank).
-    for picture in ["shear_3d", "waviness_map"] {
+    for picture in ["shear_3d", "waviness_map", "profiles"] {
         assert!(!out.join(format!("{picture}.png")).exists(), "{picture}");
         let [p0, p45] = ["p0", "p45"].map(|p| bytes(&format!("{picture}_{p}.png")));
         assert_ne!(p0, p45, "{picture}");
+    }
+
+    // Each ply's own profiles, under a ply column, bottom ply first.
+    let profiles = std::fs::read_to_string(out.join("profiles.csv")).unwrap();
+    let plies_of = |line: &str| {
+        profiles
+            .lines()
+            .skip(1)
+            .filter(|r| r.split(',').nth(1) == Some(line))
+            .map(|r| r.split(',').next().unwrap().to_owned())
+            .collect::<Vec<_>>()
+    };
+    assert!(profiles.starts_with("ply,line,distance_mm,shear_deg\np0,diagonal,"));
+    for line in ["diagonal", "median"] {
+        let plies = plies_of(line);
+        let p0 = plies.iter().filter(|p| *p == "p0").count();
+        // Both plies, each along its own blank's line (p45's cells turned
+        // with its warp: fewer centroids within the band).
+        assert!(p0 > 0 && plies.len() > p0, "{line}: {profiles}");
+        assert!(plies[..p0].iter().all(|p| p == "p0"), "{profiles}");
     }
 
     // The table: a ply column, each ply's rows with its own warp.
@@ -191,5 +214,96 @@ fn a_stack_pictures_and_exports_every_ply() {
     }
     assert_eq!(tables[0], tables[1]);
     assert!(views[0] == views[1], "one ply's pictures differ as a stack");
+
+    // Two laminates compare ply by ply: the run with a copy of itself.
+    let copy = dir.join("copy");
+    std::fs::create_dir_all(copy.join("frames")).unwrap();
+    for entry in walk(&out) {
+        let to = copy.join(entry.strip_prefix(&out).unwrap());
+        std::fs::copy(&entry, to).unwrap();
+    }
+    let compare = |b: &Path, into: &str| {
+        drape(&[
+            "compare",
+            out.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "--out",
+            dir.join(into).to_str().unwrap(),
+        ])
+    };
+    let o = compare(&copy, "c-copy");
+    assert!(o.status.success(), "{}", text(&o));
+    let c = json(&dir.join("c-copy/comparison.json"));
+    let plies = c["plies"].as_array().unwrap();
+    let names: Vec<&str> = plies.iter().map(|p| p["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["p0", "p45"], "{c}");
+    let elements = c["elements"].as_u64().unwrap();
+    for p in plies {
+        // Each ply with itself: element by element, all of them, no difference.
+        assert_eq!(p["same_mesh"], true, "{p}");
+        assert_eq!(p["compared"], p["elements"], "{p}");
+        assert_eq!(p["max_abs_difference_deg"].as_f64(), Some(0.0), "{p}");
+        // Its own profiles, as many points as its rows in profiles.csv.
+        let name = p["name"].as_str().unwrap();
+        for d in p["profiles"].as_array().unwrap() {
+            let line = d["line"].as_str().unwrap();
+            let rows = plies_of(line).iter().filter(|q| *q == name).count();
+            assert_eq!(d["points"].as_u64(), Some(rows as u64), "{d}");
+        }
+        assert_eq!(p["profiles"].as_array().unwrap().len(), 2, "{p}");
+    }
+    let count = |p: usize| plies[p]["elements"].as_u64().unwrap();
+    assert_eq!(count(0) + count(1), elements, "{c}");
+    assert_eq!(c["profiles"].as_array().unwrap().len(), 0, "{c}");
+    let written: Vec<String> = std::fs::read_dir(dir.join("c-copy"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".png"))
+        .collect();
+    let mut written = written;
+    written.sort();
+    assert_eq!(written, ["comparison_p0.png", "comparison_p45.png"]);
+    let table = std::fs::read_to_string(dir.join("c-copy/comparison.csv")).unwrap();
+    assert!(table.starts_with("ply,element,x0_mm,"), "{table}");
+    let rows = table.lines().filter(|l| l.starts_with("p45,")).count();
+    assert_eq!(rows as u64, count(1));
+
+    // A ply of A that B lacks (renamed in B's summary): an error naming it.
+    let summary = std::fs::read_to_string(copy.join("summary.json")).unwrap();
+    assert!(summary.contains("\"name\": \"p45\""));
+    std::fs::write(
+        copy.join("summary.json"),
+        summary.replace("\"name\": \"p45\"", "\"name\": \"top\""),
+    )
+    .unwrap();
+    let o = compare(&copy, "c-renamed");
+    assert!(!o.status.success());
+    assert!(
+        text(&o).contains("no ply `p45` (its plies: p0, top)"),
+        "{}",
+        text(&o)
+    );
+    // A laminate and a single ply do not compare.
+    let o = compare(&dir.join("one-false"), "c-one");
+    assert!(!o.status.success());
+    assert!(
+        text(&o).contains("is a single ply but") && text(&o).contains("plies p0, p45"),
+        "{}",
+        text(&o)
+    );
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// The files under `dir`, at any depth.
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            files.extend(walk(&path));
+        } else {
+            files.push(path);
+        }
+    }
+    files
 }

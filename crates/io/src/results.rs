@@ -8,10 +8,10 @@
 //! | `series.pvd` | VTK collection of the frames with their times (open this in ParaView) | [`ResultsDir::write_frame`] |
 //! | `energy.csv` | energy history | [`ResultsDir::write_energy`] |
 //! | `cutbacks.csv` | implicit runs: every increment cut back, when and why | [`ResultsDir::write_cutbacks`] |
-//! | `profiles.csv` | shear along the blank's diagonal and median | [`ResultsDir::write_profiles`] |
+//! | `profiles.csv` | shear along the blank's diagonal and median (a laminate: each ply's, a `ply` column first) | [`ResultsDir::write_profiles`] |
 //! | `summary.json` | derived measures and run statistics ([`Summary`]) | [`ResultsDir::write_summary`] |
 //! | `shear_map.png`, `waviness_map.png`, `profiles.png` | pictures | [`ResultsDir::write_pictures`] |
-//! | `shear_map_<ply>.png`, `waviness_map_<ply>.png` | a laminate's pictures per ply (the second in place of `waviness_map.png`) | [`ResultsDir::write_pictures`] |
+//! | `shear_map_<ply>.png`, `waviness_map_<ply>.png`, `profiles_<ply>.png` | a laminate's pictures per ply (the last two in place of `waviness_map.png` and `profiles.png`) | [`ResultsDir::write_pictures`] |
 //! | `shear_3d.png` (a laminate: `shear_3d_<ply>.png` per ply instead) | the formed part seen obliquely, with the tools' outline | [`ResultsDir::write_view`] |
 //! | `frames/trusses_NNNNN.vtu`, `trusses.pvd` | the fibre trusses as lines (models with trusses) | [`ResultsDir::write_frame`] |
 //! | `frames/tools_NNNNN.vtu`, `tools.pvd` | the tools' surfaces where they are at each frame | [`ResultsDir::write_tools`] |
@@ -58,6 +58,7 @@ pub mod export;
 mod lock;
 pub mod mapping;
 mod pictures;
+mod profiles;
 
 pub(crate) use pictures::boundary_edges;
 pub mod read;
@@ -491,10 +492,17 @@ pub enum PlyPicture {
     Shear3d,
     /// `waviness_map_<ply>.png`, in place of `waviness_map.png`.
     WavinessMap,
+    /// `profiles_<ply>.png`, in place of `profiles.png`.
+    Profiles,
 }
 
 impl PlyPicture {
-    const ALL: [Self; 3] = [Self::ShearMap, Self::Shear3d, Self::WavinessMap];
+    const ALL: [Self; 4] = [
+        Self::ShearMap,
+        Self::Shear3d,
+        Self::WavinessMap,
+        Self::Profiles,
+    ];
 
     /// The one-ply file's name without `.png`.
     fn stem(self) -> &'static str {
@@ -502,6 +510,7 @@ impl PlyPicture {
             Self::ShearMap => "shear_map",
             Self::Shear3d => "shear_3d",
             Self::WavinessMap => "waviness_map",
+            Self::Profiles => "profiles",
         }
     }
 }
@@ -813,7 +822,18 @@ impl ResultsDir {
     /// `median`, each sorted by signed initial distance from the centre.
     /// Without a rectangular blank both profiles are empty and the file
     /// holds only its header.
+    ///
+    /// A laminate (`measures.ply_profiles`) writes each ply's own profiles
+    /// instead, with a first column naming the ply as `orientations.csv`
+    /// does: header `ply,line,distance_mm,shear_deg`, ply by ply from the
+    /// bottom, each ply's diagonal then its median.
     pub fn write_profiles(&self, measures: &Measures) -> Result<(), ResultsError> {
+        if !measures.ply_profiles.is_empty() {
+            return self.write_file(
+                "profiles.csv",
+                profiles::ply_csv(&measures.ply_profiles).as_bytes(),
+            );
+        }
         let mut csv = String::from("line,distance_mm,shear_deg\n");
         for (line, points) in [
             ("diagonal", &measures.profile_diagonal),
@@ -856,7 +876,8 @@ impl ResultsDir {
     /// Writes `shear_map.png` (the formed part seen from above, coloured by
     /// shear angle, with a colour bar), for a laminate one such map per
     /// ply ([`ply_picture`]), `waviness_map.png` (for a laminate, one per
-    /// ply instead: `waviness_map_<ply>.png`) and `profiles.png`.
+    /// ply instead: `waviness_map_<ply>.png`) and `profiles.png` (for a
+    /// laminate, one per ply instead: `profiles_<ply>.png`).
     ///
     /// The shear map projects the current positions on the x–y plane and
     /// paints each membrane element with the viridis colour of its
@@ -913,6 +934,10 @@ impl ResultsDir {
                     source: std::io::Error::other(e),
                 })?;
             crate::atomic::write(&path, &png).map_err(at(&path))?;
+        }
+        if !measures.ply_profiles.is_empty() {
+            // Each ply's profiles on a plot of its own, as its other pictures.
+            return profiles::write_ply_pictures(&self.dir, &measures.ply_profiles, state.time);
         }
         let path = self.dir.join("profiles.png");
         let png = pictures::profiles(measures, state.time).map_err(|e| ResultsError {

@@ -1,7 +1,9 @@
 //! The pictures of a laminate, one per ply, and of one ply, as before:
-//! a two-ply model draped on a sphere writes `shear_3d_<ply>.png` and
-//! `waviness_map_<ply>.png` in place of the overlaid `shear_3d.png` and
-//! `waviness_map.png` (and `shear_map_<ply>.png` beside `shear_map.png`);
+//! a two-ply model draped on a sphere writes `shear_3d_<ply>.png`,
+//! `waviness_map_<ply>.png` and `profiles_<ply>.png` in place of the
+//! overlaid `shear_3d.png`, `waviness_map.png` and `profiles.png` (and
+//! `shear_map_<ply>.png` beside `shear_map.png`), and each ply's own rows
+//! in `profiles.csv`;
 //! a one-ply model writes the one-ply files, byte for byte those drape
 //! wrote before laminates had their own pictures.
 
@@ -123,7 +125,8 @@ fn a_laminate_writes_one_oblique_view_and_one_waviness_map_per_ply() {
     assert_eq!(
         names,
         [
-            "profiles.png",
+            "profiles_high.png",
+            "profiles_low.png",
             "shear_3d_high.png",
             "shear_3d_low.png",
             "shear_map.png",
@@ -138,11 +141,109 @@ fn a_laminate_writes_one_oblique_view_and_one_waviness_map_per_ply() {
         "shear_3d_low.png"
     );
     let bytes = |name: &str| std::fs::read(tmp.path().join(name)).unwrap();
-    for picture in ["shear_3d", "waviness_map"] {
+    for picture in ["shear_3d", "waviness_map", "profiles"] {
         let [low, high] = ["low", "high"].map(|p| bytes(&format!("{picture}_{p}.png")));
         assert_ne!(low, high, "{picture}");
     }
     // The next run into the folder starts without them.
     let _again = ResultsDir::create(tmp.path()).unwrap();
     assert_eq!(png_names(tmp.path()), Vec::<String>::new());
+}
+
+/// A two-ply stack, `low` (8 × 8 cells) under `high` (6 × 6).
+fn two_plies(material: &Material) -> Model {
+    let ply = |name: &str, cells: usize| PlyModel {
+        model: Model::from_blank(&blank(cells), material).unwrap(),
+        name: name.into(),
+        thickness: material.thickness,
+        orientation_deg: 0.0,
+        friction_below: 0.0,
+    };
+    Model::stack(vec![ply("low", 8), ply("high", 6)]).unwrap()
+}
+
+/// `profiles.csv` of `model` at `state` written into `dir`.
+fn profiles_csv(dir: &Path, model: &Model, state: &State) -> String {
+    let out = ResultsDir::create(dir).unwrap();
+    out.write_profiles(&model.measures(state, 50.0).unwrap())
+        .unwrap();
+    std::fs::read_to_string(dir.join("profiles.csv")).unwrap()
+}
+
+#[test]
+fn one_ply_profiles_csv_is_byte_identical_to_the_one_before_per_ply_profiles() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = Model::from_blank(&blank(8), &glass()).unwrap();
+    let csv = profiles_csv(tmp.path(), &model, &draped(&model));
+    assert!(
+        csv.starts_with("line,distance_mm,shear_deg\ndiagonal,"),
+        "{csv}"
+    );
+    // Written by commit 4891f49 (before a laminate's profiles were per
+    // ply) from this model and state.
+    assert_eq!(
+        fnv1a(csv.as_bytes()),
+        0xea18_02b2_8935_83f5,
+        "{:x}",
+        fnv1a(csv.as_bytes())
+    );
+}
+
+/// Each ply of a laminate has its own rows in `profiles.csv`, under a
+/// `ply` column: the rows of that ply formed alone (the draped map moves
+/// a ply's nodes as it moves the ply alone, lifted by its height), not
+/// the elements of every ply near the bottom ply's lines.
+#[test]
+fn a_laminate_writes_each_plys_own_profiles_under_a_ply_column() {
+    let material = glass();
+    let model = two_plies(&material);
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = profiles_csv(tmp.path(), &model, &draped(&model));
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("ply,line,distance_mm,shear_deg"));
+    let rows: Vec<(String, String, f64, f64)> = lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            assert_eq!(f.len(), 4, "{l}");
+            (
+                f[0].into(),
+                f[1].into(),
+                f[2].parse().unwrap(),
+                f[3].parse().unwrap(),
+            )
+        })
+        .collect();
+    for (name, cells) in [("low", 8), ("high", 6)] {
+        let alone = Model::from_blank(&blank(cells), &material).unwrap();
+        let m = alone.measures(&draped(&alone), 50.0).unwrap();
+        let expected: Vec<(&str, f64, f64)> = [
+            ("diagonal", &m.profile_diagonal),
+            ("median", &m.profile_median),
+        ]
+        .into_iter()
+        .flat_map(|(line, points)| points.iter().map(move |p| (line, p.distance, p.shear_deg)))
+        .collect();
+        let got: Vec<&(String, String, f64, f64)> = rows.iter().filter(|r| r.0 == name).collect();
+        assert_eq!(got.len(), expected.len(), "{name}: {csv}");
+        assert!(
+            expected.iter().any(|e| e.2.abs() > 1.0),
+            "{name}: no shear to compare"
+        );
+        for (g, e) in got.iter().zip(&expected) {
+            assert_eq!((g.1.as_str(), g.2), (e.0, e.1), "{name}");
+            // The lifted ply's edges differ from the ply's alone in the
+            // last bits of z only.
+            assert!((g.3 - e.2).abs() <= 1e-9, "{name}: {g:?} against {e:?}");
+        }
+    }
+    // Bottom to top, nothing else.
+    let names: Vec<&str> = rows.iter().map(|r| r.0.as_str()).collect();
+    let switch = names.iter().position(|n| *n == "high").unwrap();
+    assert!(
+        names[..switch].iter().all(|n| *n == "low") && names[switch..].iter().all(|n| *n == "high")
+    );
+    // The model's own profile is the bottom ply's, not both plies mixed.
+    let m = model.measures(&draped(&model), 50.0).unwrap();
+    assert_eq!(m.profile_diagonal, m.ply_profiles[0].diagonal);
+    assert_eq!(m.profile_median, m.ply_profiles[0].median);
 }

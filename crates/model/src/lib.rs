@@ -412,10 +412,15 @@ pub struct Measures {
     pub max_shear_at: [f64; 3],
     /// Draw-in (mm), for a rectangular blank.
     pub draw_in: Option<DrawIn>,
-    /// Shear along the diagonal.
+    /// Shear along the diagonal (of a laminate: of its bottom ply, whose
+    /// blank the model's is; every ply's in `ply_profiles`).
     pub profile_diagonal: Vec<ProfilePoint>,
-    /// Shear along the median parallel to x.
+    /// Shear along the median parallel to x (of a laminate, as above).
     pub profile_median: Vec<ProfilePoint>,
+    /// A laminate's profiles ply by ply, bottom to top (empty for one
+    /// ply), see [`Model::ply_profiles`].
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ply_profiles: Vec<stack::PlyProfiles>,
     /// Reference area above the locking angle (mm²).
     pub area_above_locking: f64,
     /// Largest truss tension (N), 0 without trusses.
@@ -977,6 +982,12 @@ impl Model {
             };
             m.profile_diagonal = profile(ProfileLine::Diagonal);
             m.profile_median = profile(ProfileLine::MedianX);
+        }
+        m.ply_profiles = self.ply_profiles(&fields);
+        if let Some(bottom) = m.ply_profiles.first() {
+            // The model's lines cross every ply: the bottom ply's own.
+            m.profile_diagonal = bottom.diagonal.clone();
+            m.profile_median = bottom.median.clone();
         }
         Ok(m)
     }

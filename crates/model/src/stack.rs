@@ -13,7 +13,7 @@ use nalgebra::Vector3;
 
 use serde::Serialize;
 
-use crate::measures::{self, DrawIn};
+use crate::measures::{self, DrawIn, ProfileLine, ProfilePoint};
 use crate::{BlankInfo, ElementFields, Model, ModelError};
 
 /// One ply of a laminate.
@@ -50,6 +50,20 @@ pub struct PlyMeasures {
     pub wrinkle_area_mm2: f64,
     /// Its draw-in, for a rectangle.
     pub draw_in: Option<DrawIn>,
+}
+
+/// One ply's shear profiles (`profiles.csv`'s rows of that ply): along
+/// its own blank's diagonal and median, of its own elements only. A
+/// laminate's plies lie one above the other in the blank plane, so the
+/// stack's lines would pick up every ply's elements at once.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PlyProfiles {
+    /// The ply's name.
+    pub name: String,
+    /// Shear along its diagonal (empty for a ply from a mesh file).
+    pub diagonal: Vec<ProfilePoint>,
+    /// Shear along its median parallel to x.
+    pub median: Vec<ProfilePoint>,
 }
 
 /// A ply to stack: its model (built alone, in its own blank plane) and
@@ -195,6 +209,37 @@ impl Model {
                         .blank
                         .as_ref()
                         .map(|b| measures::draw_in(&b.frame, &self.x0, x, b.midpoints, b.corners)),
+                }
+            })
+            .collect()
+    }
+
+    /// Each ply's shear profiles with the element `fields` of a state,
+    /// read on the ply's own blank (its frame and half its element size
+    /// as the band, as [`Model::measures`] reads one ply's); empty for
+    /// fewer than two plies, whose profiles are the model's.
+    pub fn ply_profiles(&self, fields: &ElementFields) -> Vec<PlyProfiles> {
+        if self.plies.len() < 2 {
+            return Vec::new();
+        }
+        self.plies
+            .iter()
+            .map(|ply| {
+                let e = ply.elements.clone();
+                let profile = |line| match &ply.blank {
+                    Some(b) => measures::shear_profile(
+                        &b.frame,
+                        &fields.centroid0[e.clone()],
+                        &fields.shear[e.clone()],
+                        line,
+                        0.5 * b.cell_size,
+                    ),
+                    None => Vec::new(),
+                };
+                PlyProfiles {
+                    name: ply.name.clone(),
+                    diagonal: profile(ProfileLine::Diagonal),
+                    median: profile(ProfileLine::MedianX),
                 }
             })
             .collect()

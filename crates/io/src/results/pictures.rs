@@ -637,22 +637,40 @@ fn mean_curve(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
 /// values would draw a flat line through a sheared region. `profiles.csv`
 /// keeps the signs.
 pub(super) fn profiles(measures: &Measures, time: f64) -> Result<Vec<u8>> {
+    profiles_of(
+        &measures.profile_diagonal,
+        &measures.profile_median,
+        time,
+        None,
+    )
+}
+
+/// [`profiles`] of the `diagonal` and `median` of the ply named `ply`
+/// (`profiles_<ply>.png`), or of the model's blank for None.
+pub(super) fn profiles_of(
+    diagonal: &[ProfilePoint],
+    median: &[ProfilePoint],
+    time: f64,
+    ply: Option<&str>,
+) -> Result<Vec<u8>> {
     let lines = [
-        (
-            "diagonal".to_owned(),
-            magnitudes(&measures.profile_diagonal),
-            DIAGONAL_COLOUR,
-        ),
+        ("diagonal".to_owned(), magnitudes(diagonal), DIAGONAL_COLOUR),
         (
             "median (parallel to x)".to_owned(),
-            magnitudes(&measures.profile_median),
+            magnitudes(median),
             MEDIAN_COLOUR,
         ),
     ];
-    let title = format!(
-        "Shear along the blank's diagonal and median   (time {} s)",
-        human(time)
-    );
+    let title = match ply {
+        None => format!(
+            "Shear along the blank's diagonal and median   (time {} s)",
+            human(time)
+        ),
+        Some(ply) => format!(
+            "Ply {ply}: shear along its blank's diagonal and median   (time {} s)",
+            human(time)
+        ),
+    };
     profile_lines(&title, &lines)
 }
 

@@ -120,6 +120,11 @@ fn array_values(node: roxmltree::Node<'_, '_>) -> Result<(usize, Vec<f64>), Stri
             .chunks_exact(8)
             .map(|c| i64::from_le_bytes(c.try_into().unwrap_or_default()) as f64)
             .collect(),
+        // A laminate's `ply` cell array.
+        "Int32" => data
+            .chunks_exact(4)
+            .map(|c| f64::from(i32::from_le_bytes(c.try_into().unwrap_or_default())))
+            .collect(),
         "UInt32" => data
             .chunks_exact(4)
             .map(|c| f64::from(u32::from_le_bytes(c.try_into().unwrap_or_default())))

@@ -236,6 +236,16 @@ struct Row {
     optional: bool,
 }
 
+fn implicit() -> (String, String) {
+    set("simulation.solver", "\"implicit\"")
+}
+
+/// The implicit driver's contact solver, named (rows mean the same
+/// whichever is the default).
+fn contact_solver(name: &str) -> (String, String) {
+    set("simulation.contact_solver", format!("\"{name}\""))
+}
+
 fn set(key: &str, value: impl std::fmt::Display) -> (String, String) {
     (key.to_owned(), value.to_string())
 }
@@ -374,13 +384,18 @@ fn plan(
         let mut one = Row::new("threads", "10x10 ms2e-5 1 thread", base());
         one.threads = 1;
         rows.push(one);
-        let mut implicit = Row::new(
-            "implicit",
-            "10x10 implicit ms2e-5",
-            [base(), vec![set("simulation.solver", "\"implicit\"")]].concat(),
-        );
-        implicit.optional = true;
-        rows.push(implicit);
+        for (name, solver) in [
+            ("10x10 implicit ms2e-5", "condensed"),
+            ("10x10 implicit active_set ms2e-5", "active_set"),
+        ] {
+            let mut implicit = Row::new(
+                "implicit",
+                name,
+                [base(), vec![implicit(), contact_solver(solver)]].concat(),
+            );
+            implicit.optional = true;
+            rows.push(implicit);
+        }
     } else {
         let (n0, dt0) = (shipped.cells, shipped.mass_scaling_dt);
         let mut row = Row::new(
@@ -463,16 +478,34 @@ fn plan(
             "10x10 no mass scaling",
             vec![cells(10), no_mass_scaling()],
         ));
-        let implicit = || set("simulation.solver", "\"implicit\"");
+        // Each contact solver (the condensed one is the reference, the
+        // active set the faster: `simulation.contact_solver`).
+        let condensed = || contact_solver("condensed");
+        let active_set = || contact_solver("active_set");
         for (name, overrides) in [
-            (format!("{n0}x{n0} implicit ms{dt0:e}"), vec![implicit()]),
+            (
+                format!("{n0}x{n0} implicit ms{dt0:e}"),
+                vec![implicit(), condensed()],
+            ),
+            (
+                format!("{n0}x{n0} implicit active_set ms{dt0:e}"),
+                vec![implicit(), active_set()],
+            ),
             (
                 format!("10x10 implicit ms{dt0:e}"),
-                vec![cells(10), implicit()],
+                vec![cells(10), implicit(), condensed()],
+            ),
+            (
+                format!("10x10 implicit active_set ms{dt0:e}"),
+                vec![cells(10), implicit(), active_set()],
             ),
             (
                 "10x10 implicit no mass scaling".to_owned(),
-                vec![cells(10), no_mass_scaling(), implicit()],
+                vec![cells(10), no_mass_scaling(), implicit(), condensed()],
+            ),
+            (
+                "10x10 implicit active_set no mass scaling".to_owned(),
+                vec![cells(10), no_mass_scaling(), implicit(), active_set()],
             ),
         ] {
             let mut row = Row::new("implicit", &name, overrides);
@@ -1466,8 +1499,9 @@ fn markdown(c: &Context<'_>, measured: &[Measured], prony: &[Measured]) -> Strin
 }
 
 /// What the implicit rows' runs cost: increments, Newton iterations
-/// (converged and wasted in cutbacks), condensed-solve products (one
-/// forward/back solve with the factors each), and where the time went.
+/// (converged and wasted in cutbacks), factorisations, solves with the
+/// factors (the condensed solver's ~30 per iteration, the active set's
+/// one or two), and where the time went.
 fn implicit_table(measured: &[Measured]) -> String {
     let rows: Vec<(usize, &Measured, u64, drape_io::results::ImplicitRunInfo)> = measured
         .iter()
@@ -1483,19 +1517,20 @@ fn implicit_table(measured: &[Measured]) -> String {
     let mut md = String::from(
         "\nThe implicit rows' solver counts (summary.json `run.implicit`; seconds are wall time of the run's \
          pieces):\n\n\
-         | # | setting | increments | Newton | wasted Newton | cutbacks | contact-solve products | factorisation s (share) | assembly s | contact s |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n",
+         | # | setting | increments | Newton | wasted Newton | cutbacks | factorisations | solves with the factors | factorisation s (share) | assembly s | contact s |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for (i, m, steps, t) in rows {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} ({:.0} %) | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} ({:.0} %) | {} | {} |",
             i + 1,
             m.row.name,
             steps,
             t.newton_iterations,
             t.wasted_iterations,
             t.cutbacks,
+            t.factorisations,
             t.contact_iterations,
             cell(t.factor_s, 1),
             100.0 * t.factor_share,

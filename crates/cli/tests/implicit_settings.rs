@@ -105,6 +105,9 @@ fn a_run_ending_inside_a_tool_is_failed_with_its_results_kept() {
     .collect();
     let mut scene = drape_io::scene::Scene::from_file(&path, &sets).unwrap();
     scene.implicit.gap_tolerance = 1e8;
+    // The condensed solver stops at the gap tolerance; the active set
+    // holds its rows exactly and would not let the blank through.
+    scene.implicit.contact_solver = drape_time::ContactSolver::Condensed;
     let report = drape::run_scene(&scene, &out, &mut |_| drape::RunControl::Continue).unwrap();
     let s = &report.summary;
     let reason = s.reason.clone().unwrap_or_default();

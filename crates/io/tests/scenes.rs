@@ -741,7 +741,7 @@ fn the_membrane_tangent_reaches_the_implicit_settings_and_a_bad_one_is_named() {
 fn the_contact_solver_reaches_the_implicit_settings_and_a_bad_one_is_named() {
     use drape_time::ContactSolver;
     let scene = with_sets(GOOD, &[]).unwrap();
-    assert_eq!(scene.implicit.contact_solver, ContactSolver::Condensed);
+    assert_eq!(scene.implicit.contact_solver, ContactSolver::ActiveSet);
     for (value, choice) in [
         ("condensed", ContactSolver::Condensed),
         ("active_set", ContactSolver::ActiveSet),

@@ -194,6 +194,10 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "implicit/hemisphere-agreement-coarse with the active-set contact solver",
             "the explicit run, same tolerances",
         ),
+        "implicit/active-set-hemisphere-agreement" => (
+            "implicit/hemisphere-agreement with the active-set contact solver",
+            "the explicit run, same tolerances",
+        ),
         "implicit/hemisphere-shipped" => (
             "the shipped mass-scaled hemispheres by both drivers: same added mass, both complete; differences reported",
             "the explicit run (reported, not checked)",

@@ -56,10 +56,11 @@ impl From<MembraneTangentSpec> for MembraneTangentChoice {
 #[serde(rename_all = "snake_case")]
 pub enum ContactSolverSpec {
     /// The paper's condensed multiplier solve (the reference).
-    #[default]
     Condensed,
     /// Semi-smooth Newton: one active set and one saddle-point
-    /// factorisation per Newton iteration.
+    /// factorisation per Newton iteration (the default: see
+    /// [`drape_time::ContactSolver`]).
+    #[default]
     ActiveSet,
 }
 

@@ -15,11 +15,17 @@ pub enum ContactSolver {
     /// multipliers by preconditioned MPRGP, ~30 solves with the factors
     /// per iteration; the complementarity solved exactly every iteration.
     /// The reference.
-    #[default]
     Condensed,
     /// Semi-smooth Newton on the complementarity, one active set per
     /// iteration: one LDLᵀ of the saddle-point system [K̂ Cᵀ; C −εD] and
     /// a few solves with it (`drape_contact`'s `active_set` module).
+    ///
+    /// The default: the faster on three of the four shipped contact
+    /// scenes and on the work–precision bench's hemisphere rows, and it
+    /// passes the validation cases the condensed solver passes, at the
+    /// same tolerances (measurements: the scene reference, *The implicit
+    /// solver*).
+    #[default]
     ActiveSet,
 }
 

@@ -482,23 +482,14 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
         elements: ga.len(),
         ..RunComparisonSummary::default()
     };
-    let (mut sum, mut sum2) = (0.0, 0.0);
-    for (e, (x, y)) in ga.iter().zip(&b_deg).enumerate() {
-        let d = y - x;
-        if !d.is_finite() {
-            continue;
-        }
-        summary.compared += 1;
-        sum += d;
-        sum2 += d * d;
-        if d.abs() > summary.max_abs_difference_deg {
-            summary.max_abs_difference_deg = d.abs();
-            summary.max_difference_at = centroid0[e].into();
-        }
+    let stats = Differences::of(ga.iter().zip(&b_deg).map(|(x, y)| y - x).enumerate());
+    summary.compared = stats.compared;
+    summary.max_abs_difference_deg = stats.max_abs;
+    if let Some(e) = stats.max_at {
+        summary.max_difference_at = centroid0[e].into();
     }
-    let n = summary.compared.max(1) as f64;
-    summary.mean_difference_deg = sum / n;
-    summary.rms_difference_deg = (sum2 / n).sqrt();
+    summary.mean_difference_deg = stats.mean;
+    summary.rms_difference_deg = stats.rms;
     summary.compared_fraction = summary.compared as f64 / summary.elements.max(1) as f64;
 
     std::fs::create_dir_all(out).map_err(|source| ResultsError {
@@ -693,5 +684,46 @@ mod tests {
         assert_eq!(time.show(None), "—");
         // Only counts are marked.
         assert_eq!(rows.iter().filter(|m| m.count).count(), COUNTS.len());
+    }
+}
+
+/// The largest, mean and RMS of element differences, those that are not
+/// finite (an element B does not cover) left out.
+pub(crate) struct Differences {
+    pub compared: usize,
+    pub max_abs: f64,
+    /// The element of the largest (none when every difference is 0).
+    pub max_at: Option<usize>,
+    pub mean: f64,
+    pub rms: f64,
+}
+
+impl Differences {
+    /// Of (element, difference) pairs.
+    pub fn of(differences: impl Iterator<Item = (usize, f64)>) -> Self {
+        let mut d = Self {
+            compared: 0,
+            max_abs: 0.0,
+            max_at: None,
+            mean: 0.0,
+            rms: 0.0,
+        };
+        let (mut sum, mut sum2) = (0.0, 0.0);
+        for (e, x) in differences {
+            if !x.is_finite() {
+                continue;
+            }
+            d.compared += 1;
+            sum += x;
+            sum2 += x * x;
+            if x.abs() > d.max_abs {
+                d.max_abs = x.abs();
+                d.max_at = Some(e);
+            }
+        }
+        let n = d.compared.max(1) as f64;
+        d.mean = sum / n;
+        d.rms = (sum2 / n).sqrt();
+        d
     }
 }

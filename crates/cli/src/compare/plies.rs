@@ -176,23 +176,14 @@ impl PlyDifference {
             elements: cells.len(),
             ..PlyDifference::default()
         };
-        let (mut sum, mut sum2) = (0.0, 0.0);
-        for &e in cells {
-            let x = b_deg[e] - ga[e];
-            if !x.is_finite() {
-                continue;
-            }
-            d.compared += 1;
-            sum += x;
-            sum2 += x * x;
-            if x.abs() > d.max_abs_difference_deg {
-                d.max_abs_difference_deg = x.abs();
-                d.max_difference_at = centroid0[e].into();
-            }
+        let stats = super::Differences::of(cells.iter().map(|&e| (e, b_deg[e] - ga[e])));
+        d.compared = stats.compared;
+        d.max_abs_difference_deg = stats.max_abs;
+        if let Some(e) = stats.max_at {
+            d.max_difference_at = centroid0[e].into();
         }
-        let n = d.compared.max(1) as f64;
-        d.mean_difference_deg = sum / n;
-        d.rms_difference_deg = (sum2 / n).sqrt();
+        d.mean_difference_deg = stats.mean;
+        d.rms_difference_deg = stats.rms;
         d
     }
 }

@@ -662,31 +662,6 @@ fn carried(
         .collect())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn step_counts_show_as_integers_and_measures_with_decimals() {
-        let mut a = Summary::default();
-        a.run.steps = 52794;
-        a.time = 0.25;
-        let mut b = a.clone();
-        b.run.steps = 52800;
-        let rows = measures(&a, &b);
-        let steps = rows.iter().find(|m| m.name == "steps").unwrap();
-        assert!(steps.count);
-        assert_eq!(steps.show(steps.a), "52794");
-        assert_eq!(steps.show(steps.a.zip(steps.b).map(|(a, b)| b - a)), "6");
-        let time = rows.iter().find(|m| m.name == "time reached").unwrap();
-        assert!(!time.count);
-        assert_eq!(time.show(time.a), "0.25000");
-        assert_eq!(time.show(None), "—");
-        // Only counts are marked.
-        assert_eq!(rows.iter().filter(|m| m.count).count(), COUNTS.len());
-    }
-}
-
 /// The largest, mean and RMS of element differences, those that are not
 /// finite (an element B does not cover) left out.
 pub(crate) struct Differences {
@@ -725,5 +700,30 @@ impl Differences {
         d.mean = sum / n;
         d.rms = (sum2 / n).sqrt();
         d
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn step_counts_show_as_integers_and_measures_with_decimals() {
+        let mut a = Summary::default();
+        a.run.steps = 52794;
+        a.time = 0.25;
+        let mut b = a.clone();
+        b.run.steps = 52800;
+        let rows = measures(&a, &b);
+        let steps = rows.iter().find(|m| m.name == "steps").unwrap();
+        assert!(steps.count);
+        assert_eq!(steps.show(steps.a), "52794");
+        assert_eq!(steps.show(steps.a.zip(steps.b).map(|(a, b)| b - a)), "6");
+        let time = rows.iter().find(|m| m.name == "time reached").unwrap();
+        assert!(!time.count);
+        assert_eq!(time.show(time.a), "0.25000");
+        assert_eq!(time.show(None), "—");
+        // Only counts are marked.
+        assert_eq!(rows.iter().filter(|m| m.count).count(), COUNTS.len());
     }
 }

@@ -253,8 +253,8 @@ pub struct PlyStep {
     pub active: usize,
     /// Gauss–Seidel sweeps.
     pub sweeps: usize,
-    /// Largest linearised gap violation left (mm): at most
-    /// [`NORMAL_TOLERANCE`] of the largest at the start unless the sweeps
+    /// Largest linearised gap violation left (mm): at most 1e-6
+    /// (`NORMAL_TOLERANCE`) of the largest at the start unless the sweeps
     /// ran out.
     pub residual: f64,
 }
@@ -748,7 +748,7 @@ impl PlyContact {
     /// applied already), solved together: projected Gauss–Seidel on each
     /// constraint's tangential force, the force that stops the relative
     /// sliding over the step projected on the disc of radius μλ, until no
-    /// force changes by more than [`FRICTION_TOLERANCE`] of the largest
+    /// force changes by more than 1e-6 (`FRICTION_TOLERANCE`) of the largest
     /// cap. Together,
     /// because a ply that sticks to the one below drags it on the tool:
     /// friction solved one contact after the other would let a sticking

@@ -853,8 +853,9 @@ fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
     match checkpoint.scene_file_matches() {
         Some(true) => {}
         Some(false) => eprintln!(
-            "note: {file} has changed since the run started; the run continues with the scene \
-             it started with (kept in the checkpoint). Start a new run to use the edited scene."
+            "note: {file} has changed since the run started (the file was edited, or this \
+             drape reads it with other defaults); the run continues with the scene it started \
+             with (kept in the checkpoint). Start a new run to use the scene as it reads now."
         ),
         None => eprintln!(
             "note: {file} cannot be read as it was (moved, deleted or broken); the run continues \

@@ -1140,6 +1140,34 @@ fn inverse_mass(mass: &[f64], movable: &[bool], i: u32) -> f64 {
 #[cfg(test)]
 mod side_tests;
 
+/// Fixtures of the ply-contact tests.
+#[cfg(test)]
+pub(crate) mod fixtures {
+    use super::{PlyLayer, Support};
+    use nalgebra::Vector3;
+
+    /// A ply of the two triangles of the quad `first`..`first + 3`.
+    pub fn square_layer(first: u32, half_thickness: f64) -> PlyLayer {
+        PlyLayer {
+            first_node: first,
+            node_count: 4,
+            faces: vec![[first, first + 1, first + 2], [first, first + 2, first + 3]],
+            half_thickness,
+        }
+    }
+
+    /// Nodes 0..4 held on a tool below them (normal +z).
+    pub fn bottom_supports() -> Vec<Support> {
+        (0..4)
+            .map(|n| Support {
+                node: n,
+                normal: Vector3::z(),
+                mu: 0.0,
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1152,12 +1180,7 @@ mod tests {
         };
         let mut x = sq(0.0).to_vec();
         x.extend(sq(dz));
-        let layer = |first: u32| PlyLayer {
-            first_node: first,
-            node_count: 4,
-            faces: vec![[first, first + 1, first + 2], [first, first + 2, first + 3]],
-            half_thickness: 0.5,
-        };
+        let layer = |first| fixtures::square_layer(first, 0.5);
         let contact = PlyContact::new(
             vec![layer(0), layer(4)],
             &[PlyInterface {
@@ -1345,13 +1368,7 @@ mod tests {
         let mut v = vec![Vector3::zeros(); 8];
         let mass = vec![1.0; 8];
         let mut force = vec![Vector3::zeros(); 8];
-        let mut supports: Vec<Support> = (0..4)
-            .map(|n| Support {
-                node: n,
-                normal: Vector3::z(),
-                mu: 0.0,
-            })
-            .collect();
+        let mut supports = fixtures::bottom_supports();
         contact.normal(
             &mut x,
             &mut v,
@@ -1386,12 +1403,7 @@ mod tests {
             [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
         };
         let mut x: Vec<Vector3<f64>> = [0.0, 0.9, 1.8].iter().flat_map(|&z| sq(z)).collect();
-        let layer = |first: u32| PlyLayer {
-            first_node: first,
-            node_count: 4,
-            faces: vec![[first, first + 1, first + 2], [first, first + 2, first + 3]],
-            half_thickness: 0.5,
-        };
+        let layer = |first| fixtures::square_layer(first, 0.5);
         let interface = |lower, upper| PlyInterface {
             lower,
             upper,
@@ -1407,13 +1419,7 @@ mod tests {
         let mut mass = vec![1.0; 12];
         mass[4..8].fill(2.0);
         let mut force = vec![Vector3::zeros(); 12];
-        let mut supports: Vec<Support> = (0..4)
-            .map(|n| Support {
-                node: n,
-                normal: Vector3::z(),
-                mu: 0.0,
-            })
-            .collect();
+        let mut supports = fixtures::bottom_supports();
         let step = contact.normal(
             &mut x,
             &mut v,

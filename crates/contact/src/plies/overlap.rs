@@ -169,12 +169,7 @@ mod tests {
     /// A layer of the two triangles of the quad `first`..`first + 3`,
     /// 0.15 mm half thick.
     fn layer(first: u32) -> PlyLayer {
-        PlyLayer {
-            first_node: first,
-            node_count: 4,
-            faces: vec![[first, first + 1, first + 2], [first, first + 2, first + 3]],
-            half_thickness: 0.15,
-        }
+        crate::plies::fixtures::square_layer(first, 0.15)
     }
 
     /// The lower ply a 10 mm square in z = 0 (normal +z), the upper one

@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 
-use super::{PlyContact, PlyInterface, PlyLayer};
+use super::{PlyContact, PlyInterface};
 
 /// The lower ply a fixed 10 mm square in z = 0, the upper one a 4 mm
 /// wide quad resting on it (z = 0.3: the two 0.15 mm half thicknesses)
@@ -20,12 +20,7 @@ fn edge(hang: f64) -> (Vec<Vector3<f64>>, PlyContact) {
         Vector3::new(10.2, 7.0, hang),
         Vector3::new(6.0, 7.0, 0.3),
     ]);
-    let layer = |first: u32| PlyLayer {
-        first_node: first,
-        node_count: 4,
-        faces: vec![[first, first + 1, first + 2], [first, first + 2, first + 3]],
-        half_thickness: 0.15,
-    };
+    let layer = |first| super::fixtures::square_layer(first, 0.15);
     let interface = PlyInterface {
         lower: 0,
         upper: 1,

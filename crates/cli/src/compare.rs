@@ -497,23 +497,7 @@ pub fn compare_runs(a: &Path, b: &Path, out: &Path) -> Result<RunComparison, Com
         source,
     })?;
     clear_comparison(out, &[])?;
-    if summary.compared == 0 {
-        // "0 of N compared, largest difference 0°" would read as agreement.
-        let reason = if same {
-            format!(
-                "no element compared: the two runs share their mesh, but none of its {} \
-                 elements has a finite shear in both",
-                summary.elements
-            )
-        } else {
-            format!(
-                "no element compared: none of A's {} elements lies within half an element of \
-                 B's blank ({} elements): the two blanks do not overlap (placed apart, or not \
-                 the same part)",
-                summary.elements,
-                gb.len()
-            )
-        };
+    if let Some(reason) = nothing_compared(&summary, same, gb.len()) {
         summary.status = "failed".to_owned();
         summary.reason = Some(reason.clone());
         write_json(out, &summary)?;
@@ -662,6 +646,39 @@ fn carried(
         .collect())
 }
 
+/// Why a comparison compared nothing, for the whole or for a ply of a
+/// laminate (`b_elements`: B's element count): "0 of N compared, largest
+/// difference 0°" would read as agreement.
+fn nothing_compared(
+    summary: &RunComparisonSummary,
+    same_mesh: bool,
+    b_elements: usize,
+) -> Option<String> {
+    if summary.compared > 0 {
+        return summary.plies.iter().find(|p| p.compared == 0).map(|p| {
+            format!(
+                "no element of ply `{}` compared: none of its {} elements in A has a finite \
+                 shear in both runs and lies within half an element of B's ply `{}`",
+                p.name, p.elements, p.name
+            )
+        });
+    }
+    Some(if same_mesh {
+        format!(
+            "no element compared: the two runs share their mesh, but none of its {} elements \
+             has a finite shear in both",
+            summary.elements
+        )
+    } else {
+        format!(
+            "no element compared: none of A's {} elements lies within half an element of B's \
+             blank ({b_elements} elements): the two blanks do not overlap (placed apart, or not \
+             the same part)",
+            summary.elements
+        )
+    })
+}
+
 /// The largest, mean and RMS of element differences, those that are not
 /// finite (an element B does not cover) left out.
 pub(crate) struct Differences {
@@ -706,6 +723,31 @@ impl Differences {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ply_with_nothing_compared_fails_the_comparison_naming_it() {
+        let ply = |name: &str, compared| plies::PlyDifference {
+            name: name.to_owned(),
+            elements: 16,
+            compared,
+            ..plies::PlyDifference::default()
+        };
+        let mut summary = RunComparisonSummary {
+            elements: 32,
+            compared: 16,
+            plies: vec![ply("p0", 16), ply("p45", 0)],
+            ..RunComparisonSummary::default()
+        };
+        let reason = nothing_compared(&summary, true, 32).expect("a ply compared nothing");
+        assert!(reason.contains("ply `p45`"), "{reason}");
+        summary.plies[1].compared = 16;
+        summary.compared = 32;
+        assert_eq!(nothing_compared(&summary, true, 32), None);
+        summary.plies.clear();
+        summary.compared = 0;
+        let reason = nothing_compared(&summary, false, 20).expect("nothing compared");
+        assert!(reason.contains("(20 elements)"), "{reason}");
+    }
 
     #[test]
     fn step_counts_show_as_integers_and_measures_with_decimals() {

@@ -60,7 +60,7 @@ impl FaceBound {
         let scale = v.iter().map(|v| v.amax()).fold(0.0, f64::max);
         // A sliver's normal is lost in round-off (its direction errs by
         // ~1e-16·|e|²/|n|): no bound. At 1e-4 the error is 1e-12 rad.
-        if !(n2 > 1e-8 * longest * longest) {
+        if n2.is_nan() || n2 <= 1e-8 * longest * longest {
             return Self {
                 v,
                 scale,
@@ -153,11 +153,11 @@ impl Master<'_> {
         if let Some(k) = warm {
             visit(k, &mut best);
         }
-        for k in 0..cand.len() {
+        for (k, &f) in cand.iter().enumerate() {
             if Some(k) == warm {
                 continue;
             }
-            let bound = &self.bounds[cand[k] as usize];
+            let bound = &self.bounds[f as usize];
             let reach = best.sqrt() + BOUND_SLACK * (bound.scale + p_scale);
             if bound.distance_squared(p) > reach * reach {
                 continue;

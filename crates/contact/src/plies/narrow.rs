@@ -347,6 +347,47 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(200))]
 
+        /// The bound never exceeds the distance to the triangle (beyond
+        /// round-off, 1e-12 of the squared distance), and is the distance
+        /// where the node is over the face (then only the height counts)
+        /// or beside one edge's middle (height and that edge's distance):
+        /// loose nowhere a smooth ply's neighbour faces are.
+        #[test]
+        fn the_bound_is_below_the_distance_and_tight_over_the_face(seed in any::<u64>()) {
+            let mut rng = Rng(seed | 1);
+            let mut point = |s: f64| Vector3::new(s * (rng.next() - 0.5), s * (rng.next() - 0.5), s * (rng.next() - 0.5));
+            let v = [point(20.0), point(20.0), point(20.0)];
+            let bound = FaceBound::of(v);
+            let distance = |p: &Vector3<f64>| (p - closest_on_triangle(p, &v[0], &v[1], &v[2]).0).norm_squared();
+            for _ in 0..50 {
+                let p = point(60.0);
+                let d = distance(&p);
+                prop_assert!(bound.distance_squared(&p) <= d * (1.0 + 1e-12) + 1e-24, "{} > {d}", bound.distance_squared(&p));
+            }
+            if bound.inv_n2 > 0.0 {
+                let n = bound.n.normalize();
+                let mut w = [rng.next(), rng.next(), rng.next()];
+                let sum: f64 = w.iter().sum();
+                w.iter_mut().for_each(|w| *w /= sum);
+                let h = 5.0 * (rng.next() - 0.5);
+                // Over the face.
+                let over = v[0] * w[0] + v[1] * w[1] + v[2] * w[2] + n * h;
+                let d = distance(&over);
+                prop_assert!((bound.distance_squared(&over) - d).abs() <= 1e-9 * (1.0 + d), "over: {} against {d}", bound.distance_squared(&over));
+                // Beside the middle of edge 0–1, out in the plane.
+                let mid = (v[0] + v[1]) * 0.5;
+                let out = (v[1] - v[0]).cross(&n).normalize();
+                let e = 3.0 * rng.next();
+                let beside = mid + out * e + n * h;
+                let d = distance(&beside);
+                // Only where that edge's middle is the closest point (an
+                // obtuse corner can put another edge nearer).
+                if ((d - e * e - h * h) / (1.0 + d)).abs() < 1e-9 {
+                    prop_assert!((bound.distance_squared(&beside) - d).abs() <= 1e-9 * (1.0 + d), "beside: {} against {d}", bound.distance_squared(&beside));
+                }
+            }
+        }
+
         /// On a wavy, jittered grid of triangles (a ply's mid-surface,
         /// some of it folded steeply), nodes above, below and beside it,
         /// some exactly over a vertex (where several faces tie), with

@@ -46,6 +46,8 @@
 //! faces grown by the reach; each slave node lists the faces whose grown
 //! box holds it. The lists are rebuilt when a node of either ply has moved
 //! half the margin, so a stack pays only near where plies meet.
+//! Narrow phase ([`narrow`]): each slave node's closest candidate face,
+//! found without projecting the node on the faces a bound rules out.
 //!
 //! What it is not: tool contact ([`crate::ExplicitContact`] holds both and
 //! calls this pass), nor an implicit ply contact.

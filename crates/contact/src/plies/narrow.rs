@@ -10,8 +10,13 @@
 //! less work, to the same bits: last step's face is projected first (a
 //! node moves a small part of a face in a step, so it is usually the
 //! closest again), and a candidate whose lower bound ([`FaceBound`]) is
-//! farther than the best so far is not projected at all. Most nodes of a stack then project one or
-//! two faces of their four to eight candidates.
+//! farther than the best so far is not projected at all. Where the
+//! plies' lattices coincide (in the flat blank a ±45 ply's nodes lie on the
+//! 0/90 ply's vertices and diagonals) a node is as far from every face
+//! round its vertex or edge, and those are all projected: the earliest
+//! must win, to the bit. Over the first 0.3 s of the four-ply hemisphere
+//! (12 × 12 cells) the search took about a quarter less time than
+//! projecting on every candidate.
 //!
 //! Not for: the candidate lists (the broad phase, [`super::PlyContact`]'s
 //! refresh), the solves, or the overlap measure ([`super::overlap`]).

@@ -46,6 +46,8 @@
 //! faces grown by the reach; each slave node lists the faces whose grown
 //! box holds it. The lists are rebuilt when a node of either ply has moved
 //! half the margin, so a stack pays only near where plies meet.
+//! Narrow phase ([`narrow`]): each slave node's closest candidate face,
+//! found without projecting the node on the faces a bound rules out.
 //!
 //! What it is not: tool contact ([`crate::ExplicitContact`] holds both and
 //! calls this pass), nor an implicit ply contact.
@@ -53,7 +55,9 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+mod narrow;
 mod overlap;
+use narrow::{FaceBound, Master, closest_on_triangle, face_bounds};
 pub use overlap::PlyOverlap;
 
 /// Sweeps allowed to the friction solve: a stack sticking on a tool
@@ -167,6 +171,8 @@ struct Hit {
     normal: Vector3<f64>,
     nodes: [u32; 3],
     w: [f64; 3],
+    /// The face (index into the master's faces; `u32::MAX`: none).
+    face: u32,
     found: bool,
     /// The node is inside the face's ply on the far side of its
     /// mid-surface from its own (the stacking side, [`Search::side`]):
@@ -181,6 +187,7 @@ impl Hit {
         normal: Vector3::new(0.0, 0.0, 0.0),
         nodes: [0; 3],
         w: [0.0; 3],
+        face: u32::MAX,
         found: false,
         recover: false,
     };
@@ -289,6 +296,9 @@ pub struct PlyContact {
     /// Per layer and face, which of its features lie on the ply's free
     /// outline: bits 0–2 the edges ab, bc, ca, bits 3–5 the vertices.
     outline: Vec<Vec<u8>>,
+    /// Per layer and face, its bound at this step's positions (for the
+    /// narrow phase, [`narrow`]).
+    face_bound: Vec<Vec<FaceBound>>,
     margin: f64,
     tolerance: f64,
     max_sweeps: usize,
@@ -353,8 +363,13 @@ impl PlyContact {
             }
         }
         let outline = layers.iter().map(|l| outline_of(&l.faces)).collect();
+        let face_bound = layers
+            .iter()
+            .map(|l| vec![FaceBound::default(); l.faces.len()])
+            .collect();
         Self {
             outline,
+            face_bound,
             layers,
             searches,
             margin,
@@ -436,91 +451,35 @@ impl PlyContact {
         self.refresh(x);
         let inv = |i: u32| inverse_mass(mass, movable, i);
         let layers = &self.layers;
+        // The bounds of the faces of every ply (each is some search's
+        // master).
+        self.face_bound
+            .par_iter_mut()
+            .zip(layers)
+            .for_each(|(bounds, l)| face_bounds(&l.faces, x, bounds));
         for s in self.searches.iter_mut() {
             let slave = &layers[s.slave];
-            let faces = &layers[s.master].faces;
-            let outline = &self.outline[s.master];
+            let master = Master {
+                faces: &layers[s.master].faces,
+                outline: &self.outline[s.master],
+                bounds: &self.face_bound[s.master],
+                side: s.side,
+                offset: s.offset,
+                reach: s.offset + self.margin,
+            };
             let (ptr, cand) = (&s.cand_ptr, &s.cand);
-            let (side, offset, reach) = (s.side, s.offset, s.offset + self.margin);
             s.hits
                 .par_iter_mut()
                 .enumerate()
                 .with_min_len(NODES_PER_TASK)
                 .for_each(|(local, hit)| {
-                    *hit = Hit::NONE;
                     let range = ptr[local] as usize..ptr[local + 1] as usize;
-                    if range.is_empty() {
-                        return;
-                    }
-                    let p = x[slave.first_node as usize + local];
-                    let mut best = f64::INFINITY;
-                    for &f in &cand[range] {
-                        let tri = faces[f as usize];
-                        let [a, b, c] = tri.map(|n| x[n as usize]);
-                        let (q, w) = closest_on_triangle(&p, &a, &b, &c);
-                        let d = p - q;
-                        let dist = d.norm_squared();
-                        if dist >= best {
-                            continue;
-                        }
-                        let nf = (b - a).cross(&(c - a));
-                        let len = nf.norm();
-                        if len == 0.0 || dist == 0.0 {
-                            continue;
-                        }
-                        let up = nf * (side / len);
-                        let along = d.dot(&up);
-                        // A node beside the face (past the ply's free
-                        // edge, its offset mostly sideways) is not on it.
-                        if (d - up * along).norm_squared() > offset * offset {
-                            continue;
-                        }
-                        let outline_hit = on_outline(outline[f as usize], &w);
-                        let r = dist.sqrt();
-                        let (normal, gap, recover) = if along > 0.0 {
-                            // The distance to the closest point and its
-                            // direction: continuous across the kinks
-                            // between faces (a face's own normal would
-                            // turn by the kink as the node passes a vertex
-                            // and push it each time), the face's normal
-                            // inside a face. On the ply's free outline the
-                            // face's normal: the ply ends there square,
-                            // not rounded, so a ply sliding past the edge
-                            // of the one below is not pushed sideways.
-                            if outline_hit {
-                                (up, along - offset, false)
-                            } else {
-                                (d / r, r - offset, false)
-                            }
-                        } else if outline_hit {
-                            // Behind the square end of the ply: not in it.
-                            continue;
-                        } else if r < offset {
-                            // Inside the ply beyond its mid-surface: it
-                            // came round the ply's free edge or a fold
-                            // (no step moves a node that deep), and goes
-                            // back out on its own side, not the nearer
-                            // one, which would put it through the ply.
-                            (up, along - offset, true)
-                        } else {
-                            // Clear of the ply on its far side: another
-                            // part of it (a fold), not this one's
-                            // neighbour.
-                            continue;
-                        };
-                        if gap > reach {
-                            continue;
-                        }
-                        best = dist;
-                        *hit = Hit {
-                            gap,
-                            normal,
-                            nodes: tri,
-                            w,
-                            found: true,
-                            recover,
-                        };
-                    }
+                    *hit = if range.is_empty() {
+                        Hit::NONE
+                    } else {
+                        let p = x[slave.first_node as usize + local];
+                        master.closest(&p, x, &cand[range], hit.face)
+                    };
                 });
         }
         for (k, s) in self.searches.iter().enumerate() {
@@ -1077,54 +1036,6 @@ fn build_candidates(s: &mut Search, layers: &[PlyLayer], x: &[Vector3<f64>], rea
         }
         s.cand_ptr[local + 1] = s.cand.len() as u32;
     }
-}
-
-/// The closest point of triangle abc to p and its barycentric weights
-/// (Ericson, Real-Time Collision Detection, §5.1.5).
-fn closest_on_triangle(
-    p: &Vector3<f64>,
-    a: &Vector3<f64>,
-    b: &Vector3<f64>,
-    c: &Vector3<f64>,
-) -> (Vector3<f64>, [f64; 3]) {
-    let ab = b - a;
-    let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(&ap);
-    let d2 = ac.dot(&ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return (*a, [1.0, 0.0, 0.0]);
-    }
-    let bp = p - b;
-    let d3 = ab.dot(&bp);
-    let d4 = ac.dot(&bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return (*b, [0.0, 1.0, 0.0]);
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let t = d1 / (d1 - d3);
-        return (a + ab * t, [1.0 - t, t, 0.0]);
-    }
-    let cp = p - c;
-    let d5 = ab.dot(&cp);
-    let d6 = ac.dot(&cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return (*c, [0.0, 0.0, 1.0]);
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let t = d2 / (d2 - d6);
-        return (a + ac * t, [1.0 - t, 0.0, t]);
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (b + (c - b) * t, [0.0, 1.0 - t, t]);
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let (s, t) = (vb * denom, vc * denom);
-    (a + ab * s + ac * t, [1.0 - s - t, s, t])
 }
 
 /// A node's inverse mass, 0 where its motion is prescribed (it takes no

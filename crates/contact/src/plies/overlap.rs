@@ -177,11 +177,12 @@ fn node_depth(d: Vector3<f64>, up: Vector3<f64>, offset: f64, w: [f64; 3], bits:
 }
 
 /// How deep a node is through a face's ply when that face is the
-/// nearest to take it, from the same arguments as [`node_depth`]: `offset
-/// + |d|` when it is behind the mid-surface, however far (behind an edge
-/// or vertex the ply's faces share counts, as in the narrow phase's
-/// rules), 0 in front of it; None when the face does not take the node
-/// (beside it, or behind its square end), so that a farther face decides.
+/// nearest to take it, from the same arguments as [`node_depth`]:
+/// `offset + |d|` when it is behind the mid-surface, however far (behind
+/// an edge or vertex the ply's faces share counts, as in the narrow
+/// phase's rules), 0 in front of it; None when the face does not take the
+/// node (beside it, or behind its square end), so that a farther face
+/// decides.
 fn behind_depth(
     d: Vector3<f64>,
     up: Vector3<f64>,

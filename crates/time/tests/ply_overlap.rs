@@ -67,6 +67,58 @@ fn pushed(push: f64) -> (Model, u32) {
     (model, centre)
 }
 
+/// Two glass plies of 10 mm quads side by side, the bottom one 40 mm
+/// square, the top one 40 × 30 mm (its corners off the bottom one's
+/// outline when it is under it), the bottom one
+/// held and the top one 2·h below it (past the offset h: the two are not
+/// in contact) and 2.25 mm to its right, moved 10 mm to the left over
+/// 0.01 s, so that its left edge slides under the bottom ply's right
+/// edge, 0.25 mm under it at the check of 2.5 ms.
+fn slid_under() -> Model {
+    let material = Material::preset("glass-serge-4x3").expect("preset");
+    let h = material.thickness;
+    let ply = |name: &str, center: Vector3<f64>, rows: usize| {
+        let blank = RectangleBlank {
+            width: 40.0,
+            height: 10.0 * rows as f64,
+            center,
+            orientation_deg: 0.0,
+            element: ElementKind::Quad,
+            meshing: Meshing::Cells([4, rows]),
+            fibres: FibreRepresentation::Embedded,
+        };
+        PlyModel {
+            model: Model::from_mesh(
+                &blank.mesh().expect("mesh"),
+                &material,
+                FibreRepresentation::Embedded,
+            )
+            .expect("model"),
+            name: name.into(),
+            thickness: h,
+            orientation_deg: 0.0,
+            friction_below: 0.0,
+        }
+    };
+    // The stack lifts the top ply by h.
+    let mut model = Model::stack(vec![
+        ply("bottom", Vector3::new(0.0, 0.0, 0.5 * h), 4),
+        ply("top", Vector3::new(42.25, 0.0, -2.5 * h), 3),
+    ])
+    .expect("stack");
+    let bottom: Vec<u32> = model.plies[0].nodes.clone().collect();
+    model.boundary.push(BoundaryCondition::fixed(bottom));
+    model.boundary.push(BoundaryCondition {
+        nodes: model.plies[1].nodes.clone().collect(),
+        components: [true, true, true],
+        motion: Motion::Displacement {
+            value: Vector3::new(-10.0, 0.0, 0.0),
+            amplitude: Amplitude::Ramp { duration: 0.01 },
+        },
+    });
+    model
+}
+
 /// The times of the published frames.
 struct Times(Vec<f64>);
 impl Observer for Times {
@@ -129,6 +181,49 @@ fn a_ply_pushed_through_its_neighbour_stops_the_run_naming_it() {
     // Frames 0 and 0.5 ms were published; the state is the last of them.
     assert_eq!(times.0.len(), 2, "{:?}", times.0);
     assert_eq!(state.time, times.0[1]);
+}
+
+#[test]
+fn a_free_edge_slid_under_its_neighbour_stops_the_run() {
+    // How the four-ply hemisphere's flapping free edges go through their
+    // neighbours (a `m45` corner node 1.07 mm behind `p90`'s corner face
+    // at t = 0.28 s, its own neighbours above it): from beside the
+    // neighbour's free edge, where the contact does not take it, to behind
+    // its face by more than the offset, which the check took for a fold
+    // and let the run complete.
+    let h = Material::preset("glass-serge-4x3").unwrap().thickness;
+    let model = slid_under();
+    let mut state = model.initial_state();
+    let mut times = Times(Vec::new());
+    let mut driver = Explicit::new(&model, settings()).expect("driver");
+    let dt = driver.stable_time_step(&model.x0);
+    let error = driver.run(&mut state, &mut times).expect_err("stopped");
+    let RunError::PlyOverlap {
+        time,
+        overlap,
+        ref ply,
+        ref into,
+        node,
+        at,
+        ..
+    } = error
+    else {
+        panic!("{error}");
+    };
+    assert_eq!((ply.as_str(), into.as_str()), ("top", "bottom"));
+    // A node of the top ply's left edge (x = 22.25 at the start), at the
+    // first check after the edge passes x = 20 at 2.25 ms.
+    assert!((model.x0[node][0] - 22.25).abs() < 1e-9, "{node}");
+    assert!((0.0025..0.0025 + 1.01 * dt).contains(&time), "{time}");
+    assert!((at[0] - (22.25 - 1000.0 * time)).abs() < 1e-9, "{at:?}");
+    // The offset h and the 2·h behind the bottom's mid-surface.
+    assert!((overlap - 3.0 * h).abs() < 1e-9 * h, "{overlap}");
+    assert!((at[2] + 1.5 * h).abs() < 1e-9, "{at:?}");
+    let message = error.to_string();
+    for word in ["`top`", "inside ply `bottom`"] {
+        assert!(message.contains(word), "{message}");
+    }
+    assert_eq!(state.time, *times.0.last().expect("frames"));
 }
 
 /// A profile clock that advances by a microsecond at each reading: every

@@ -16,7 +16,16 @@
 //! - `offset + |d|` when it is behind the mid-surface with its projection
 //!   inside the face: through the ply (the narrow phase puts such a node
 //!   back out on its stacking side, so this is what a node left there by
-//!   the last step shows).
+//!   the last step shows);
+//! - `offset + |d|` as well when it is behind the nearest face that takes
+//!   it, however far: through the ply. A node behind a face by more than
+//!   the offset with a nearer face in front of it is over a fold of the
+//!   ply (that face is the folded-back layer), not through it. The first
+//!   measure left every node more than the offset behind as a fold, and
+//!   so let the four-ply hemisphere (24 × 24 cells, its ±45 plies at
+//!   17 × 17) end "completed" with flapping free edges through their
+//!   neighbours, a `m45` corner node 1.07 mm behind `p90`'s corner face
+//!   at t = 0.28 s, its own neighbours 2–6 mm above it.
 //!
 //! A node beside the ply (more than the offset sideways of the closest
 //! point), or behind an edge or vertex, is not inside it: the first
@@ -63,6 +72,10 @@ impl PlyContact {
             let p = x[node as usize];
             let range = s.cand_ptr[local] as usize..s.cand_ptr[local + 1] as usize;
             let mut depth: f64 = 0.0;
+            // The nearest face that takes the node, and how deep the node
+            // is behind it (0 when in front of it).
+            let mut nearest = f64::INFINITY;
+            let mut through: f64 = 0.0;
             for &f in &s.cand[range] {
                 let [a, b, c] = faces[f as usize].map(|n| x[n as usize]);
                 let nf = (b - a).cross(&(c - a));
@@ -71,14 +84,16 @@ impl PlyContact {
                     continue;
                 }
                 let (q, w) = closest_on_triangle(&p, &a, &b, &c);
-                depth = depth.max(node_depth(
-                    p - q,
-                    nf * (s.side / len),
-                    s.offset,
-                    w,
-                    outline[f as usize],
-                ));
+                let (d, up, bits) = (p - q, nf * (s.side / len), outline[f as usize]);
+                depth = depth.max(node_depth(d, up, s.offset, w, bits));
+                if let Some(t) = behind_depth(d, up, s.offset, w, bits)
+                    && d.norm_squared() < nearest
+                {
+                    nearest = d.norm_squared();
+                    through = t;
+                }
             }
+            let depth = depth.max(through);
             if depth > 0.0 && worst.is_none_or(|w| depth > w.depth) {
                 worst = Some(PlyOverlap {
                     depth,
@@ -161,6 +176,32 @@ fn node_depth(d: Vector3<f64>, up: Vector3<f64>, offset: f64, w: [f64; 3], bits:
     depth.max(0.0)
 }
 
+/// How deep a node is through a face's ply when that face is the
+/// nearest to take it, from the same arguments as [`node_depth`]:
+/// `offset + |d|` when it is behind the mid-surface, however far (behind
+/// an edge or vertex the ply's faces share counts, as in the narrow
+/// phase's rules), 0 in front of it; None when the face does not take the
+/// node (beside it, or behind its square end), so that a farther face
+/// decides.
+fn behind_depth(
+    d: Vector3<f64>,
+    up: Vector3<f64>,
+    offset: f64,
+    w: [f64; 3],
+    bits: u8,
+) -> Option<f64> {
+    let along = d.dot(&up);
+    if (d - up * along).norm_squared() > offset * offset {
+        None
+    } else if along > 0.0 {
+        Some(0.0)
+    } else if on_outline(bits, &w) {
+        None
+    } else {
+        Some(offset + d.norm())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -235,9 +276,10 @@ mod tests {
             (0.1, 0.2),
             (-0.1, 0.4),
             (-0.25, 0.55),
-            // Beyond the offset behind: another part of the ply (a fold),
-            // not this one's neighbour.
-            (-0.35, 0.0),
+            // Beyond the offset behind, the lower ply's faces the nearest:
+            // through it, however far.
+            (-0.35, 0.65),
+            (-1.0, 1.3),
         ] {
             let (x, mut c) = contact(flat(z));
             let found = c.record_overlap(&x).map_or(0.0, |o| o.depth);
@@ -252,6 +294,67 @@ mod tests {
         let (y, _) = contact(flat(0.4));
         assert_eq!(c.record_overlap(&y), None);
         assert!((c.overlap_peaks()[0] - 0.2).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_flapping_edge_node_behind_its_neighbour_is_through_it() {
+        // The four-ply hemisphere at t = 0.28 s (24 × 24 cells, ±45 plies
+        // at 17 × 17): a corner node of `m45` 1.07 mm behind the
+        // mid-surface of `p90`'s corner face, its neighbours 2–6 mm above
+        // it. The first measure took every node more than the offset
+        // behind a face for a fold and reported nothing.
+        let mut upper = flat(4.0);
+        upper[0].z = 2.0;
+        upper[2].z = 6.0;
+        upper[3].z = -1.07;
+        let (x, mut c) = contact(upper);
+        let o = c.record_overlap(&x).expect("through");
+        assert!((o.depth - (0.3 + 1.07)).abs() < 1e-12, "{o:?}");
+        assert_eq!((o.ply, o.into, o.node), (1, 0, 7));
+        assert_eq!(o.position, x[7]);
+    }
+
+    #[test]
+    fn over_a_fold_the_nearest_layer_decides() {
+        // The lower ply folded twice under the upper one (a Z): layers in
+        // z = 0 (normal +z), −0.6 (folded back, normal −z) and −1.2. A
+        // node of the upper ply over the top layer is behind the middle
+        // one by more than the offset, which is not through the ply: the
+        // top layer, nearer, has it in front.
+        let square = |z: f64| {
+            [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]].map(|[a, b]| Vector3::new(a, b, z))
+        };
+        let mut x: Vec<Vector3<f64>> = [0.0, -0.6, -1.2].iter().flat_map(|&z| square(z)).collect();
+        let folded = PlyLayer {
+            first_node: 0,
+            node_count: 12,
+            faces: vec![
+                [0, 1, 2],
+                [0, 2, 3],
+                [4, 6, 5],
+                [4, 7, 6],
+                [8, 9, 10],
+                [8, 10, 11],
+            ],
+            half_thickness: 0.15,
+        };
+        let interface = PlyInterface {
+            lower: 0,
+            upper: 1,
+            friction: 0.0,
+        };
+        for (z, depth) in [(0.35, 0.0), (0.25, 0.05)] {
+            x.truncate(12);
+            x.extend(flat(z));
+            let mut c = PlyContact::new(
+                vec![folded.clone(), layer(12)],
+                &[interface],
+                vec![1.0; 16],
+                1.0,
+            );
+            let found = c.record_overlap(&x).map_or(0.0, |o| o.depth);
+            assert!((found - depth).abs() < 1e-12, "z = {z}: {found}");
+        }
     }
 
     #[test]

@@ -19,35 +19,43 @@ use drape_time::{
 };
 use nalgebra::Vector3;
 
+fn glass() -> Material {
+    Material::preset("glass-serge-4x3").expect("preset")
+}
+
+/// A glass ply 40 mm wide and `rows` 10 mm quads high, centred at
+/// `center`, with embedded fibres.
+fn glass_ply(name: &str, center: Vector3<f64>, rows: usize) -> PlyModel {
+    let material = glass();
+    let blank = RectangleBlank {
+        width: 40.0,
+        height: 10.0 * rows as f64,
+        center,
+        orientation_deg: 0.0,
+        element: ElementKind::Quad,
+        meshing: Meshing::Cells([4, rows]),
+        fibres: FibreRepresentation::Embedded,
+    };
+    PlyModel {
+        model: Model::from_mesh(
+            &blank.mesh().expect("mesh"),
+            &material,
+            FibreRepresentation::Embedded,
+        )
+        .expect("model"),
+        name: name.into(),
+        thickness: material.thickness,
+        orientation_deg: 0.0,
+        friction_below: 0.0,
+    }
+}
+
 /// Two 40 mm glass plies of 10 mm quads, the bottom one held, the top
 /// one's centre node moved down by `push` mm along a ramp over 0.01 s;
 /// the centre node.
 fn pushed(push: f64) -> (Model, u32) {
-    let material = Material::preset("glass-serge-4x3").expect("preset");
-    let h = material.thickness;
-    let ply = |name: &str| {
-        let blank = RectangleBlank {
-            width: 40.0,
-            height: 40.0,
-            center: Vector3::new(0.0, 0.0, 0.5 * h),
-            orientation_deg: 0.0,
-            element: ElementKind::Quad,
-            meshing: Meshing::Cells([4, 4]),
-            fibres: FibreRepresentation::Embedded,
-        };
-        PlyModel {
-            model: Model::from_mesh(
-                &blank.mesh().expect("mesh"),
-                &material,
-                FibreRepresentation::Embedded,
-            )
-            .expect("model"),
-            name: name.into(),
-            thickness: h,
-            orientation_deg: 0.0,
-            friction_below: 0.0,
-        }
-    };
+    let h = glass().thickness;
+    let ply = |name: &str| glass_ply(name, Vector3::new(0.0, 0.0, 0.5 * h), 4);
     let mut model = Model::stack(vec![ply("bottom"), ply("top")]).expect("stack");
     let bottom: Vec<u32> = model.plies[0].nodes.clone().collect();
     model.boundary.push(BoundaryCondition::fixed(bottom));
@@ -75,35 +83,11 @@ fn pushed(push: f64) -> (Model, u32) {
 /// 0.01 s, so that its left edge slides under the bottom ply's right
 /// edge, 0.25 mm under it at the check of 2.5 ms.
 fn slid_under() -> Model {
-    let material = Material::preset("glass-serge-4x3").expect("preset");
-    let h = material.thickness;
-    let ply = |name: &str, center: Vector3<f64>, rows: usize| {
-        let blank = RectangleBlank {
-            width: 40.0,
-            height: 10.0 * rows as f64,
-            center,
-            orientation_deg: 0.0,
-            element: ElementKind::Quad,
-            meshing: Meshing::Cells([4, rows]),
-            fibres: FibreRepresentation::Embedded,
-        };
-        PlyModel {
-            model: Model::from_mesh(
-                &blank.mesh().expect("mesh"),
-                &material,
-                FibreRepresentation::Embedded,
-            )
-            .expect("model"),
-            name: name.into(),
-            thickness: h,
-            orientation_deg: 0.0,
-            friction_below: 0.0,
-        }
-    };
+    let h = glass().thickness;
     // The stack lifts the top ply by h.
     let mut model = Model::stack(vec![
-        ply("bottom", Vector3::new(0.0, 0.0, 0.5 * h), 4),
-        ply("top", Vector3::new(42.25, 0.0, -2.5 * h), 3),
+        glass_ply("bottom", Vector3::new(0.0, 0.0, 0.5 * h), 4),
+        glass_ply("top", Vector3::new(42.25, 0.0, -2.5 * h), 3),
     ])
     .expect("stack");
     let bottom: Vec<u32> = model.plies[0].nodes.clone().collect();
@@ -137,7 +121,7 @@ fn settings() -> ExplicitSettings {
 
 #[test]
 fn a_ply_pushed_through_its_neighbour_stops_the_run_naming_it() {
-    let h = Material::preset("glass-serge-4x3").unwrap().thickness;
+    let h = glass().thickness;
     // The centre node's depth is 1.5·h·t/0.01: 0.075·h at the frame of
     // t = 0.5 ms, 0.15·h at the check of 1 ms, past the tolerance of a
     // tenth of the thickness (the quads' hundredth, 0.1 mm, is larger).
@@ -191,7 +175,7 @@ fn a_free_edge_slid_under_its_neighbour_stops_the_run() {
     // neighbour's free edge, where the contact does not take it, to behind
     // its face by more than the offset, which the check took for a fold
     // and let the run complete.
-    let h = Material::preset("glass-serge-4x3").unwrap().thickness;
+    let h = glass().thickness;
     let model = slid_under();
     let mut state = model.initial_state();
     let mut times = Times(Vec::new());
@@ -235,7 +219,7 @@ fn ticks() -> Duration {
 
 #[test]
 fn a_run_stopped_by_a_ply_overlap_keeps_its_step_profile() {
-    let h = Material::preset("glass-serge-4x3").unwrap().thickness;
+    let h = glass().thickness;
     let (model, _) = pushed(1.5 * h);
     let mut state = model.initial_state();
     let mut driver = Explicit::new(&model, settings()).expect("driver");
@@ -262,7 +246,7 @@ fn a_run_stopped_by_a_ply_overlap_keeps_its_step_profile() {
 
 #[test]
 fn a_ply_pushed_within_the_tolerance_completes_and_reports_its_peak() {
-    let h = Material::preset("glass-serge-4x3").unwrap().thickness;
+    let h = glass().thickness;
     let (model, _) = pushed(0.05 * h);
     let mut state = model.initial_state();
     let mut driver = Explicit::new(&model, settings()).expect("driver");

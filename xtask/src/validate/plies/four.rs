@@ -251,7 +251,7 @@ pub fn hemisphere_four() -> Vec<Check> {
             equal.cpu,
             equal.wall / one.wall,
             equal.cpu / one.cpu,
-            100.0 * share(&equal),
+            100.0 * share(equal),
             equal
                 .profile
                 .contact_time(ContactPhase::Plies)

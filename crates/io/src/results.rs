@@ -898,23 +898,18 @@ impl ResultsDir {
         measures: &Measures,
     ) -> Result<(), ResultsError> {
         let path = self.dir.join("shear_map.png");
-        let png = pictures::shear_map(model, state, fields, measures, self.shear_range, None)
-            .map_err(|e| ResultsError {
-                path: path.clone(),
-                source: std::io::Error::other(e),
-            })?;
-        crate::atomic::write(&path, &png).map_err(at(&path))?;
+        write_png(
+            &path,
+            pictures::shear_map(model, state, fields, measures, self.shear_range, None),
+        )?;
         // A laminate's plies overlap in the picture above: one each too.
         let plies = pictured_plies(model);
         for ply in plies {
             let path = self.dir.join(ply_picture(&ply.name));
-            let png =
-                pictures::shear_map(model, state, fields, measures, self.shear_range, Some(ply))
-                    .map_err(|e| ResultsError {
-                        path: path.clone(),
-                        source: std::io::Error::other(e),
-                    })?;
-            crate::atomic::write(&path, &png).map_err(at(&path))?;
+            write_png(
+                &path,
+                pictures::shear_map(model, state, fields, measures, self.shear_range, Some(ply)),
+            )?;
         }
         // A laminate's waviness one ply per picture only: on the flat
         // blank the plies lie on one another and the top one hides the rest.
@@ -928,23 +923,14 @@ impl ResultsDir {
         };
         for (name, ply) in wavy {
             let path = self.dir.join(name);
-            let png =
-                pictures::waviness_map(model, fields, measures, ply).map_err(|e| ResultsError {
-                    path: path.clone(),
-                    source: std::io::Error::other(e),
-                })?;
-            crate::atomic::write(&path, &png).map_err(at(&path))?;
+            write_png(&path, pictures::waviness_map(model, fields, measures, ply))?;
         }
         if !measures.ply_profiles.is_empty() {
             // Each ply's profiles on a plot of its own, as its other pictures.
             return profiles::write_ply_pictures(&self.dir, &measures.ply_profiles, state.time);
         }
         let path = self.dir.join("profiles.png");
-        let png = pictures::profiles(measures, state.time).map_err(|e| ResultsError {
-            path: path.clone(),
-            source: std::io::Error::other(e),
-        })?;
-        crate::atomic::write(&path, &png).map_err(at(&path))
+        write_png(&path, pictures::profiles(measures, state.time))
     }
 
     /// Writes `shear_3d.png`: the formed part seen obliquely (azimuth −60°,
@@ -974,20 +960,18 @@ impl ResultsDir {
         };
         for (name, ply) in views {
             let path = self.dir.join(name);
-            let png = pictures::oblique::oblique_view(
-                model,
-                state,
-                fields,
-                tools,
-                displacements,
-                self.shear_range,
-                ply,
-            )
-            .map_err(|e| ResultsError {
-                path: path.clone(),
-                source: std::io::Error::other(e),
-            })?;
-            crate::atomic::write(&path, &png).map_err(at(&path))?;
+            write_png(
+                &path,
+                pictures::oblique::oblique_view(
+                    model,
+                    state,
+                    fields,
+                    tools,
+                    displacements,
+                    self.shear_range,
+                    ply,
+                ),
+            )?;
         }
         Ok(())
     }
@@ -1028,11 +1012,7 @@ pub fn write_flat_maps(
     model: &Model,
     panels: &[MapPanel<'_>],
 ) -> Result<(), ResultsError> {
-    let png = pictures::maps::flat_maps(model, panels).map_err(|e| ResultsError {
-        path: path.to_owned(),
-        source: std::io::Error::other(e),
-    })?;
-    crate::atomic::write(path, &png).map_err(at(path))
+    write_png(path, pictures::maps::flat_maps(model, panels))
 }
 
 /// Writes the PNG `path` like [`write_flat_maps`], for elements `cells`
@@ -1044,11 +1024,7 @@ pub fn write_flat_maps_of(
     cells: &[Vec<u32>],
     panels: &[MapPanel<'_>],
 ) -> Result<(), ResultsError> {
-    let png = pictures::maps::flat_maps_of(x0, cells, panels).map_err(|e| ResultsError {
-        path: path.to_owned(),
-        source: std::io::Error::other(e),
-    })?;
-    crate::atomic::write(path, &png).map_err(at(path))
+    write_png(path, pictures::maps::flat_maps_of(x0, cells, panels))
 }
 
 /// Writes the PNG `path` with several shear profiles on one plot (for
@@ -1059,11 +1035,7 @@ pub fn write_profile_comparison(
     title: &str,
     curves: &[(String, &[drape_model::measures::ProfilePoint])],
 ) -> Result<(), ResultsError> {
-    let png = pictures::profile_comparison(title, curves).map_err(|e| ResultsError {
-        path: path.to_owned(),
-        source: std::io::Error::other(e),
-    })?;
-    crate::atomic::write(path, &png).map_err(at(path))
+    write_png(path, pictures::profile_comparison(title, curves))
 }
 
 /// Writes the PNG `path` of a fit (`drape fit`): the `measured` curves
@@ -1076,12 +1048,10 @@ pub fn write_fit_picture(
     measured: &[(String, Vec<(f64, f64)>)],
     fitted: &[(f64, f64)],
 ) -> Result<(), ResultsError> {
-    let png =
-        pictures::fit::fit_png(title, labels, measured, fitted).map_err(|e| ResultsError {
-            path: path.to_owned(),
-            source: std::io::Error::other(e),
-        })?;
-    crate::atomic::write(path, &png).map_err(at(path))
+    write_png(
+        path,
+        pictures::fit::fit_png(title, labels, measured, fitted),
+    )
 }
 
 /// Writes the PNG `path` of a sweep: each measure of `runs` against each
@@ -1091,11 +1061,7 @@ pub fn write_sweep_picture(
     axes: &[SweepAxis],
     runs: &[SweepRun],
 ) -> Result<(), ResultsError> {
-    let png = pictures::sweep::sweep_png(axes, runs).map_err(|e| ResultsError {
-        path: path.to_owned(),
-        source: std::io::Error::other(e),
-    })?;
-    crate::atomic::write(path, &png).map_err(at(path))
+    write_png(path, pictures::sweep::sweep_png(axes, runs))
 }
 
 /// Writes the PNG `path` of a work-precision study: run time against each
@@ -1109,11 +1075,22 @@ pub fn write_work_precision_picture(
     panels: &[WorkPrecisionPanel],
     points: &[WorkPrecisionPoint],
 ) -> Result<(), ResultsError> {
-    let png = pictures::work_precision::work_precision_png(title, time_label, panels, points)
-        .map_err(|e| ResultsError {
-            path: path.to_owned(),
-            source: std::io::Error::other(e),
-        })?;
+    write_png(
+        path,
+        pictures::work_precision::work_precision_png(title, time_label, panels, points),
+    )
+}
+
+/// Writes the PNG `png` renders to `path` (whole or not at all), or says
+/// which picture could not be drawn.
+fn write_png<E>(path: &Path, png: Result<Vec<u8>, E>) -> Result<(), ResultsError>
+where
+    E: Into<Box<dyn std::error::Error + Send + Sync>>,
+{
+    let png = png.map_err(|e| ResultsError {
+        path: path.to_owned(),
+        source: std::io::Error::other(e),
+    })?;
     crate::atomic::write(path, &png).map_err(at(path))
 }
 

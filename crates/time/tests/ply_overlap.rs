@@ -13,7 +13,7 @@ use drape_constitutive::Material;
 use drape_contact::ContactPhase;
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::stack::PlyModel;
-use drape_model::{Amplitude, BoundaryCondition, Model, Motion};
+use drape_model::{Amplitude, BoundaryCondition, Model, Motion, State};
 use drape_time::{
     Explicit, ExplicitSettings, Frame, Observer, Pass, RunError, ply_overlap_tolerance,
 };
@@ -128,11 +128,7 @@ fn a_ply_pushed_through_its_neighbour_stops_the_run_naming_it() {
     let (model, centre) = pushed(1.5 * h);
     let tolerance = ply_overlap_tolerance(&model);
     assert_eq!(tolerance, 0.1 * h);
-    let mut state = model.initial_state();
-    let mut times = Times(Vec::new());
-    let mut driver = Explicit::new(&model, settings()).expect("driver");
-    let dt = driver.stable_time_step(&model.x0);
-    let error = driver.run(&mut state, &mut times).expect_err("stopped");
+    let (error, state, times, dt) = run_until_stopped(&model);
     let RunError::PlyOverlap {
         time,
         overlap,
@@ -163,8 +159,8 @@ fn a_ply_pushed_through_its_neighbour_stops_the_run_naming_it() {
         assert!(message.contains(word), "{message}");
     }
     // Frames 0 and 0.5 ms were published; the state is the last of them.
-    assert_eq!(times.0.len(), 2, "{:?}", times.0);
-    assert_eq!(state.time, times.0[1]);
+    assert_eq!(times.len(), 2, "{times:?}");
+    assert_eq!(state.time, times[1]);
 }
 
 #[test]
@@ -177,11 +173,7 @@ fn a_free_edge_slid_under_its_neighbour_stops_the_run() {
     // and let the run complete.
     let h = glass().thickness;
     let model = slid_under();
-    let mut state = model.initial_state();
-    let mut times = Times(Vec::new());
-    let mut driver = Explicit::new(&model, settings()).expect("driver");
-    let dt = driver.stable_time_step(&model.x0);
-    let error = driver.run(&mut state, &mut times).expect_err("stopped");
+    let (error, state, times, dt) = run_until_stopped(&model);
     let RunError::PlyOverlap {
         time,
         overlap,
@@ -207,7 +199,18 @@ fn a_free_edge_slid_under_its_neighbour_stops_the_run() {
     for word in ["`top`", "inside ply `bottom`"] {
         assert!(message.contains(word), "{message}");
     }
-    assert_eq!(state.time, *times.0.last().expect("frames"));
+    assert_eq!(state.time, *times.last().expect("frames"));
+}
+
+/// Runs `model` until the driver stops it: the error, the state it kept,
+/// the times of the frames it published and the stable step.
+fn run_until_stopped(model: &Model) -> (RunError, State, Vec<f64>, f64) {
+    let mut state = model.initial_state();
+    let mut times = Times(Vec::new());
+    let mut driver = Explicit::new(model, settings()).expect("driver");
+    let dt = driver.stable_time_step(&model.x0);
+    let error = driver.run(&mut state, &mut times).expect_err("stopped");
+    (error, state, times.0, dt)
 }
 
 /// A profile clock that advances by a microsecond at each reading: every

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use drape_model::stack::PlyProfiles;
 
-use super::{PlyPicture, ResultsError, at, fmt_f64, pictures, ply_picture_of};
+use super::{PlyPicture, ResultsError, fmt_f64, pictures, ply_picture_of, write_png};
 
 /// `profiles.csv` of a laminate: header `ply,line,distance_mm,shear_deg`,
 /// each ply (bottom to top) its diagonal then its median, each sorted by
@@ -39,12 +39,10 @@ pub(super) fn write_ply_pictures(
 ) -> Result<(), ResultsError> {
     for ply in plies {
         let path = dir.join(ply_picture_of(PlyPicture::Profiles, &ply.name));
-        let png = pictures::profiles_of(&ply.diagonal, &ply.median, time, Some(&ply.name))
-            .map_err(|e| ResultsError {
-                path: path.clone(),
-                source: std::io::Error::other(e),
-            })?;
-        crate::atomic::write(&path, &png).map_err(at(&path))?;
+        write_png(
+            &path,
+            pictures::profiles_of(&ply.diagonal, &ply.median, time, Some(&ply.name)),
+        )?;
     }
     Ok(())
 }

@@ -353,10 +353,13 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(200))]
 
         /// The bound never exceeds the distance to the triangle (beyond
-        /// round-off: 64 ε of the coordinates, as for any distance computed
-        /// from them; a node 2e-3 from a face 30 from the origin errs by
-        /// 1e-12 of the distance, and `BOUND_SLACK` is 1e-10 of the
-        /// coordinates), and is the distance
+        /// round-off: 16 ε of the coordinates times 1 + L²/|n|, the
+        /// face's longest edge squared over twice its area, which the
+        /// error of its normal's direction grows with; a node 2e-3 from a
+        /// face 30 from the origin errs by 1e-12 of the distance, a node
+        /// by a face with L²/|n| = 1871 by 87 ε of the coordinates, and
+        /// `BOUND_SLACK` is 1e-10 of them, above the round-off of any face
+        /// the guard keeps, L²/|n| ≤ 1e4), and is the distance
         /// where the node is over the face (then only the height counts)
         /// or beside one edge's middle (height and that edge's distance):
         /// loose nowhere a smooth ply's neighbour faces are.
@@ -367,11 +370,16 @@ mod tests {
             let v = [point(20.0), point(20.0), point(20.0)];
             let bound = FaceBound::of(v);
             let distance = |p: &Vector3<f64>| (p - closest_on_triangle(p, &v[0], &v[1], &v[2]).0).norm_squared();
+            // L²/|n|: the normal's components err by ~ε·L², its direction
+            // by ε·L²/|n|, a height over the face by that times the
+            // node's distance (a sliver's bound is 0: nothing to err).
+            let longest = [v[1] - v[0], v[2] - v[1], v[0] - v[2]].iter().map(|e| e.norm_squared()).fold(0.0, f64::max);
+            let shape = longest * bound.inv_n2.sqrt();
             for _ in 0..50 {
                 let p = point(60.0);
                 let d = distance(&p);
                 let scale = v.iter().chain([&p]).map(|v| v.amax()).fold(0.0, f64::max);
-                let round_off = 64.0 * f64::EPSILON * scale;
+                let round_off = 16.0 * f64::EPSILON * scale * (1.0 + shape);
                 prop_assert!(bound.distance_squared(&p).sqrt() <= d.sqrt() + round_off, "{} > {d}", bound.distance_squared(&p));
                 prop_assert!(round_off < BOUND_SLACK * scale);
             }

@@ -556,46 +556,45 @@ struct Scratch {
 /// the applied force at the end of the no-penetration case.
 pub const STICK_OVER_INERTIA: f64 = 100.0;
 
-/// The inertia floor stiffens a regularised stick by at most this factor:
-/// a slipping pair's direction turns by k_t·Δs/|f|, and with k_t unbounded
-/// (the floor grows as 1/h² when increments are cut) the Δs that carries
-/// the turn fell below the positions' round-off and Newton stalled (the
-/// capstan and no-penetration cases at h ≈ 1e-11 s).
+/// The inertia floor never stiffens a regularised stick beyond
+/// μ·λ_N over this slip (mm): a slipping pair's direction turns by
+/// k_t·Δs/|f|, and with k_t unbounded (the floor grows as 1/h² when
+/// increments are cut) the Δs that carries the turn fell below the
+/// positions' round-off and Newton stalled (the capstan and
+/// no-penetration cases at h ≈ 1e-11 s).
 ///
-/// 10, not the 1 000 it was: the floor grows as 1/h² when increments are
-/// cut, and at 1 000 × μ·λ_N/δ a slipping pair's trial force f_n − k_t·s
-/// swung by more than μ·λ_N with each Newton correction. Traced on the
-/// hemisphere-ring scene (10 × 10), node 82 at t = 0.664 s, h = 1.06e-5 s
-/// (k_t ≈ 6e6 N/mm for μ·λ_N = 5.9 N): its slip direction alternated
-/// between (0.37, 0.78, −0.51) and (0.05, −0.83, 0.55) for 20 iterations
-/// with corrections of 2e-5 mm, the residual stuck at 6 N of 185, and the
-/// cut attempt stiffened the spring further (720 of that run's 875
-/// cutbacks hit the iteration limit). Measured (one core, user CPU):
-/// that scene 5 094 increments and 52.7 s at 1 000, 721 and 23.3 s at 10,
-/// 488 and 14.1 s without the floor (cap 1); but without it a blank
-/// dropped on a plane rings (no-penetration balance at rest 8.9e-3 of the
-/// load against a tolerance of 1e-3; 3.8e-4 at 10, 3.9e-7 at 1 000).
-/// The shipped hemispheres at 10: see the scene reference.
+/// 1e-4 mm, not 1e-6 mm as it was: at μ·λ_N/1e-6 mm a slipping pair's
+/// trial force f_n − k_t·s swung by more than μ·λ_N with each Newton
+/// correction. Traced on the hemisphere-ring scene (10 × 10), node 82 at
+/// t = 0.664 s, h = 1.06e-5 s (k_t ≈ 6e6 N/mm for μ·λ_N = 5.9 N): its slip
+/// direction alternated between (0.37, 0.78, −0.51) and (0.05, −0.83,
+/// 0.55) for 20 iterations with corrections of 2e-5 mm, the residual stuck
+/// at 6 N of 185, and the cut attempt stiffened the spring further (720 of
+/// that run's 875 cutbacks hit the iteration limit). Measured (one core,
+/// user CPU, elastic slip 1 µm): that scene 5 094 increments and 52.7 s at
+/// 1e-6 mm, 721 and 23.3 s at 1e-4 mm, 488 and 14.1 s without the floor;
+/// but without it a blank dropped on a plane rings (no-penetration
+/// balance at rest 8.9e-3 of the load against a tolerance of 1e-3; 3.8e-4
+/// at 1e-4 mm, 3.9e-7 at 1e-6 mm).
 ///
-/// With this cap, a pair pressed again in the iterations takes the return
-/// mapping at once (see `update_friction`); together (one core, user CPU)
-/// the shipped hemisphere-0-90 implicit runs in 308 increments, 3 770 +
-/// 287 Newton iterations, 24 cutbacks and 103 s (480, 5 121 + 1 218, 60
-/// and 155 s with the cap alone), and the dropped blank's balance is the
-/// same 3.8e-4. Without the floor that change made it ring (8.9e-3).
-const INERTIA_FLOOR_CAP: f64 = 10.0;
+/// It is a slip, not a multiple of the elastic slip (it was 1/10 of it at
+/// 1 µm), so a softer stick keeps the floor that stops a landing node
+/// ringing: at an elastic slip of 10 µm a floor of 1/10 of it rang (the
+/// plane's balance at rest 8.9e-3) and slowed the shipped hemisphere-0-90
+/// by a quarter (185 increments against 140).
+const STIFFEST_FLOOR_SLIP: f64 = 1e-4;
 
 /// k_t of a regularised stick: μ·λ_N/δ for a pair at the friction limit
 /// `cone` = μ·λ_N and elastic slip δ, and at least
 /// [`STICK_OVER_INERTIA`] times the node's inertia stiffness when its
-/// `mass` is known, up to [`INERTIA_FLOOR_CAP`] times μ·λ_N/δ.
+/// `mass` is known, up to μ·λ_N/[`STIFFEST_FLOOR_SLIP`].
 fn stick_stiffness(cone: f64, elastic_slip: f64, mass: Option<f64>, inc: Option<Increment>) -> f64 {
     let inertia = match (mass, inc) {
         (Some(m), Some(inc)) => STICK_OVER_INERTIA * m * inc.mass_factor(),
         _ => 0.0,
     };
     let k = cone / elastic_slip;
-    k.max(inertia.min(INERTIA_FLOOR_CAP * k))
+    k.max(inertia.min(cone / STIFFEST_FLOOR_SLIP))
 }
 
 /// Two unit tangents of the plane normal to `n`.

@@ -506,8 +506,11 @@ fn the_stick_spring_is_the_cone_over_the_elastic_slip_or_above_the_inertia() {
     assert_eq!(stick_stiffness(0.6, 1e-2, Some(1e-6), inc), 60.0);
     let heavy = stick_stiffness(0.6, 1e-2, Some(1e-4), inc);
     assert!((heavy - STICK_OVER_INERTIA * 4.0).abs() <= 1e-9 * heavy);
-    // Capped at 10 × μ·λ_N/δ.
-    assert_eq!(stick_stiffness(0.6, 1e-2, Some(1.0), inc), 600.0);
+    // Capped at μ·λ_N/1e-4 mm, whatever the elastic slip.
+    assert_eq!(stick_stiffness(0.6, 1e-2, Some(1.0), inc), 6000.0);
+    assert_eq!(stick_stiffness(0.6, 1e-3, Some(1.0), inc), 6000.0);
+    // Never softer than μ·λ_N/δ.
+    assert_eq!(stick_stiffness(0.6, 1e-5, Some(1.0), inc), 60000.0);
 }
 
 /// Nodes pinched between a floor and a force-driven holder pressed

@@ -506,11 +506,14 @@ fn the_stick_spring_is_the_cone_over_the_elastic_slip_or_above_the_inertia() {
     assert_eq!(stick_stiffness(0.6, 1e-2, Some(1e-6), inc), 60.0);
     let heavy = stick_stiffness(0.6, 1e-2, Some(1e-4), inc);
     assert!((heavy - STICK_OVER_INERTIA * 4.0).abs() <= 1e-9 * heavy);
-    // Capped at μ·λ_N/1e-4 mm, whatever the elastic slip.
-    assert_eq!(stick_stiffness(0.6, 1e-2, Some(1.0), inc), 6000.0);
-    assert_eq!(stick_stiffness(0.6, 1e-3, Some(1.0), inc), 6000.0);
+    // Capped at μ·λ_N/1e-4 mm, whatever the elastic slip (to the
+    // division's rounding: 0.6/1e-4 is 6 000 less an ulp).
+    let cap: f64 = 0.6 / 1e-4;
+    assert!((cap - 6000.0).abs() <= 1e-12 * 6000.0);
+    assert_eq!(stick_stiffness(0.6, 1e-2, Some(1.0), inc), cap);
+    assert_eq!(stick_stiffness(0.6, 1e-3, Some(1.0), inc), cap);
     // Never softer than μ·λ_N/δ.
-    assert_eq!(stick_stiffness(0.6, 1e-5, Some(1.0), inc), 60000.0);
+    assert_eq!(stick_stiffness(0.6, 1e-5, Some(1.0), inc), 0.6 / 1e-5);
 }
 
 /// Nodes pinched between a floor and a force-driven holder pressed

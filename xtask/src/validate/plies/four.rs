@@ -23,7 +23,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use drape_contact::{ContactPhase, PlyTotals};
-use drape_time::{Explicit, Frame, StepProfile};
+use drape_time::{Explicit, Frame, Pass, StepProfile};
 
 use super::{Frames, overlap_between};
 use crate::validate::{Check, note, quick_mode};
@@ -40,6 +40,8 @@ struct Run {
     peaks: Vec<f64>,
     thickness: f64,
     plies: usize,
+    /// Membrane elements of the model.
+    membranes: usize,
     /// Why the run stopped short, if it did (the driver's overlap check).
     failure: Option<String>,
 }
@@ -144,8 +146,37 @@ fn run(plies: usize, overrides: &[(String, String)]) -> Run {
         peaks,
         thickness: model.plies.first().map_or(f64::NAN, |p| p.thickness),
         plies: model.plies.len().max(1),
+        membranes: model.membrane_count(),
         failure,
     }
+}
+
+/// µs per step of the run's tool contact (the contact pass less the ply
+/// phase), its element forces with their gather, and its checks (stable
+/// Δt, finite and guard checks, works, energies, output): what grows with
+/// the plies besides their contact.
+fn outside_plies(r: &Run) -> [f64; 3] {
+    let p = &r.profile;
+    let us = |d: Duration| d.as_secs_f64() * 1e6 / p.steps.max(1) as f64;
+    let sum = |passes: &[Pass]| us(passes.iter().map(|&q| p.time(q)).sum());
+    [
+        us(p.time(Pass::Contact)
+            .saturating_sub(p.contact_time(ContactPhase::Plies))),
+        sum(&[
+            Pass::Trusses,
+            Pass::Membranes,
+            Pass::Springs,
+            Pass::Bending,
+            Pass::Gather,
+        ]),
+        sum(&[
+            Pass::StableStep,
+            Pass::Checks,
+            Pass::Works,
+            Pass::Energies,
+            Pass::Output,
+        ]),
+    ]
 }
 
 fn share(r: &Run) -> f64 {
@@ -240,6 +271,13 @@ pub fn hemisphere_four() -> Vec<Check> {
             .map(|p| format!("{p:.2e} mm"))
             .collect::<Vec<_>>()
             .join(", "),
+    ));
+    let (o4, o1) = (outside_plies(&four), outside_plies(&one));
+    note(format!(
+        "Outside the ply contact, µs per step of the four plies against the one (the profile, \
+         wall clock on 2 threads): tool contact {:.0} / {:.0}, element forces and gather {:.0} / {:.0} \
+         ({} / {} membranes), checks, works and output {:.0} / {:.0}.",
+        o4[0], o1[0], o4[1], o1[1], four.membranes, one.membranes, o4[2], o1[2],
     ));
     if let Some(equal) = &equal {
         note(format!(

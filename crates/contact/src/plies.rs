@@ -14,10 +14,11 @@
 //! Which side of a neighbour a node belongs on is the stacking side,
 //! which each face's normal (wound up the stack) carries through the
 //! ply's folds. A node found inside a ply beyond its mid-surface, which
-//! no step's motion does (it came round the ply's free edge, or a fold
-//! came over it), is put back out on its own side, not the nearer one
-//! (which is through the ply), by a shift of position alone: the shift is
-//! up to the plies' thickness, and as a velocity it would throw the node.
+//! no step's motion does (a fold came over it), is put back out on its
+//! own side, not the nearer one (which is through the ply), by a shift of
+//! position alone: the shift is up to the plies' thickness, and as a
+//! velocity it would throw the node. (Near the ply's free end it goes out
+//! through the end instead, where that is shorter: below.)
 //! A side memory that turned a node's side when it was seen clear on the
 //! far side of a ply (shell contact codes keep one) stopped the full
 //! four-ply hemisphere at t = 0.95 s with a `p90` node held at the offset

@@ -599,4 +599,50 @@ mod tests {
             }
         }
     }
+
+    /// The way out through a free end: to the nearest point of the face's
+    /// outline edges and vertices (an edge's foot or a vertex, not an
+    /// interior edge), and only behind the face where that way is shorter
+    /// than the offset and the depth.
+    #[test]
+    fn the_way_out_through_the_end_is_to_the_nearest_outline_point_behind_the_face() {
+        let v = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(4.0, 0.0, 0.0),
+            Vector3::new(0.0, 4.0, 0.0),
+        ];
+        let q = Vector3::new(1.0, 0.5, 0.0);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-14;
+        // Edge ab free (with its vertices): straight across to it.
+        let (e, w, m) = nearest_outline(0b01_1001, v, &q).expect("ab");
+        assert!(close(e, 0.5) && close(w[0], 0.75) && close(w[1], 0.25) && w[2] == 0.0);
+        assert!((m + Vector3::y()).norm() < 1e-14, "{m}");
+        // Edge bc free: its foot, at 0.4375 of the way from b.
+        let (e, w, m) = nearest_outline(0b00_0010, v, &q).expect("bc");
+        assert!(close(e, 2.5 / 2f64.sqrt()), "{e}");
+        assert!(
+            w[0] == 0.0 && close(w[1], 0.5625) && close(w[2], 0.4375),
+            "{w:?}"
+        );
+        assert!((m - Vector3::new(1.0, 1.0, 0.0) / 2f64.sqrt()).norm() < 1e-14);
+        // Only vertex c on the outline (its edges interior): to it.
+        let (e, w, _) = nearest_outline(0b10_0000, v, &q).expect("c");
+        assert!(close(e, (1.0f64 + 3.5 * 3.5).sqrt()) && w == [0.0, 0.0, 1.0]);
+        // No outline, or the point on it: none.
+        assert!(nearest_outline(0, v, &q).is_none());
+        assert!(nearest_outline(0b01_1001, v, &Vector3::new(1.0, 0.0, 0.0)).is_none());
+        // Behind the face, 0.5 from the free edge ab with the offset 0.3:
+        // out through the end from 0.2 deep on, never in front.
+        let w = [0.625, 0.25, 0.125];
+        for (along, out) in [
+            (0.1, false),
+            (0.0, false),
+            (-0.19, false),
+            (-0.21, true),
+            (-3.0, true),
+        ] {
+            let found = through_end(0b01_1001, v, &w, 0.3, along).is_some();
+            assert_eq!(found, out, "along {along}");
+        }
+    }
 }

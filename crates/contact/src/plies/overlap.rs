@@ -179,7 +179,12 @@ fn node_depth(
     let depth = if on_outline(bits, &w) {
         // Past the square end.
         return 0.0;
-    } else if let Some(e) = end_depth(d, along, offset, w, bits, v) {
+    } else if dist < offset
+        && let Some(e) = end_depth(d, along, offset, w, bits, v)
+    {
+        // In the ply's thickness; deeper behind, only the nearest face
+        // decides ([`behind_depth`]): behind a fold's far layer near its
+        // end is not inside it.
         e
     } else if along > 0.0 {
         offset - dist
@@ -393,6 +398,36 @@ mod tests {
             let found = c.record_overlap(&x).map_or(0.0, |o| o.depth);
             assert!((found - depth).abs() < 1e-12, "z = {z}: {found}");
         }
+    }
+
+    #[test]
+    fn near_a_fold_s_end_only_the_nearest_layer_decides() {
+        // The lower ply folded back under itself: layers in z = 0 (normal
+        // +z) and −0.6 (folded back, normal −z), both ending at x = 10.
+        // The upper ply rests on the top layer at the offset, 0.1 mm in
+        // from the end: behind the folded-back layer by 0.9 mm there, and
+        // 0.1 mm in from its end, which is the shorter way out of that
+        // layer. The top layer, nearer, has the node in front: not inside.
+        let square = |z: f64| {
+            [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]].map(|[a, b]| Vector3::new(a, b, z))
+        };
+        let mut x: Vec<Vector3<f64>> = [0.0, -0.6].iter().flat_map(|&z| square(z)).collect();
+        x.extend(
+            [[5.9, 3.0], [9.9, 3.0], [9.9, 7.0], [5.9, 7.0]].map(|[a, b]| Vector3::new(a, b, 0.3)),
+        );
+        let folded = PlyLayer {
+            first_node: 0,
+            node_count: 8,
+            faces: vec![[0, 1, 2], [0, 2, 3], [4, 6, 5], [4, 7, 6]],
+            half_thickness: 0.15,
+        };
+        let interface = PlyInterface {
+            lower: 0,
+            upper: 1,
+            friction: 0.0,
+        };
+        let mut c = PlyContact::new(vec![folded, layer(8)], &[interface], vec![1.0; 12], 1.0);
+        assert_eq!(c.record_overlap(&x), None);
     }
 
     #[test]

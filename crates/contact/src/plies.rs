@@ -28,8 +28,8 @@
 //! end on either side of the ply, but never come round it to the far side
 //! of the face. Nothing else stops that: beside the end a node is free,
 //! and past the end plane behind the ply, deeper than the offset, the
-//! faces take it for another part of the ply (a fold), so a flapping free
-//! edge went round its neighbour's (in the four-ply hemisphere, whose
+//! faces take it for another part of the ply (a fold), so a free edge
+//! went round its neighbour's (in the four-ply hemisphere, whose
 //! four plies share one outline, a `p45` node came round `p90`'s edge
 //! 0.5 mm beside it and crossed the end plane 2 mm behind it). So a node
 //! behind a face whose way out through the end is shorter than the way
@@ -568,9 +568,6 @@ impl PlyContact {
                 if m_inv == 0.0 {
                     continue;
                 }
-                // The last step's force, as this step's multiplier: in a
-                // forming run the plies press on each other much as they
-                // did a step ago.
                 let shift = if hit.recover {
                     -gap
                 } else if hit.sudden {
@@ -597,6 +594,9 @@ impl PlyContact {
                 } else {
                     0.0
                 };
+                // The last step's force, as this step's multiplier: in a
+                // forming run the plies press on each other much as they
+                // did a step ago.
                 let warm = s.warm[local];
                 let mu = if warm.pass + 1 == self.pass && !hit.recover {
                     warm.normal * dt * tau

@@ -14,14 +14,34 @@
 //! Which side of a neighbour a node belongs on is the stacking side,
 //! which each face's normal (wound up the stack) carries through the
 //! ply's folds. A node found inside a ply beyond its mid-surface, which
-//! no step's motion does (it came round the ply's free edge, or a fold
-//! came over it), is put back out on its own side, not the nearer one
-//! (which is through the ply), by a shift of position alone: the shift is
-//! up to the plies' thickness, and as a velocity it would throw the node.
+//! no step's motion does (a fold came over it), is put back out on its
+//! own side, not the nearer one (which is through the ply), by a shift of
+//! position alone: the shift is up to the plies' thickness, and as a
+//! velocity it would throw the node. (Near the ply's free end it goes out
+//! through the end instead, where that is shorter: below.)
 //! A side memory that turned a node's side when it was seen clear on the
 //! far side of a ply (shell contact codes keep one) stopped the full
 //! four-ply hemisphere at t = 0.95 s with a `p90` node held at the offset
 //! on the far side of `p45`, its side turned near a fold.
+//!
+//! A ply ends square at its free outline, and a node may hang beside the
+//! end on either side of the ply, but never come round it to the far side
+//! of the face. Nothing else stops that: beside the end a node is free,
+//! and past the end plane behind the ply, deeper than the offset, the
+//! faces take it for another part of the ply (a fold), so a free edge
+//! went round its neighbour's (in the four-ply hemisphere, whose
+//! four plies share one outline, a `p45` node came round `p90`'s edge
+//! 0.5 mm beside it and crossed the end plane 2 mm behind it). So a node
+//! behind a face whose way out through the end is shorter than the way
+//! back to its own side is held by the end: a row whose normal lies in
+//! the ply, out of the end ([`narrow`]). It stops a node going in, and an
+//! end that comes over a node behind it pushes the node along. Such a row
+//! can begin violated by more than a step's motion (the end plane comes
+//! to a node as a face switches, and a node that comes up beside the end
+//! into the face's hold from the far side starts up to the offset inside
+//! it: at the four-ply hemisphere's 2e-5 s step, a velocity of 15 m/s):
+//! what the two plies' motion over the step brought is stopped as a
+//! velocity, an inelastic impact, and the rest moved as a position.
 //!
 //! Stick is exact, not regularised: the normal multipliers make the gap
 //! zero at the end of the step and the friction multiplier makes the
@@ -179,6 +199,16 @@ struct Hit {
     /// it came round a free edge or a fold, and goes back by a shift of
     /// its position, not a velocity ([`PlyContact::normal`]).
     recover: bool,
+    /// The node is inside the face's ply through its free end (or on
+    /// the far side past it), the way out through that end the shorter:
+    /// `normal` is in the ply's plane, out of the end, and `w` the
+    /// weights of the nearest point of the end.
+    end: bool,
+    /// The row can begin violated by more than the step's motion brought
+    /// (its rule starts beside the ply's free end, where the node was
+    /// free): what is beyond that goes as a shift of position, like
+    /// [`Self::recover`]'s, not as a velocity that would throw the node.
+    sudden: bool,
 }
 
 impl Hit {
@@ -190,6 +220,8 @@ impl Hit {
         face: u32::MAX,
         found: false,
         recover: false,
+        end: false,
+        sudden: false,
     };
 }
 
@@ -241,8 +273,11 @@ struct Constraint {
     /// (`u32::MAX`: none, a row of a lower node alone).
     slip_node: u32,
     search: u32,
-    /// A node back to its side ([`Hit::recover`]).
-    recover: bool,
+    /// How much of the violation goes as a shift of position before the
+    /// solve (mm): all of it for a node back to its side
+    /// ([`Hit::recover`]), what is beyond the step's motion for a row
+    /// that can begin violated ([`Hit::sudden`]), else none.
+    shift: f64,
 }
 
 /// A constraint's forces at a pass, for the next pass to start from.
@@ -541,6 +576,32 @@ impl PlyContact {
                 if m_inv == 0.0 {
                     continue;
                 }
+                let shift = if hit.recover {
+                    -gap
+                } else if hit.sudden {
+                    // What the two plies' motion over this step brought
+                    // of the violation is stopped as a velocity (an
+                    // inelastic impact); the rest was there before. Beside
+                    // the end on the node's own side only for a node that
+                    // was on the far side at the start of the step: one
+                    // resting on the edge of the ply below keeps its row
+                    // as it was.
+                    let rel = v[node as usize]
+                        - hit
+                            .nodes
+                            .iter()
+                            .zip(&hit.w)
+                            .map(|(&j, w)| v[j as usize] * *w)
+                            .sum::<Vector3<f64>>();
+                    let approach = -rel.dot(&hit.normal) * dt;
+                    if hit.end || gap + s.offset + approach <= 0.0 {
+                        (-gap - approach.max(0.0)).max(0.0)
+                    } else {
+                        0.0
+                    }
+                } else {
+                    0.0
+                };
                 // The last step's force, as this step's multiplier: in a
                 // forming run the plies press on each other much as they
                 // did a step ago.
@@ -566,7 +627,7 @@ impl PlyContact {
                     ],
                     slip_node,
                     search: k as u32,
-                    recover: hit.recover,
+                    shift,
                 });
             }
         }
@@ -602,13 +663,16 @@ impl PlyContact {
         // out on its side before the solve, by the row's own projection
         // (its masses' shares), as a shift of position only: its depth is
         // up to the plies' thickness, which as a velocity (dx/dt) would
-        // throw it at metres a second. The row stays in the solve with
-        // the shift in its gap, so the others cannot push it back in.
+        // throw it at metres a second. So is the part of a sudden row's
+        // violation (a node come up beside a ply's end, or in through it)
+        // that the step's motion did not bring. The row stays in the
+        // solve with the shift in its gap, so the others cannot push it
+        // back in.
         for c in &self.constraints {
-            if !c.recover {
+            if c.shift <= 0.0 {
                 continue;
             }
-            let d = c.normal * (-c.gap * c.mass);
+            let d = c.normal * (c.shift * c.mass);
             let s = d * c.inv[0];
             self.dx[c.slave as usize] += s;
             self.shift[c.slave as usize] += s;
@@ -891,6 +955,11 @@ impl PlyContact {
 /// A hit's face vertex that carries at least [`PAIR_WEIGHT`] of the
 /// closest point.
 fn nearest(hit: &Hit) -> Option<u32> {
+    if hit.end {
+        // A row through the ply's end is not the face's row of a node
+        // on a node: its normal lies in the ply.
+        return None;
+    }
     (0..3)
         .find(|&k| hit.w[k] >= PAIR_WEIGHT)
         .map(|k| hit.nodes[k])
@@ -1056,6 +1125,8 @@ fn inverse_mass(mass: &[f64], movable: &[bool], i: u32) -> f64 {
     }
 }
 
+#[cfg(test)]
+mod end_tests;
 #[cfg(test)]
 mod side_tests;
 

@@ -104,7 +104,7 @@ pub enum RunError {
          the ply–ply contact did not keep the plies apart (it puts a node that came round a \
          ply's free edge or a fold into the ply back on its side, but not one whose motion is \
          prescribed, nor one that crossed the whole ply within one step, nor one that came \
-         round the free edge farther behind the ply than the two half thicknesses); hold the stack more (springs, a holder) so its flanges do not fold \
+         round the free edge farther behind the ply than the contact's reach); hold the stack more (springs, a holder) so its flanges do not fold \
          over, or lower `simulation.safety_factor`",
         .at[0], .at[1], .at[2]
     )]

@@ -322,10 +322,15 @@ fn incline() -> Vec<Check> {
 
 /// Signed distance of `p` from the triangles `faces` of `x` along their
 /// normal (wound up the stack, `up` = +1 for the ply above them), over the
-/// triangles whose plane projection of `p` falls inside them; None when
-/// it falls inside none (past the ply's edge).
-fn distance_over(p: &Vector3<f64>, x: &[Vector3<f64>], faces: &[[u32; 3]], up: f64) -> Option<f64> {
-    let mut best: Option<f64> = None;
+/// triangles whose plane projection of `p` falls inside them, and that
+/// projection; None when it falls inside none (past the ply's edge).
+fn distance_over(
+    p: &Vector3<f64>,
+    x: &[Vector3<f64>],
+    faces: &[[u32; 3]],
+    up: f64,
+) -> Option<(f64, Vector3<f64>)> {
+    let mut best: Option<(f64, Vector3<f64>)> = None;
     for f in faces {
         let [a, b, c] = f.map(|i| x[i as usize]);
         let n = (b - a).cross(&(c - a));
@@ -341,11 +346,40 @@ fn distance_over(p: &Vector3<f64>, x: &[Vector3<f64>], faces: &[[u32; 3]], up: f
             continue;
         }
         let d = (p - a).dot(&n) / area2.sqrt() * up;
-        if best.is_none_or(|q| d.abs() < q.abs()) {
-            best = Some(d);
+        if best.is_none_or(|(q, _)| d.abs() < q.abs()) {
+            best = Some((d, a * w_a + b * w_b + c * w_c));
         }
     }
     best
+}
+
+/// The free outline of the triangles `faces`: the edges no other face
+/// shares.
+fn outline(faces: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    let mut count = std::collections::BTreeMap::new();
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            *count.entry([a.min(b), a.max(b)]).or_insert(0u32) += 1;
+        }
+    }
+    count
+        .into_iter()
+        .filter_map(|(e, n)| (n == 1).then_some(e))
+        .collect()
+}
+
+/// The distance from `q` to the nearest of the segments `edges` of `x`.
+fn from_outline(q: &Vector3<f64>, x: &[Vector3<f64>], edges: &[[u32; 2]]) -> f64 {
+    edges
+        .iter()
+        .map(|&[a, b]| {
+            let (a, b) = (x[a as usize], x[b as usize]);
+            let e = b - a;
+            let t = ((q - a).dot(&e) / e.norm_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+            (q - (a + e * t)).norm()
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// The largest overlap of either ply into the other: thickness − the
@@ -356,7 +390,10 @@ fn overlap(model: &Model, x: &[Vector3<f64>]) -> f64 {
 
 /// The largest overlap of ply `lower` into its neighbour `upper` or back:
 /// half of each thickness − the distance of each node from the other
-/// ply's mid-surface.
+/// ply's mid-surface, for a node behind that mid-surface the lesser of
+/// that and its distance in from the ply's free outline (the shorter way
+/// out of the ply that does not cross it: a node held beside a ply's end
+/// on its far side is at the end, not through the ply).
 fn overlap_between(model: &Model, x: &[Vector3<f64>], lower: usize, upper: usize) -> f64 {
     let faces = |p: usize| -> Vec<[u32; 3]> {
         let mut out = Vec::new();
@@ -374,12 +411,19 @@ fn overlap_between(model: &Model, x: &[Vector3<f64>], lower: usize, upper: usize
     let mut worst: f64 = 0.0;
     for (slave, master, up) in [(upper, lower, 1.0), (lower, upper, -1.0)] {
         let f = faces(master);
+        let edges = outline(&f);
         for i in model.plies[slave].nodes.clone() {
-            if let Some(d) = distance_over(&x[i as usize], x, &f, up) {
+            if let Some((d, q)) = distance_over(&x[i as usize], x, &f, up) {
                 // A node more than both plies' thickness away is over
                 // another part of the blank, not on it.
                 if d.abs() < 4.0 * offset {
-                    worst = worst.max(offset - d);
+                    let depth = offset - d;
+                    let depth = if d < 0.0 {
+                        depth.min(from_outline(&q, x, &edges))
+                    } else {
+                        depth
+                    };
+                    worst = worst.max(depth);
                 }
             }
         }

@@ -18,6 +18,16 @@
 //! (12 × 12 cells) the search took about a quarter less time than
 //! projecting on every candidate.
 //!
+//! A face's rules see the ply as its mid-surface grown by the offset,
+//! ending square at the free outline: a node beside the end is not in
+//! it, and a node behind the face goes out the shorter of two ways, back
+//! to its own side or out through the end (the nearest point of the
+//! face's outline edges and vertices). The way through the ply to the far
+//! side is never taken. Through the end is what keeps a node from coming
+//! round a free edge: it holds at any depth behind the ply, because past
+//! the offset a node behind is otherwise left alone (a fold), and that is
+//! the way a free edge came round its neighbour's.
+//!
 //! Not for: the candidate lists (the broad phase, [`super::PlyContact`]'s
 //! refresh), the solves, or the overlap measure ([`super::overlap`]).
 
@@ -225,24 +235,63 @@ impl Master<'_> {
         if (d - up * along).norm_squared() > offset * offset {
             return None;
         }
-        let outline_hit = on_outline(self.outline[f as usize], &w);
+        let bits = self.outline[f as usize];
         let r = dist.sqrt();
+        if on_outline(bits, &w) {
+            if along <= 0.0 {
+                // Beside the square end of the ply on its far side: not
+                // in it (the end rule below keeps it from going in).
+                return None;
+            }
+            // The face's normal: the ply ends there square, not rounded,
+            // so a ply sliding past the edge of the one below is not
+            // pushed sideways. Up to the offset beside the end, so that
+            // plies whose edges lie on each other (equal blanks) rest on
+            // each other's edges; a node that comes up into it from the
+            // far side beside the end starts inside by up to the offset,
+            // which goes as a shift of position ([`Hit::sudden`]).
+            let gap = along - offset;
+            return (gap <= self.reach).then_some(Hit {
+                gap,
+                normal: up,
+                nodes: tri,
+                w,
+                face: f,
+                found: true,
+                recover: false,
+                end: false,
+                sudden: true,
+            });
+        }
+        // On the far side, the way out through the ply's square end where
+        // that is shorter than the way back to the node's own side (the
+        // offset and its depth): what a node that crossed the end plane
+        // in a step (by its motion, or the end's coming over it) has to
+        // go back, at any depth. Such a node is round the end, and
+        // farther in no memoryless rule tells it from a fold of the ply;
+        // nothing else stops a free edge from coming round a neighbour's
+        // (the four-ply hemisphere's `p45` node 1017 came round `p90`'s
+        // edge 0.5 mm beside it and crossed the end plane 2 mm behind it).
+        if let Some((q, wc, m)) = through_end(bits, [a, b, c], &w, offset, along) {
+            let gap = (q + d - p_of(&[a, b, c], &wc)).dot(&m);
+            return (gap <= self.reach).then_some(Hit {
+                gap,
+                normal: m,
+                nodes: tri,
+                w: wc,
+                face: f,
+                found: true,
+                recover: false,
+                end: true,
+                sudden: true,
+            });
+        }
         let (normal, gap, recover) = if along > 0.0 {
             // The distance to the closest point and its direction:
             // continuous across the kinks between faces (a face's own
             // normal would turn by the kink as the node passes a vertex
-            // and push it each time), the face's normal inside a face. On
-            // the ply's free outline the face's normal: the ply ends there
-            // square, not rounded, so a ply sliding past the edge of the
-            // one below is not pushed sideways.
-            if outline_hit {
-                (up, along - offset, false)
-            } else {
-                (d / r, r - offset, false)
-            }
-        } else if outline_hit {
-            // Behind the square end of the ply: not in it.
-            return None;
+            // and push it each time), the face's normal inside a face.
+            (d / r, r - offset, false)
         } else if r < offset {
             // Inside the ply beyond its mid-surface: it came round the
             // ply's free edge or a fold (no step moves a node that deep),
@@ -265,8 +314,82 @@ impl Master<'_> {
             face: f,
             found: true,
             recover,
+            end: false,
+            sudden: false,
         })
     }
+}
+
+/// Where a node behind face `v` (`along` ≤ 0 from its mid-surface, its
+/// closest point at the weights `w`, `bits` the face's outline features)
+/// goes out of the ply through its free end, that way being shorter than
+/// the way back to its own side (the offset and its depth): its closest
+/// point, the weights of the nearest point of the end, and the direction
+/// out; None where the node is in front, or nearer its own side.
+pub(super) fn through_end(
+    bits: u8,
+    v: [Vector3<f64>; 3],
+    w: &[f64; 3],
+    offset: f64,
+    along: f64,
+) -> Option<(Vector3<f64>, [f64; 3], Vector3<f64>)> {
+    if along > 0.0 || bits == 0 {
+        return None;
+    }
+    let q = p_of(&v, w);
+    let (e, wc, m) = nearest_outline(bits, v, &q)?;
+    (e < offset - along).then_some((q, wc, m))
+}
+
+/// The point of the face `v` at the barycentric weights `w`.
+fn p_of(v: &[Vector3<f64>; 3], w: &[f64; 3]) -> Vector3<f64> {
+    v[0] * w[0] + v[1] * w[1] + v[2] * w[2]
+}
+
+/// The point of the face `v`'s free-outline features (`bits` as
+/// [`super::outline_of`] gives them) nearest its point `q`: the distance,
+/// that point's weights, and the unit direction from `q` to it (out of
+/// the ply through its end); None where the face has no outline feature
+/// or `q` is on it.
+fn nearest_outline(
+    bits: u8,
+    v: [Vector3<f64>; 3],
+    q: &Vector3<f64>,
+) -> Option<(f64, [f64; 3], Vector3<f64>)> {
+    if bits == 0 {
+        return None;
+    }
+    let mut best: Option<(f64, [f64; 3], Vector3<f64>)> = None;
+    let mut keep = |w: [f64; 3], to: Vector3<f64>| {
+        let d2 = to.norm_squared();
+        if best.is_none_or(|b| d2 < b.0) {
+            best = Some((d2, w, to));
+        }
+    };
+    for k in 0..3 {
+        let j = (k + 1) % 3;
+        if bits & (1 << k) != 0 {
+            let e = v[j] - v[k];
+            let e2 = e.norm_squared();
+            let t = if e2 > 0.0 {
+                ((q - v[k]).dot(&e) / e2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut w = [0.0; 3];
+            w[k] = 1.0 - t;
+            w[j] = t;
+            keep(w, v[k] + e * t - q);
+        }
+        if bits & (1 << (3 + k)) != 0 {
+            let mut w = [0.0; 3];
+            w[k] = 1.0;
+            keep(w, v[k] - q);
+        }
+    }
+    let (d2, w, to) = best?;
+    let e = d2.sqrt();
+    (e > 0.0).then(|| (e, w, to / e))
 }
 
 /// The closest point of triangle abc to p and its barycentric weights
@@ -482,6 +605,52 @@ mod tests {
                     "p = {p:?}, first {first}: {pruned:?} against {exhaustive:?}"
                 );
             }
+        }
+    }
+
+    /// The way out through a free end: to the nearest point of the face's
+    /// outline edges and vertices (an edge's foot or a vertex, not an
+    /// interior edge), and only behind the face where that way is shorter
+    /// than the offset and the depth.
+    #[test]
+    fn the_way_out_through_the_end_is_to_the_nearest_outline_point_behind_the_face() {
+        let v = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(4.0, 0.0, 0.0),
+            Vector3::new(0.0, 4.0, 0.0),
+        ];
+        let q = Vector3::new(1.0, 0.5, 0.0);
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-14;
+        // Edge ab free (with its vertices): straight across to it.
+        let (e, w, m) = nearest_outline(0b01_1001, v, &q).expect("ab");
+        assert!(close(e, 0.5) && close(w[0], 0.75) && close(w[1], 0.25) && w[2] == 0.0);
+        assert!((m + Vector3::y()).norm() < 1e-14, "{m}");
+        // Edge bc free: its foot, at 0.4375 of the way from b.
+        let (e, w, m) = nearest_outline(0b00_0010, v, &q).expect("bc");
+        assert!(close(e, 2.5 / 2f64.sqrt()), "{e}");
+        assert!(
+            w[0] == 0.0 && close(w[1], 0.5625) && close(w[2], 0.4375),
+            "{w:?}"
+        );
+        assert!((m - Vector3::new(1.0, 1.0, 0.0) / 2f64.sqrt()).norm() < 1e-14);
+        // Only vertex c on the outline (its edges interior): to it.
+        let (e, w, _) = nearest_outline(0b10_0000, v, &q).expect("c");
+        assert!(close(e, (1.0f64 + 3.5 * 3.5).sqrt()) && w == [0.0, 0.0, 1.0]);
+        // No outline, or the point on it: none.
+        assert!(nearest_outline(0, v, &q).is_none());
+        assert!(nearest_outline(0b01_1001, v, &Vector3::new(1.0, 0.0, 0.0)).is_none());
+        // Behind the face, 0.5 from the free edge ab with the offset 0.3:
+        // out through the end from 0.2 deep on, never in front.
+        let w = [0.625, 0.25, 0.125];
+        for (along, out) in [
+            (0.1, false),
+            (0.0, false),
+            (-0.19, false),
+            (-0.21, true),
+            (-3.0, true),
+        ] {
+            let found = through_end(0b01_1001, v, &w, 0.3, along).is_some();
+            assert_eq!(found, out, "along {along}");
         }
     }
 }

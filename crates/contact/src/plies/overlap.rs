@@ -13,6 +13,11 @@
 //!   phase's gap, continuous across the kinks between faces);
 //! - `offset − along` over a face's free-outline edge or vertex, along the
 //!   face's normal (the square end);
+//! - its in-plane distance from the ply's free outline when it is behind
+//!   the mid-surface and that way out through the end is shorter than the
+//!   way back to its side (the offset and its depth), as the narrow phase
+//!   puts it out: a node held at the end plane behind the ply is at the
+//!   end, within the solve's tolerance, not through the ply;
 //! - `offset + |d|` when it is behind the mid-surface with its projection
 //!   inside the face: through the ply (the narrow phase puts such a node
 //!   back out on its stacking side, so this is what a node left there by
@@ -39,6 +44,7 @@
 
 use nalgebra::Vector3;
 
+use super::narrow::through_end;
 use super::{PlyContact, closest_on_triangle, on_outline};
 
 /// The deepest node of one ply inside its neighbour.
@@ -85,8 +91,8 @@ impl PlyContact {
                 }
                 let (q, w) = closest_on_triangle(&p, &a, &b, &c);
                 let (d, up, bits) = (p - q, nf * (s.side / len), outline[f as usize]);
-                depth = depth.max(node_depth(d, up, s.offset, w, bits));
-                if let Some(t) = behind_depth(d, up, s.offset, w, bits)
+                depth = depth.max(node_depth(d, up, s.offset, w, bits, [a, b, c]));
+                if let Some(t) = behind_depth(d, up, s.offset, w, bits, [a, b, c])
                     && d.norm_squared() < nearest
                 {
                     nearest = d.norm_squared();
@@ -157,7 +163,14 @@ impl PlyContact {
 /// of unit normal `up` (towards the node's ply) is inside that face's
 /// ply, with `offset` the two half thicknesses and `bits` the face's
 /// outline features; 0 when it is not (see the module's rules).
-fn node_depth(d: Vector3<f64>, up: Vector3<f64>, offset: f64, w: [f64; 3], bits: u8) -> f64 {
+fn node_depth(
+    d: Vector3<f64>,
+    up: Vector3<f64>,
+    offset: f64,
+    w: [f64; 3],
+    bits: u8,
+    v: [Vector3<f64>; 3],
+) -> f64 {
     let along = d.dot(&up);
     if (d - up * along).norm_squared() > offset * offset {
         return 0.0;
@@ -166,6 +179,13 @@ fn node_depth(d: Vector3<f64>, up: Vector3<f64>, offset: f64, w: [f64; 3], bits:
     let depth = if on_outline(bits, &w) {
         // Past the square end.
         return 0.0;
+    } else if dist < offset
+        && let Some(e) = end_depth(d, along, offset, w, bits, v)
+    {
+        // In the ply's thickness; deeper behind, only the nearest face
+        // decides ([`behind_depth`]): behind a fold's far layer near its
+        // end is not inside it.
+        e
     } else if along > 0.0 {
         offset - dist
     } else if w.iter().all(|&w| w > 0.0) && dist < offset {
@@ -189,6 +209,7 @@ fn behind_depth(
     offset: f64,
     w: [f64; 3],
     bits: u8,
+    v: [Vector3<f64>; 3],
 ) -> Option<f64> {
     let along = d.dot(&up);
     if (d - up * along).norm_squared() > offset * offset {
@@ -197,9 +218,27 @@ fn behind_depth(
         Some(0.0)
     } else if on_outline(bits, &w) {
         None
+    } else if let Some(e) = end_depth(d, along, offset, w, bits, v) {
+        Some(e)
     } else {
         Some(offset + d.norm())
     }
+}
+
+/// How far a node behind a face is inside the ply through its free end,
+/// where the narrow phase puts it back out that way ([`through_end`]):
+/// its depth past the end, not through the ply.
+fn end_depth(
+    d: Vector3<f64>,
+    along: f64,
+    offset: f64,
+    w: [f64; 3],
+    bits: u8,
+    v: [Vector3<f64>; 3],
+) -> Option<f64> {
+    let (q, wc, m) = through_end(bits, v, &w, offset, along)?;
+    let on = v[0] * wc[0] + v[1] * wc[1] + v[2] * wc[2];
+    Some((-(q + d - on).dot(&m)).max(0.0))
 }
 
 #[cfg(test)]
@@ -256,15 +295,19 @@ mod tests {
         assert_eq!(c.record_overlap(&x), None);
         assert_eq!(c.max_overlap(&x), 0.0);
         // Moved 0.2 mm in, over the lower ply: its top node is inside the
-        // lower ply's material, 0.008 mm behind the mid-surface: the
-        // offset and that.
-        let (x, mut c) = contact(hanging(9.95, -0.008));
-        let o = c.record_overlap(&x).expect("inside");
-        assert!((o.depth - 0.308).abs() < 1e-12, "{o:?}");
-        assert_eq!((o.ply, o.into, o.interface), (1, 0, 0));
-        assert!(o.node == 4 || o.node == 7, "{o:?}");
-        assert_eq!(o.position, x[o.node as usize]);
-        assert!((c.overlap_peaks()[0] - 0.308).abs() < 1e-12);
+        // lower ply's material, 0.008 mm behind the mid-surface and
+        // 0.05 mm in from the end: the way out through the end (the
+        // contact's) is the shorter, 0.05 mm. 2 mm in, the way back to
+        // its own side is: the offset and 0.008.
+        for (at, depth) in [(9.95, 0.05), (8.0, 0.308)] {
+            let (x, mut c) = contact(hanging(at, -0.008));
+            let o = c.record_overlap(&x).expect("inside");
+            assert!((o.depth - depth).abs() < 1e-12, "{o:?}");
+            assert_eq!((o.ply, o.into, o.interface), (1, 0, 0));
+            assert!(o.node == 4 || o.node == 7, "{o:?}");
+            assert_eq!(o.position, x[o.node as usize]);
+            assert!((c.overlap_peaks()[0] - depth).abs() < 1e-12);
+        }
     }
 
     #[test]
@@ -355,6 +398,36 @@ mod tests {
             let found = c.record_overlap(&x).map_or(0.0, |o| o.depth);
             assert!((found - depth).abs() < 1e-12, "z = {z}: {found}");
         }
+    }
+
+    #[test]
+    fn near_a_fold_s_end_only_the_nearest_layer_decides() {
+        // The lower ply folded back under itself: layers in z = 0 (normal
+        // +z) and −0.6 (folded back, normal −z), both ending at x = 10.
+        // The upper ply rests on the top layer at the offset, 0.1 mm in
+        // from the end: behind the folded-back layer by 0.9 mm there, and
+        // 0.1 mm in from its end, which is the shorter way out of that
+        // layer. The top layer, nearer, has the node in front: not inside.
+        let square = |z: f64| {
+            [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]].map(|[a, b]| Vector3::new(a, b, z))
+        };
+        let mut x: Vec<Vector3<f64>> = [0.0, -0.6].iter().flat_map(|&z| square(z)).collect();
+        x.extend(
+            [[5.9, 3.0], [9.9, 3.0], [9.9, 7.0], [5.9, 7.0]].map(|[a, b]| Vector3::new(a, b, 0.3)),
+        );
+        let folded = PlyLayer {
+            first_node: 0,
+            node_count: 8,
+            faces: vec![[0, 1, 2], [0, 2, 3], [4, 6, 5], [4, 7, 6]],
+            half_thickness: 0.15,
+        };
+        let interface = PlyInterface {
+            lower: 0,
+            upper: 1,
+            friction: 0.0,
+        };
+        let mut c = PlyContact::new(vec![folded, layer(8)], &[interface], vec![1.0; 12], 1.0);
+        assert_eq!(c.record_overlap(&x), None);
     }
 
     #[test]

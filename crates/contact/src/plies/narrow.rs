@@ -38,8 +38,10 @@ use super::{Hit, on_outline};
 /// How far (relative to the coordinates of the face and the node) a
 /// face's bound must be beyond the best distance so far before the face
 /// is passed over: far above the round-off of the bound and of a computed
-/// closest point (~1e-15 of the coordinates; [`FaceBound`]'s guard keeps
-/// slivers out), so a face passed over can never have been the closer one.
+/// closest point (~1e-15 of the coordinates for a well-shaped face,
+/// growing with the face's L²/|n| to ~4e-11 at the limit [`FaceBound`]'s
+/// guard keeps slivers out at), so a face passed over can never have been
+/// the closer one.
 const BOUND_SLACK: f64 = 1e-10;
 
 /// A face's data for a lower bound on a node's distance to it, at this

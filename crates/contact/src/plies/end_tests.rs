@@ -5,29 +5,12 @@
 
 use nalgebra::Vector3;
 
-use super::{PlyContact, PlyInterface};
+use super::PlyContact;
 
-/// The lower ply a 10 mm square in z = 0 (its free end x = 10), the upper
-/// one a 4 mm wide quad from x = 6, its nodes 5 and 6 at `far`: the two
-/// plies 0.15 mm half thick (offset 0.3 mm).
+/// [`super::fixtures::quad_over_square`]: the upper ply's nodes 5 and 6
+/// at `far` (x, z), the lower ply's free end at x = 10.
 fn plies(far: [f64; 2]) -> (Vec<Vector3<f64>>, PlyContact) {
-    let mut x: Vec<Vector3<f64>> = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]
-        .map(|[a, b]| Vector3::new(a, b, 0.0))
-        .to_vec();
-    x.extend([
-        Vector3::new(6.0, 3.0, 0.3),
-        Vector3::new(far[0], 3.0, far[1]),
-        Vector3::new(far[0], 7.0, far[1]),
-        Vector3::new(6.0, 7.0, 0.3),
-    ]);
-    let layer = |first| super::fixtures::square_layer(first, 0.15);
-    let interface = PlyInterface {
-        lower: 0,
-        upper: 1,
-        friction: 0.0,
-    };
-    let c = PlyContact::new(vec![layer(0), layer(4)], &[interface], vec![1.0; 8], 1.0);
-    (x, c)
+    super::fixtures::quad_over_square(far)
 }
 
 const DT: f64 = 1e-3;

@@ -5,30 +5,13 @@
 
 use nalgebra::Vector3;
 
-use super::{PlyContact, PlyInterface};
+use super::PlyContact;
 
-/// The lower ply a fixed 10 mm square in z = 0, the upper one a 4 mm
-/// wide quad resting on it (z = 0.3: the two 0.15 mm half thicknesses)
-/// from x = 6 to its nodes 5 and 6 at x = 8, `hang` mm above the lower
-/// ply's mid-plane, 2 mm in from its free edge x = 10.
+/// [`super::fixtures::quad_over_square`] with the upper ply's nodes 5
+/// and 6 at x = 8, `hang` mm above the lower ply's mid-plane, 2 mm in
+/// from its free edge x = 10.
 fn edge(hang: f64) -> (Vec<Vector3<f64>>, PlyContact) {
-    let mut x: Vec<Vector3<f64>> = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]
-        .map(|[a, b]| Vector3::new(a, b, 0.0))
-        .to_vec();
-    x.extend([
-        Vector3::new(6.0, 3.0, 0.3),
-        Vector3::new(8.0, 3.0, hang),
-        Vector3::new(8.0, 7.0, hang),
-        Vector3::new(6.0, 7.0, 0.3),
-    ]);
-    let layer = |first| super::fixtures::square_layer(first, 0.15);
-    let interface = PlyInterface {
-        lower: 0,
-        upper: 1,
-        friction: 0.0,
-    };
-    let c = PlyContact::new(vec![layer(0), layer(4)], &[interface], vec![1.0; 8], 1.0);
-    (x, c)
+    super::fixtures::quad_over_square([8.0, hang])
 }
 
 /// `steps` steps in which the (fixed) lower ply moves 0.01 mm along +x;

@@ -1139,20 +1139,14 @@ pub(crate) mod fixtures {
     use super::{PlyContact, PlyInterface, PlyLayer, Support};
     use nalgebra::Vector3;
 
-    /// The lower ply a 10 mm square in z = 0 (its free end x = 10), the
-    /// upper one a 4 mm wide quad from x = 6 (z = 0.3, resting on it),
-    /// its nodes 5 and 6 at `far` (x, z): the two plies 0.15 mm half
-    /// thick (offset 0.3 mm), frictionless.
-    pub fn quad_over_square(far: [f64; 2]) -> (Vec<Vector3<f64>>, PlyContact) {
+    /// The lower ply a 10 mm square in z = 0 (normal +z, its free end
+    /// x = 10), the upper one the quad `upper` (nodes 4..8): the two plies
+    /// 0.15 mm half thick (offset 0.3 mm), frictionless.
+    pub fn on_square(upper: [Vector3<f64>; 4]) -> (Vec<Vector3<f64>>, PlyContact) {
         let mut x: Vec<Vector3<f64>> = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]
             .map(|[a, b]| Vector3::new(a, b, 0.0))
             .to_vec();
-        x.extend([
-            Vector3::new(6.0, 3.0, 0.3),
-            Vector3::new(far[0], 3.0, far[1]),
-            Vector3::new(far[0], 7.0, far[1]),
-            Vector3::new(6.0, 7.0, 0.3),
-        ]);
+        x.extend(upper);
         let layer = |first| square_layer(first, 0.15);
         let interface = PlyInterface {
             lower: 0,
@@ -1161,6 +1155,17 @@ pub(crate) mod fixtures {
         };
         let c = PlyContact::new(vec![layer(0), layer(4)], &[interface], vec![1.0; 8], 1.0);
         (x, c)
+    }
+
+    /// [`on_square`] with a 4 mm wide quad from x = 6 (z = 0.3, resting
+    /// on the square), its nodes 5 and 6 at `far` (x, z).
+    pub fn quad_over_square(far: [f64; 2]) -> (Vec<Vector3<f64>>, PlyContact) {
+        on_square([
+            Vector3::new(6.0, 3.0, 0.3),
+            Vector3::new(far[0], 3.0, far[1]),
+            Vector3::new(far[0], 7.0, far[1]),
+            Vector3::new(6.0, 7.0, 0.3),
+        ])
     }
 
     /// A ply of the two triangles of the quad `first`..`first + 3`.

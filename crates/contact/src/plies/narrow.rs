@@ -344,7 +344,7 @@ pub(super) fn through_end(
 }
 
 /// The point of the face `v` at the barycentric weights `w`.
-fn p_of(v: &[Vector3<f64>; 3], w: &[f64; 3]) -> Vector3<f64> {
+pub(super) fn p_of(v: &[Vector3<f64>; 3], w: &[f64; 3]) -> Vector3<f64> {
     v[0] * w[0] + v[1] * w[1] + v[2] * w[2]
 }
 

@@ -44,7 +44,7 @@
 
 use nalgebra::Vector3;
 
-use super::narrow::through_end;
+use super::narrow::{p_of, through_end};
 use super::{PlyContact, closest_on_triangle, on_outline};
 
 /// The deepest node of one ply inside its neighbour.
@@ -237,8 +237,7 @@ fn end_depth(
     v: [Vector3<f64>; 3],
 ) -> Option<f64> {
     let (q, wc, m) = through_end(bits, v, &w, offset, along)?;
-    let on = v[0] * wc[0] + v[1] * wc[1] + v[2] * wc[2];
-    Some((-(q + d - on).dot(&m)).max(0.0))
+    Some((-(q + d - p_of(&v, &wc)).dot(&m)).max(0.0))
 }
 
 #[cfg(test)]
@@ -255,17 +254,7 @@ mod tests {
     /// The lower ply a 10 mm square in z = 0 (normal +z), the upper one
     /// the quad `upper`, wound so its normal points along `up`.
     fn contact(upper: [Vector3<f64>; 4]) -> (Vec<Vector3<f64>>, PlyContact) {
-        let mut x: Vec<Vector3<f64>> = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]]
-            .map(|[a, b]| Vector3::new(a, b, 0.0))
-            .to_vec();
-        x.extend(upper);
-        let interface = PlyInterface {
-            lower: 0,
-            upper: 1,
-            friction: 0.0,
-        };
-        let c = PlyContact::new(vec![layer(0), layer(4)], &[interface], vec![1.0; 8], 1.0);
-        (x, c)
+        crate::plies::fixtures::on_square(upper)
     }
 
     /// The upper ply a 4 mm square at height `z` over the middle of the

@@ -3,7 +3,8 @@
 //! issue 31's "four plies ≤ 5× one ply", not a bench (nothing is checked).
 //!
 //! `cargo run --release -p drape-benches --example stack_cost -- PLIES
-//! [--threads N] [--set key=value]...` runs the scene's first PLIES plies
+//! [--threads N] [--scene FILE] [--set key=value]...` runs the scene's
+//! (the four-ply hemisphere's unless `--scene` names another) first PLIES plies
 //! with the overrides on a pool of N threads (1 by default), profiled
 //! by the driver thread's CPU time on one thread (the wall clock on more),
 //! and prints: nodes and elements, steps, the process's CPU time, the
@@ -34,10 +35,13 @@ fn main() {
         .expect("PLIES first");
     let mut threads = 1;
     let mut overrides = Vec::new();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut path = root.join("scenes/hemisphere-stack-4.toml");
     let mut k = 1;
     while k < args.len() {
         match args[k].as_str() {
             "--threads" => threads = args[k + 1].parse().expect("--threads N"),
+            "--scene" => path = args[k + 1].clone().into(),
             "--set" => {
                 let (key, value) = args[k + 1].split_once('=').expect("--set key=value");
                 overrides.push((key.to_string(), value.to_string()));
@@ -46,8 +50,6 @@ fn main() {
         }
         k += 2;
     }
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let path = root.join("scenes/hemisphere-stack-4.toml");
     let text = std::fs::read_to_string(&path).expect("scene");
     let starts: Vec<usize> = text
         .match_indices("[[stack.ply]]")
@@ -106,16 +108,18 @@ fn main() {
                 let t = &pl.totals;
                 let per = |n: u64| n as f64 / t.steps.max(1) as f64;
                 println!(
-                    "ply pass: {} steps, {:.0} constraints, {:.2} normal sweeps (max {}, capped {}), \
-                     {:.2} friction sweeps (max {}, capped {}), {} candidate pairs now",
+                    "ply pass: {} steps, {:.0} constraints, {:.2} normal sweeps (max {}, capped {}, stalled {}), \
+                     {:.2} friction sweeps (max {}, capped {}, stalled {}), {} candidate pairs now",
                     t.steps,
                     per(t.constraints),
                     per(t.normal_sweeps),
                     t.max_normal_sweeps,
                     t.normal_capped,
+                    t.normal_stalled,
                     per(t.friction_sweeps),
                     t.max_friction_sweeps,
                     t.friction_capped,
+                    t.friction_stalled,
                     pl.candidate_pairs(),
                 );
             }

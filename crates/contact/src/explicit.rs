@@ -314,6 +314,15 @@ struct Scratch {
     tool_axis: Vec<(Vector3<f64>, f64)>,
     tool_sum: Vec<f64>,
     tool_shift: Vec<f64>,
+    /// Per tool, the travel the ply pass gives a force-driven one.
+    ply_tool_shift: Vec<f64>,
+    /// In a stack, the nodes within the offset of a tool that no
+    /// constraint presses (gap ≥ 0): the ply pass may not push them in
+    /// either ([`crate::plies::Support`]).
+    near: Vec<Constraint>,
+    /// Per node, the tools (bits, the first 64) whose constraint on it
+    /// the ply pass holds already, while its supports are listed.
+    held_by: Vec<u64>,
     added: Vec<Constraint>,
     /// Per tool, per candidate: its last projection (see [`Projected`]).
     projected: Vec<Vec<Projected>>,
@@ -599,6 +608,7 @@ impl ExplicitContact {
         // Narrow phase. A node within `touch` of a tool rests on it: in
         // contact with no force this step (nothing pushes it in).
         self.constraints.clear();
+        self.scratch.near.clear();
         let offset = self.settings.offset;
         let (slack, max_travel) = (self.settings.fault_tolerance, self.settings.max_travel);
         let touch = TOUCHING * offset;
@@ -692,16 +702,27 @@ impl ExplicitContact {
                         gap,
                         mu: 0.0,
                     });
-                } else if gap <= touch {
-                    self.status[i as usize] = ContactStatus::Stick;
-                    self.tool_of[i as usize] = t as u32;
-                    self.touched.push(i);
+                } else {
+                    if gap <= touch {
+                        self.status[i as usize] = ContactStatus::Stick;
+                        self.tool_of[i as usize] = t as u32;
+                        self.touched.push(i);
+                    }
+                    if self.plies.is_some() && gap <= offset {
+                        self.scratch.near.push(Constraint {
+                            node: i,
+                            tool: t as u32,
+                            normal,
+                            gap,
+                            mu: 0.0,
+                        });
+                    }
                 }
             }
         }
         PhaseTimer::lap(&mut self.phases, ContactPhase::Projection);
         if self.constraints.is_empty() {
-            self.ply_pass(x, v, mass, movable, dt, tau);
+            self.ply_pass(x, v, mass, movable, dt, tau, tool_mass_factor);
             return Ok(ContactStep::default());
         }
         let mut step = ContactStep::default();
@@ -777,7 +798,7 @@ impl ExplicitContact {
         if self.plies.is_some() {
             // The ply pass leaves the tool friction for the friction pass
             // below, which reads the supports' added multipliers.
-            self.ply_normal(x, v, mass, movable, dt, tau);
+            self.ply_normal(x, v, mass, movable, dt, tau, tool_mass_factor);
         }
         if self.has_friction() {
             self.friction(x, v, mass, dt, tau);

@@ -30,6 +30,10 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "four plies [0/45/90/−45] formed together on the hemisphere (as shipped; in full runs also with the ±45 plies at the 0/90 plies' element size), and the bottom ply alone, on 2 threads",
             "the plies' distance from the positions: overlap ≤ 1 % of the thickness; no capped ply solve; full: wall time ≤ 5× one ply's, both stacks",
         ),
+        "plies/pressed-stack" => (
+            "two plies [0/90 + ±45] deep drawn under the shipped force-driven blank holder (μ_ply = 0.2)",
+            "the stroke completes; the plies' distance from the positions: overlap ≤ 1 % of the thickness; the holder's contact carries its force after the ramp",
+        ),
         "plies/hemisphere-overlap" => (
             "two plies (0/90 under ±45, μ_ply = 0.2) formed together on the hemisphere: no interpenetration",
             "the plies' distance computed from the positions: largest overlap ≤ 1 % of the ply thickness",

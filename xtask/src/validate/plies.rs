@@ -23,6 +23,7 @@ use super::{Case, Check, note};
 
 mod four;
 mod held;
+mod pressed;
 
 /// The cases of this module.
 pub const CASES: &[Case] = &[
@@ -55,6 +56,11 @@ pub const CASES: &[Case] = &[
         name: "plies/held-frictionless",
         quick: false,
         run: held::held_frictionless,
+    },
+    Case {
+        name: "plies/pressed-stack",
+        quick: true,
+        run: pressed::pressed_stack,
     },
     Case {
         name: "plies/hemisphere-four",

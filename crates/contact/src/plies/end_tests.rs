@@ -40,7 +40,17 @@ fn step(
     let mass = vec![1.0; 8];
     let movable: Vec<bool> = (0..8).map(|i| i == 5 || i == 6).collect();
     let mut force = vec![Vector3::zeros(); 8];
-    contact.normal(x, &mut v, &mass, &movable, DT, DT, &mut [], &mut force);
+    contact.normal(
+        x,
+        &mut v,
+        &mass,
+        &movable,
+        DT,
+        DT,
+        &mut [],
+        &mut [],
+        &mut force,
+    );
     v
 }
 

@@ -102,6 +102,7 @@ fn run(threads: usize) -> Outcome {
                 dt,
                 tau,
                 &mut [],
+                &mut [],
                 &mut force,
             );
             active = active.max(step.active);

@@ -198,9 +198,10 @@ fn regions(
 /// a gap-set holder), not driven by the shipped 190.4 kN: with the force
 /// the stack stopped at t = 0.025 s (2026-11-28, 40 × 40 cells) on a
 /// contact fault, a top-ply node under the holder (r = 107 mm) thrown
-/// 0.63 mm in one step into the holder as the force ramped up — a fault of
-/// a stack pinched between a pressed holder and a die, left for its own
-/// issue; a fixed holder keeps both plies held on both faces everywhere.
+/// 0.63 mm in one step into the holder as the force ramped up. That fault
+/// (the ply pass held the holder where the tool pass had pressed it into
+/// the stack) is fixed since, and `plies/pressed-stack` checks it; this
+/// case keeps the fixed holder it was measured with (below).
 ///
 /// Same mesh, mass scaling and yarn bending (the preset's, on in all) in
 /// all runs, compared element by element. Beside it, each ply alone

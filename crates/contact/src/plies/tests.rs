@@ -1,0 +1,346 @@
+//! Tests of the ply pass: the narrow phase's closest points, the normal
+//! and friction solves on small stacks.
+
+use super::*;
+
+/// Two unit squares (two triangles each) 0.9 apart with offsets of 0.5
+/// each: every node 0.1 mm inside.
+fn two_squares(dz: f64) -> (Vec<Vector3<f64>>, PlyContact) {
+    let sq = |z: f64| {
+        [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
+    };
+    let mut x = sq(0.0).to_vec();
+    x.extend(sq(dz));
+    let layer = |first| fixtures::square_layer(first, 0.5);
+    let contact = PlyContact::new(
+        vec![layer(0), layer(4)],
+        &[PlyInterface {
+            lower: 0,
+            upper: 1,
+            friction: 0.5,
+        }],
+        vec![0.25; 8],
+        1.0,
+    );
+    (x, contact)
+}
+
+#[test]
+fn closest_point_weights_reproduce_the_point() {
+    let (a, b, c) = (
+        Vector3::new(0.0, 0.0, 0.0),
+        Vector3::new(2.0, 0.0, 0.0),
+        Vector3::new(0.0, 1.0, 0.5),
+    );
+    for p in [
+        Vector3::new(0.3, 0.2, 1.0),
+        Vector3::new(-1.0, -1.0, 0.0),
+        Vector3::new(3.0, 0.1, 0.0),
+        Vector3::new(1.0, 1.0, 0.0),
+        Vector3::new(-0.5, 0.5, 0.2),
+    ] {
+        let (q, w) = closest_on_triangle(&p, &a, &b, &c);
+        let back = a * w[0] + b * w[1] + c * w[2];
+        assert!((q - back).norm() < 1e-14);
+        assert!(w.iter().all(|&w| (-1e-15..=1.0 + 1e-15).contains(&w)));
+        // No point of the triangle (a grid of them) is closer.
+        for i in 0..=20 {
+            for j in 0..=(20 - i) {
+                let r = a + (b - a) * (i as f64 / 20.0) + (c - a) * (j as f64 / 20.0);
+                assert!((p - r).norm() >= (p - q).norm() - 1e-12);
+            }
+        }
+    }
+}
+
+#[test]
+fn overlapping_plies_are_pushed_apart_by_mass() {
+    let (mut x, mut contact) = two_squares(0.9);
+    let mut v = vec![Vector3::zeros(); 8];
+    // The lower ply three times heavier: it moves a quarter of 0.1.
+    let mut mass = vec![3.0; 4];
+    mass.extend([1.0; 4]);
+    let mut force = vec![Vector3::zeros(); 8];
+    let step = contact.normal(
+        &mut x,
+        &mut v,
+        &mass,
+        &[true; 8],
+        1e-3,
+        1e-3,
+        &mut [],
+        &mut [],
+        &mut force,
+    );
+    // To the solve's tolerance: 1e-6 of the 0.1 mm violation.
+    assert!(step.active > 0 && step.residual <= 1e-7);
+    for i in 0..4 {
+        assert!((x[i].z + 0.025).abs() < 1e-7, "{}", x[i].z);
+        assert!((x[i + 4].z - 0.975).abs() < 1e-7, "{}", x[i + 4].z);
+    }
+    assert!(contact.max_overlap(&x) < 1e-7);
+    // Equal and opposite forces.
+    let total: Vector3<f64> = force.iter().sum();
+    assert!(total.norm() < 1e-9 * force[4].norm());
+}
+
+#[test]
+fn nodes_on_nodes_make_one_row_per_pair_with_the_deeper_gap() {
+    // `passes` steps on one configuration; the first step's rows.
+    let solve = |raise: f64, passes: usize| {
+        let (mut x, mut contact) = two_squares(0.9);
+        x[6].z += raise;
+        let mut v = vec![Vector3::zeros(); 8];
+        let mass = vec![1.0; 8];
+        let mut force = vec![Vector3::zeros(); 8];
+        let mut first = None;
+        for _ in 0..passes {
+            let step = contact.normal(
+                &mut x,
+                &mut v,
+                &mass,
+                &[true; 8],
+                1e-3,
+                1e-3,
+                &mut [],
+                &mut [],
+                &mut force,
+            );
+            if first.is_none() {
+                let rows: Vec<(u32, u32)> = contact
+                    .constraints
+                    .iter()
+                    .map(|c| (c.slave, c.slip_node))
+                    .collect();
+                first = Some((step, rows));
+            }
+        }
+        let (step, mut rows) = first.expect("a pass");
+        rows.sort_unstable();
+        (step, rows, contact.max_overlap(&x))
+    };
+    // Flat: four pairs, one row each (the two searches would make
+    // eight), the upper node's where the gaps tie.
+    let (step, rows, overlap) = solve(0.0, 1);
+    assert_eq!(step.active, 4);
+    assert_eq!(rows, [(4, 4), (5, 5), (6, 6), (7, 7)]);
+    assert!(overlap < 1e-9, "{overlap}");
+    // One upper corner raised: both upper faces tilt, so each lower
+    // node is nearer them than its upper node is to the flat lower
+    // faces; the lower nodes' rows are kept, their slip counted for
+    // the upper node of each pair. The upper nodes' gaps follow to
+    // first order: what one step leaves of them is of the order of
+    // the correction (0.1 mm) times the tilt squared (≤ 0.02 rad
+    // along the diagonal), and the next step, where they are the
+    // deeper, takes it up.
+    let (step, rows, overlap) = solve(0.01, 1);
+    assert_eq!(step.active, 4);
+    assert_eq!(rows, [(0, 4), (1, 5), (2, 6), (3, 7)]);
+    assert!(overlap < 0.1 * 0.02 * 0.02, "{overlap}");
+    let (_, _, overlap) = solve(0.01, 2);
+    assert!(overlap < 1e-8, "{overlap}");
+}
+
+#[test]
+fn a_repeated_step_starts_from_the_last_forces() {
+    // The lower ply fixed, the upper pushed 0.1 mm into it twice: the
+    // second solve starts from the first one's multipliers, which are
+    // its answer, and stops after the sweep that finds nothing to do.
+    let (mut x, mut contact) = two_squares(0.9);
+    let mut v = vec![Vector3::zeros(); 8];
+    let mass = vec![1.0; 8];
+    let movable: Vec<bool> = (0..8).map(|i| i >= 4).collect();
+    let mut force = vec![Vector3::zeros(); 8];
+    let (dt, tau) = (1e-3, 1e-3);
+    let first = contact.normal(
+        &mut x,
+        &mut v,
+        &mass,
+        &movable,
+        dt,
+        tau,
+        &mut [],
+        &mut [],
+        &mut force,
+    );
+    contact.friction(
+        &mut x,
+        &mut v,
+        &mass,
+        &movable,
+        dt,
+        tau,
+        &mut [],
+        &mut force,
+    );
+    assert!(first.sweeps > 1);
+    for p in &mut x[4..] {
+        p.z -= 0.1;
+    }
+    let second = contact.normal(
+        &mut x,
+        &mut v,
+        &mass,
+        &movable,
+        dt,
+        tau,
+        &mut [],
+        &mut [],
+        &mut force,
+    );
+    assert_eq!(second.sweeps, 1);
+    // To the solve's tolerance, 1e-6 of the 0.1 mm it started from.
+    for p in &x[4..] {
+        assert!((p.z - 1.0).abs() <= 1e-7, "{}", p.z);
+    }
+    assert_eq!(contact.totals.steps, 2);
+    assert_eq!(contact.totals.normal_capped, 0);
+}
+
+#[test]
+fn a_supported_lower_ply_sends_the_push_to_the_upper() {
+    let (mut x, mut contact) = two_squares(0.9);
+    let mut v = vec![Vector3::zeros(); 8];
+    let mass = vec![1.0; 8];
+    let mut force = vec![Vector3::zeros(); 8];
+    let mut supports = fixtures::bottom_supports();
+    contact.normal(
+        &mut x,
+        &mut v,
+        &mass,
+        &[true; 8],
+        1e-3,
+        1e-3,
+        &mut supports,
+        &mut [],
+        &mut force,
+    );
+    // To the solve's tolerance: 1e-6 of the 0.1 mm violation.
+    for i in 0..4 {
+        assert!(x[i].z.abs() < 1e-7);
+        assert!((x[i + 4].z - 1.0).abs() < 1e-7);
+    }
+    // The tool carries the whole push: Σν = Σμ of the ply constraints,
+    // each of the four within the solve's 1e-7 mm (unit masses).
+    let nu: f64 = supports.iter().map(|s| s.mu).sum();
+    assert!((nu - 0.4).abs() < 4e-7, "{nu}");
+}
+
+#[test]
+fn a_chain_of_plies_is_solved_to_the_stated_tolerance() {
+    // Three unit squares 0.9 mm apart (offsets 1 mm: each interface
+    // 0.1 mm inside), the bottom one on a tool, the middle one twice
+    // as heavy: the tool holds the bottom, the middle moves 0.1 mm and
+    // the top 0.2 mm, with multipliers (as mass × mm per node) 0.2 on
+    // the upper interface, 0.4 on the lower and on the tool. Gauss–
+    // Seidel takes this chain over many sweeps; it stops with every
+    // gap within NORMAL_TOLERANCE of the 0.1 mm start.
+    let sq = |z: f64| {
+        [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
+    };
+    let mut x: Vec<Vector3<f64>> = [0.0, 0.9, 1.8].iter().flat_map(|&z| sq(z)).collect();
+    let layer = |first| fixtures::square_layer(first, 0.5);
+    let interface = |lower, upper| PlyInterface {
+        lower,
+        upper,
+        friction: 0.0,
+    };
+    let mut contact = PlyContact::new(
+        vec![layer(0), layer(4), layer(8)],
+        &[interface(0, 1), interface(1, 2)],
+        vec![0.25; 12],
+        1.0,
+    );
+    let mut v = vec![Vector3::zeros(); 12];
+    let mut mass = vec![1.0; 12];
+    mass[4..8].fill(2.0);
+    let mut force = vec![Vector3::zeros(); 12];
+    let mut supports = fixtures::bottom_supports();
+    let step = contact.normal(
+        &mut x,
+        &mut v,
+        &mass,
+        &[true; 12],
+        1e-3,
+        1e-3,
+        &mut supports,
+        &mut [],
+        &mut force,
+    );
+    let tolerance = NORMAL_TOLERANCE * 0.1;
+    assert_eq!(step.active, 8);
+    assert!(step.sweeps > 5, "{}", step.sweeps);
+    assert!(step.residual <= tolerance, "{}", step.residual);
+    assert_eq!(contact.totals.normal_capped, 0);
+    // Flat plies: the linearised gaps are the gaps. Each is within the
+    // tolerance; a position errs by at most the two gaps below it.
+    assert!(
+        contact.max_overlap(&x) <= tolerance,
+        "{}",
+        contact.max_overlap(&x)
+    );
+    for i in 0..4 {
+        assert!(x[i].z.abs() <= tolerance, "{}", x[i].z);
+        assert!(
+            (x[i + 4].z - 1.0).abs() <= 2.0 * tolerance,
+            "{}",
+            x[i + 4].z
+        );
+        assert!(
+            (x[i + 8].z - 2.0).abs() <= 3.0 * tolerance,
+            "{}",
+            x[i + 8].z
+        );
+    }
+    // The tool's multipliers carry both plies' push: 0.4 per node, to
+    // the masses (1 + 2 + 1) times the gaps' tolerance.
+    for s in &supports {
+        assert!((s.mu - 0.4).abs() <= 4.0 * tolerance, "{}", s.mu);
+    }
+    let upper: Vec<f64> = contact
+        .constraints
+        .iter()
+        .filter(|c| c.slave >= 8 || c.masters.iter().all(|&m| m >= 8))
+        .map(|c| c.mu)
+        .collect();
+    assert_eq!(upper.len(), 4);
+    for mu in upper {
+        assert!((mu - 0.2).abs() <= 4.0 * tolerance, "{mu}");
+    }
+}
+
+#[test]
+fn friction_sticks_below_the_cone_and_slides_on_it() {
+    for (speed, sticks) in [(1e-3, true), (1000.0, false)] {
+        let (mut x, mut contact) = two_squares(0.9);
+        let mut v = vec![Vector3::zeros(); 8];
+        for vi in &mut v[4..] {
+            vi.x = speed;
+        }
+        let mass = vec![1.0; 8];
+        let fixed: Vec<bool> = (0..8).map(|i| i >= 4).collect();
+        let mut force = vec![Vector3::zeros(); 8];
+        let (dt, tau) = (1e-3, 1e-3);
+        contact.normal(
+            &mut x,
+            &mut v,
+            &mass,
+            &fixed,
+            dt,
+            tau,
+            &mut [],
+            &mut [],
+            &mut force,
+        );
+        let normal: f64 = force[4..].iter().map(|f| f.z).sum();
+        contact.friction(&mut x, &mut v, &mass, &fixed, dt, tau, &mut [], &mut force);
+        let tangential: f64 = force[4..].iter().map(|f| f.x).sum();
+        if sticks {
+            assert!(v[4..].iter().all(|v| v.x.abs() < 1e-12));
+            assert!(-tangential < 0.5 * normal);
+        } else {
+            assert!((-tangential - 0.5 * normal).abs() < 1e-9 * normal);
+            assert!(contact.slip[4] > 0.0 && contact.friction_dissipation > 0.0);
+        }
+    }
+}

@@ -32,7 +32,7 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
         ),
         "plies/pressed-stack" => (
             "two plies [0/90 + ±45] deep drawn under the shipped force-driven blank holder (μ_ply = 0.2)",
-            "the stroke completes; the plies' distance from the positions: overlap ≤ 1 % of the thickness; the holder's contact carries its force after the ramp",
+            "the run reaches its end time (quick: the first 0.1 s, the holder's ramp and hold; full: the stroke); the plies' distance from the positions: overlap ≤ 1 % of the thickness; the holder's contact carries its force after the ramp",
         ),
         "plies/hemisphere-overlap" => (
             "two plies (0/90 under ±45, μ_ply = 0.2) formed together on the hemisphere: no interpenetration",

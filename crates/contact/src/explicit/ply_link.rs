@@ -120,10 +120,11 @@ impl ExplicitContact {
             return;
         };
         let tools = &self.tools;
+        // A near node's gap is ≥ 0; a pressed one's is set to 0 below.
         let support = |c: &Constraint| Support {
             node: c.node,
             normal: c.normal,
-            gap: c.gap.max(0.0),
+            gap: c.gap,
             mu: 0.0,
             driven: match &tools[c.tool as usize].motion {
                 ToolMotion::Force {

@@ -15,7 +15,7 @@ use crate::validate::{Check, note, quick_mode};
 
 /// `scenes/deep-drawing-0-90.toml` as two plies, 0/90 under ±45, μ_ply =
 /// 0.2, the holder raised by one ply thickness (15 µm clear of the top
-/// ply, as shipped): the stroke completes; no ply is inside the other
+/// ply, as shipped): the run reaches its end time; no ply is inside the other
 /// beyond 1 % of the thickness (measured from the positions); after the
 /// holder's force has ramped up, the force the holder's contact carries is
 /// its own at every frame (the holder at rest on the stack).
@@ -104,7 +104,7 @@ pub fn pressed_stack() -> Vec<Check> {
     ));
     vec![
         Check::abs(
-            "the stroke completes (1 if the run stopped)",
+            "the run reaches its end time (1 if it stopped short)",
             0.0,
             f64::from(u8::from(result.is_err())),
             0.0,

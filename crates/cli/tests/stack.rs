@@ -307,3 +307,81 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
     }
     files
 }
+
+/// A laminate stopped and resumed from its checkpoint ends bit for bit
+/// where the uninterrupted run does: the ply pass's warm starts, its
+/// searches' last faces, the plies' slip and peaks travel in the
+/// checkpoint, as the tools' states do.
+#[test]
+fn a_resumed_stack_ends_where_an_uninterrupted_one_does() {
+    use drape::{Checkpoint, RunControl, RunOptions, run_scene, run_scene_with};
+    use drape_io::scene::Scene;
+    let dir = temp("stack-resume");
+    let path = scene(&dir, 2, true);
+    let scene = Scene::from_file(Path::new(&path), &[]).unwrap();
+    let straight = run_scene(&scene, &dir.join("straight"), &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(straight.summary.status, "completed");
+
+    let mut interrupted = scene.clone();
+    interrupted.settings.max_steps = Some(1300);
+    let out = dir.join("resumed");
+    let options = RunOptions {
+        checkpoint_every: Some(1200),
+        ..RunOptions::default()
+    };
+    let first = run_scene_with(&interrupted, &out, options, &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(first.summary.status, "stopped");
+    let checkpoint = Checkpoint::read(&out).unwrap();
+    assert_eq!(checkpoint.state.step, 1200);
+    let carry = checkpoint
+        .driver
+        .plies
+        .as_ref()
+        .expect("the ply pass carried");
+    assert!(carry.pass > 0 && carry.slip.iter().any(|&s| s > 0.0));
+
+    // A checkpoint an older drape wrote (no ply state) still resumes, and
+    // says that the run is not the uninterrupted one.
+    let mut older = checkpoint.clone();
+    older.driver.plies = None;
+    let options = RunOptions {
+        resume: Some(older),
+        ..RunOptions::default()
+    };
+    let cold = run_scene_with(&scene, &dir.join("cold"), options, &mut |_| {
+        RunControl::Continue
+    })
+    .unwrap();
+    assert_eq!(cold.summary.status, "completed");
+    assert!(
+        cold.summary
+            .warnings
+            .iter()
+            .any(|w| w.contains("carries no ply contact state")),
+        "{:?}",
+        cold.summary.warnings
+    );
+
+    let options = RunOptions {
+        resume: Some(checkpoint),
+        ..RunOptions::default()
+    };
+    let resumed = run_scene_with(&scene, &out, options, &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(resumed.summary.status, "completed");
+    assert_eq!(resumed.state.step, straight.state.step);
+    let bits = |s: &drape_model::State| -> Vec<u64> {
+        s.x.iter()
+            .chain(&s.v)
+            .flat_map(|p| p.iter().map(|v| v.to_bits()))
+            .collect()
+    };
+    assert!(
+        bits(&resumed.state) == bits(&straight.state),
+        "the states differ"
+    );
+    let csv = |d: &str| std::fs::read_to_string(dir.join(d).join("energy.csv")).unwrap();
+    assert_eq!(csv("resumed"), csv("straight"));
+    let plies = |d: &str| json(&dir.join(d).join("summary.json"))["plies"].clone();
+    assert_eq!(plies("resumed"), plies("straight"));
+    std::fs::remove_dir_all(dir).unwrap();
+}

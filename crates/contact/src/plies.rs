@@ -84,8 +84,10 @@
 use nalgebra::Vector3;
 use rayon::prelude::*;
 
+mod carry;
 mod narrow;
 mod overlap;
+pub use carry::PlyCarry;
 use narrow::{FaceBound, Master, closest_on_triangle, face_bounds};
 pub use overlap::PlyOverlap;
 
@@ -377,7 +379,7 @@ pub struct PlyStep {
 
 /// Sums over the steps of the ply pass since it was made: what its
 /// solves cost, for a profile or a validation note.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct PlyTotals {
     /// Steps with at least one active constraint.
     pub steps: u64,

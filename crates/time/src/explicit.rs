@@ -577,6 +577,22 @@ impl<'m> Explicit<'m> {
         if let (Some(r), Some(contact)) = (&resume, &mut self.contact) {
             contact.tool_state.clone_from(&r.tools);
             contact.friction_dissipation = r.friction_dissipation;
+            match (contact.plies_mut(), &r.plies) {
+                (Some(plies), Some(carry)) => plies.restore(carry).map_err(RunError::Setup)?,
+                // A checkpoint written before the ply pass was carried.
+                (Some(_), None) => self.warnings.push(
+                    "the checkpoint carries no ply contact state (an older drape wrote it): the \
+                     plies' solves start cold and their slip from zero, so the resumed run is \
+                     not bit for bit the uninterrupted one"
+                        .into(),
+                ),
+                (None, Some(_)) => {
+                    return Err(RunError::Setup(
+                        "the checkpoint carries a ply contact, and this model is no stack".into(),
+                    ));
+                }
+                (None, None) => {}
+            }
         }
         let frame_dt = if self.settings.frames > 0 {
             end / self.settings.frames as f64
@@ -877,6 +893,11 @@ impl<'m> Explicit<'m> {
                         .map_or(0.0, |c| c.friction_dissipation),
                     implicit: None,
                     truss_clearance: Confinement::stored(&self.forces.truss_clearance),
+                    plies: self
+                        .contact
+                        .as_ref()
+                        .and_then(ExplicitContact::plies)
+                        .map(drape_contact::PlyContact::carry),
                 };
                 observer.checkpoint(state, &driver);
                 self.lap(Pass::Output);

@@ -1135,6 +1135,7 @@ impl<'m> Implicit<'m> {
                 contact_force: self.f_c_n.clone(),
             }),
             truss_clearance: Vec::new(),
+            plies: None,
         }
     }
 

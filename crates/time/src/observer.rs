@@ -131,6 +131,10 @@ pub struct DriverState {
     /// empty where no yarn is confined.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub truss_clearance: Vec<Vec<f64>>,
+    /// The explicit driver's ply contact between steps (warm starts, broad
+    /// phase, slip and peaks); None without a stack.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plies: Option<drape_contact::PlyCarry>,
 }
 
 /// The implicit driver's carried state: accelerations (the Bossak scheme

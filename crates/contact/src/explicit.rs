@@ -118,6 +118,14 @@ pub struct ContactSettings {
     /// explicit driver sets it to the fabric's thickness; the default does
     /// not limit.
     pub max_travel: f64,
+    /// The largest clearance between two tools that a confined yarn can
+    /// meet (mm; 0: no yarn is confined): a node whose gap to a tool is
+    /// within the offset and this is projected on it at every step, and a
+    /// tool farther away is no wall ([`ExplicitContact::clearance_into`]),
+    /// so that a yarn's clearance depends on the positions alone, not on
+    /// when the node was last projected (a resumed run's projections are
+    /// all new).
+    pub clearance_reach: f64,
 }
 
 impl Default for ContactSettings {
@@ -129,6 +137,7 @@ impl Default for ContactSettings {
             max_iterations: 500,
             fault_tolerance: 1e-3,
             max_travel: f64::INFINITY,
+            clearance_reach: 0.0,
         }
     }
 }
@@ -631,7 +640,11 @@ impl ExplicitContact {
             let projected = &mut self.scratch.projected[t];
             projected.resize(candidates.len(), Projected::STALE);
             let axis = tool.motion.direction().norm();
-            let reach = offset + 2.0 * touch;
+            // A stack's ply pass also reads the nodes within the offset of
+            // a tool (`near`), and the confined yarns every gap within the
+            // clearance reach, so none of those may be skipped either.
+            let near = if self.plies.is_some() { offset } else { 0.0 };
+            let reach = offset + near.max(self.settings.clearance_reach) + 2.0 * touch;
             candidates
                 .par_iter()
                 .zip(projected.par_iter_mut())

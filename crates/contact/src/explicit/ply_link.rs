@@ -336,4 +336,78 @@ mod tests {
             }
         }
     }
+
+    /// A top ply near a lid (within the offset of touching it) is pushed up
+    /// by a heavy bottom ply rising into it: the lid must hold it, as a
+    /// near support, even where the tool pass did not project the node
+    /// again this step (it had not moved since it was last projected, far
+    /// enough by the tool contact's own reach). The skip missed that band,
+    /// and the ply pass pushed the top ply into the lid.
+    #[test]
+    fn a_node_near_a_tool_is_held_though_its_projection_was_skipped() {
+        let (h, dt) = (0.1, 1e-5);
+        let offset = 0.5 * h;
+        // The lid 1.9 offsets above the top ply's mid-surface: 0.9 offset
+        // of room before it touches.
+        let lid_z = 1.5 * h + 1.9 * offset;
+        let lid = Tool {
+            name: "lid".into(),
+            surface: Surface::plane(Vector3::new(0.0, 0.0, lid_z), -Vector3::z()).unwrap(),
+            motion: ToolMotion::Fixed,
+            friction: 0.0,
+        };
+        let settings = ContactSettings {
+            offset,
+            ..ContactSettings::default()
+        };
+        let mut contact = ExplicitContact::new(vec![lid], 8, settings);
+        contact.set_plies(PlyContact::new(
+            vec![
+                fixtures::square_layer(0, offset),
+                fixtures::square_layer(4, offset),
+            ],
+            &[PlyInterface {
+                lower: 0,
+                upper: 1,
+                friction: 0.0,
+            }],
+            vec![0.25; 8],
+            1.0,
+        ));
+        let square = |z: f64| {
+            [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
+        };
+        let mut x = square(0.5 * h).to_vec();
+        x.extend(square(1.5 * h));
+        let mut v = vec![Vector3::zeros(); 8];
+        // The bottom ply ten times heavier: it pushes the top ply up by
+        // 10/11 of what it rises into it.
+        let mut mass = [1e-5; 8];
+        mass[4..].fill(1e-6);
+        contact
+            .enforce(&mut x, &mut v, &mass, &[true; 8], dt, dt)
+            .unwrap();
+        // The bottom ply rises by 1.2 offsets in a step: the top one would
+        // go 0.19 offset into the lid.
+        let rise = 1.2 * offset;
+        for i in 0..4 {
+            x[i].z += rise;
+            v[i].z = rise / dt;
+        }
+        contact
+            .enforce(&mut x, &mut v, &mass, &[true; 8], 2.0 * dt, dt)
+            .unwrap();
+        for i in 4..8 {
+            let into_lid = x[i].z - (lid_z - offset);
+            assert!(
+                into_lid < 1e-6 * offset,
+                "node {i} {into_lid:e} mm into the lid"
+            );
+            let apart = x[i].z - x[i - 4].z;
+            assert!(
+                apart > 2.0 * offset * (1.0 - 1e-6),
+                "node {i}: plies {apart} apart"
+            );
+        }
+    }
 }

@@ -47,7 +47,7 @@ mod locking;
 mod material;
 mod resin;
 
-pub use fibre::FibreLaw;
+pub use fibre::{CONFINED_SHORTENING, FibreLaw};
 pub use locking::{FitError, ShearLocking};
 pub use material::{Material, MaterialError, PRESET_NAMES};
 pub use resin::{PronyTerm, ResinLaw};

@@ -43,6 +43,21 @@ impl Confinement {
         model.tools.len() >= 2 && model.trusses.iter().any(|b| b.law.confines())
     }
 
+    /// The largest clearance any confined yarn of `model` can meet (mm;
+    /// 0 where none is confined): the contact projects every node within
+    /// it of a tool at every step, and no farther tool is a wall
+    /// ([`drape_contact::ContactSettings::clearance_reach`]).
+    pub fn reach(model: &Model) -> f64 {
+        if !Self::applies(model) {
+            return 0.0;
+        }
+        model
+            .trusses
+            .iter()
+            .map(|b| b.law.confinement_reach())
+            .fold(0.0, f64::max)
+    }
+
     /// Per truss batch, every truss free (infinite clearance) for the
     /// batches whose law confines, none for the others: the force pass's
     /// `truss_clearance` before the first contact pass.

@@ -154,6 +154,7 @@ impl<'m> Explicit<'m> {
                     } else {
                         f64::INFINITY
                     },
+                    clearance_reach: Confinement::reach(model),
                     ..ContactSettings::default()
                 },
             )

@@ -28,11 +28,10 @@ use crate::validate::{Check, note, quick_mode};
 ///
 /// Measured (2026-11-28, a 2-core machine): quick, overlap 2.0e-6 of the
 /// thickness and the holder's force carried to 9e-7, in 26 s. The whole
-/// stroke fails: it stopped at t = 0.367 s (a top-ply node at the punch's
-/// shoulder thrown 0.79 mm in one step; overlap 1.6 % of the thickness by
-/// then, the holder's force to 1.1e-4 while the blank draws in), where the
-/// same scene with the holder's height 0.87 mm instead of 0.3 + 0.57
-/// (round-off apart) drew the whole stroke in 404 s (overlap 1.9 %).
+/// stroke fails (2026-11-29): it stops at t = 0.352 s, a bottom-ply node
+/// thrown 1.08 mm into the die where the bottom ply's free edge slides out
+/// from under the top one at the holder's inner edge
+/// (docs/notes/stack-cost.md).
 pub fn pressed_stack() -> Vec<Check> {
     let cells = 24;
     let end = if quick_mode() { 0.1 } else { 0.5 };

@@ -287,7 +287,7 @@ motion = { kind = "force", direction = [0, 0, -1], force = 1e15, mass = 1e-3 }
 
 #[test]
 fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
-    use drape::{Checkpoint, RunControl, RunOptions, run_scene, run_scene_with};
+    use drape::{RunControl, RunOptions, run_scene, run_scene_with};
     use drape_io::scene::Scene;
     let dir = temp("resume");
     let path = dir.join("draped.toml");
@@ -297,16 +297,8 @@ fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
     assert_eq!(straight.summary.status, "completed");
 
     // Stopped after 300 steps with a checkpoint every 70, then resumed.
-    let mut interrupted = scene.clone();
-    interrupted.settings.max_steps = Some(300);
     let out = dir.join("resumed");
-    let options = RunOptions {
-        checkpoint_every: Some(70),
-        ..RunOptions::default()
-    };
-    let first = run_scene_with(&interrupted, &out, options, &mut |_| RunControl::Continue).unwrap();
-    assert_eq!(first.summary.status, "stopped");
-    let checkpoint = Checkpoint::read(&out).unwrap();
+    let checkpoint = stopped_with_checkpoint(&scene, &out, 300, 70);
     assert_eq!(checkpoint.state.step, 280);
     // The file keeps the membranes' history element after element, not in
     // the lane blocks the run keeps it in (quads of four elements): the
@@ -346,11 +338,7 @@ fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
     // The same resumed through the command line, from another directory,
     // with the scene file gone: the checkpoint carries the scene.
     let cli = dir.join("cli");
-    let options = RunOptions {
-        checkpoint_every: Some(70),
-        ..RunOptions::default()
-    };
-    run_scene_with(&interrupted, &cli, options, &mut |_| RunControl::Continue).unwrap();
+    stopped_with_checkpoint(&scene, &cli, 300, 70);
     std::fs::remove_file(&path).unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_drape"))
         .args(["run", "--resume", cli.to_str().unwrap()])

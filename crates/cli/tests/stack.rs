@@ -310,11 +310,11 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
 
 /// A laminate stopped and resumed from its checkpoint ends bit for bit
 /// where the uninterrupted run does: the ply pass's warm starts, its
-/// searches' last faces, the plies' slip and peaks travel in the
-/// checkpoint, as the tools' states do.
+/// broad phase, the plies' slip and peaks travel in the checkpoint, as
+/// the tools' states do.
 #[test]
 fn a_resumed_stack_ends_where_an_uninterrupted_one_does() {
-    use drape::{Checkpoint, RunControl, RunOptions, run_scene, run_scene_with};
+    use drape::{RunControl, RunOptions, run_scene, run_scene_with};
     use drape_io::scene::Scene;
     let dir = temp("stack-resume");
     let path = scene(&dir, 2, true);
@@ -322,16 +322,8 @@ fn a_resumed_stack_ends_where_an_uninterrupted_one_does() {
     let straight = run_scene(&scene, &dir.join("straight"), &mut |_| RunControl::Continue).unwrap();
     assert_eq!(straight.summary.status, "completed");
 
-    let mut interrupted = scene.clone();
-    interrupted.settings.max_steps = Some(1300);
     let out = dir.join("resumed");
-    let options = RunOptions {
-        checkpoint_every: Some(1200),
-        ..RunOptions::default()
-    };
-    let first = run_scene_with(&interrupted, &out, options, &mut |_| RunControl::Continue).unwrap();
-    assert_eq!(first.summary.status, "stopped");
-    let checkpoint = Checkpoint::read(&out).unwrap();
+    let checkpoint = stopped_with_checkpoint(&scene, &out, 1300, 1200);
     assert_eq!(checkpoint.state.step, 1200);
     let carry = checkpoint
         .driver
@@ -369,14 +361,8 @@ fn a_resumed_stack_ends_where_an_uninterrupted_one_does() {
     let resumed = run_scene_with(&scene, &out, options, &mut |_| RunControl::Continue).unwrap();
     assert_eq!(resumed.summary.status, "completed");
     assert_eq!(resumed.state.step, straight.state.step);
-    let bits = |s: &drape_model::State| -> Vec<u64> {
-        s.x.iter()
-            .chain(&s.v)
-            .flat_map(|p| p.iter().map(|v| v.to_bits()))
-            .collect()
-    };
     assert!(
-        bits(&resumed.state) == bits(&straight.state),
+        state_bits(&resumed.state) == state_bits(&straight.state),
         "the states differ"
     );
     let csv = |d: &str| std::fs::read_to_string(dir.join(d).join("energy.csv")).unwrap();

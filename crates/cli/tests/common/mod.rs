@@ -112,3 +112,32 @@ pub fn within_a_minute(args: &[String]) -> Output {
     }
     child.wait_with_output().unwrap()
 }
+
+/// `scene` run to step `stop` with a checkpoint every `every` steps into
+/// `out` (a run stopped there, as by a job's time limit): the checkpoint
+/// it leaves.
+pub fn stopped_with_checkpoint(
+    scene: &drape_io::scene::Scene,
+    out: &Path,
+    stop: u64,
+    every: u64,
+) -> drape::Checkpoint {
+    use drape::{Checkpoint, RunControl, RunOptions, run_scene_with};
+    let mut interrupted = scene.clone();
+    interrupted.settings.max_steps = Some(stop);
+    let options = RunOptions {
+        checkpoint_every: Some(every),
+        ..RunOptions::default()
+    };
+    let first = run_scene_with(&interrupted, out, options, &mut |_| RunControl::Continue).unwrap();
+    assert_eq!(first.summary.status, "stopped");
+    Checkpoint::read(out).unwrap()
+}
+
+/// A state's positions and velocities, bit for bit.
+pub fn state_bits(s: &drape_model::State) -> Vec<u64> {
+    s.x.iter()
+        .chain(&s.v)
+        .flat_map(|p| p.iter().map(|v| v.to_bits()))
+        .collect()
+}

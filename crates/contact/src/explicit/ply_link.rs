@@ -253,6 +253,31 @@ mod tests {
     use crate::tool::{Amplitude, Tool, ToolMotion};
     use crate::{ContactSettings, ExplicitContact};
 
+    /// Two unit squares of thickness h, one on the other (μ_ply = 0), as
+    /// `contact`'s ply pass; their nodes' positions, the bottom ply's on
+    /// z = h/2.
+    fn two_plies(contact: &mut ExplicitContact, h: f64) -> Vec<Vector3<f64>> {
+        contact.set_plies(PlyContact::new(
+            vec![
+                fixtures::square_layer(0, 0.5 * h),
+                fixtures::square_layer(4, 0.5 * h),
+            ],
+            &[PlyInterface {
+                lower: 0,
+                upper: 1,
+                friction: 0.0,
+            }],
+            vec![0.25; 8],
+            1.0,
+        ));
+        let square = |z: f64| {
+            [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
+        };
+        let mut x = square(0.5 * h).to_vec();
+        x.extend(square(1.5 * h));
+        x
+    }
+
     /// Two plies (unit squares, thickness h) on a floor under a blank
     /// holder pressed down by F, the holder's face on the top ply: the
     /// holder's force goes through both plies into the floor, and nothing
@@ -293,24 +318,7 @@ mod tests {
             ..ContactSettings::default()
         };
         let mut contact = ExplicitContact::new(vec![floor, holder], 8, settings);
-        contact.set_plies(PlyContact::new(
-            vec![
-                fixtures::square_layer(0, 0.5 * h),
-                fixtures::square_layer(4, 0.5 * h),
-            ],
-            &[PlyInterface {
-                lower: 0,
-                upper: 1,
-                friction: 0.0,
-            }],
-            vec![0.25; 8],
-            1.0,
-        ));
-        let square = |z: f64| {
-            [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
-        };
-        let mut x = square(0.5 * h).to_vec();
-        x.extend(square(1.5 * h));
+        let mut x = two_plies(&mut contact, h);
         let start = x.clone();
         let mut v = vec![Vector3::zeros(); 8];
         for step in 1..=20 {
@@ -361,24 +369,7 @@ mod tests {
             ..ContactSettings::default()
         };
         let mut contact = ExplicitContact::new(vec![lid], 8, settings);
-        contact.set_plies(PlyContact::new(
-            vec![
-                fixtures::square_layer(0, offset),
-                fixtures::square_layer(4, offset),
-            ],
-            &[PlyInterface {
-                lower: 0,
-                upper: 1,
-                friction: 0.0,
-            }],
-            vec![0.25; 8],
-            1.0,
-        ));
-        let square = |z: f64| {
-            [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
-        };
-        let mut x = square(0.5 * h).to_vec();
-        x.extend(square(1.5 * h));
+        let mut x = two_plies(&mut contact, h);
         let mut v = vec![Vector3::zeros(); 8];
         // The bottom ply ten times heavier: it pushes the top ply up by
         // 10/11 of what it rises into it.

@@ -287,7 +287,7 @@ motion = { kind = "force", direction = [0, 0, -1], force = 1e15, mass = 1e-3 }
 
 #[test]
 fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
-    use drape::{RunControl, RunOptions, run_scene, run_scene_with};
+    use drape::{RunControl, run_scene};
     use drape_io::scene::Scene;
     let dir = temp("resume");
     let path = dir.join("draped.toml");
@@ -313,11 +313,7 @@ fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
     let history = scene.model.history_to_element_major(&same.state.history);
     assert_ne!(history, same.state.history, "the run keeps lane blocks");
     assert_eq!(checkpoint.state.history, history);
-    let options = RunOptions {
-        resume: Some(checkpoint),
-        ..RunOptions::default()
-    };
-    let resumed = run_scene_with(&scene, &out, options, &mut |_| RunControl::Continue).unwrap();
+    let resumed = resumed_from(&scene, &out, checkpoint);
     assert_eq!(resumed.summary.status, "completed");
     assert_eq!(resumed.state.step, straight.state.step);
     let bits = |s: &drape_model::State| -> Vec<u64> {

@@ -354,11 +354,7 @@ fn a_resumed_stack_ends_where_an_uninterrupted_one_does() {
         cold.summary.warnings
     );
 
-    let options = RunOptions {
-        resume: Some(checkpoint),
-        ..RunOptions::default()
-    };
-    let resumed = run_scene_with(&scene, &out, options, &mut |_| RunControl::Continue).unwrap();
+    let resumed = resumed_from(&scene, &out, checkpoint);
     assert_eq!(resumed.summary.status, "completed");
     assert_eq!(resumed.state.step, straight.state.step);
     assert!(

@@ -134,6 +134,20 @@ pub fn stopped_with_checkpoint(
     Checkpoint::read(out).unwrap()
 }
 
+/// `scene` resumed in `out` from `checkpoint` to its end.
+pub fn resumed_from(
+    scene: &drape_io::scene::Scene,
+    out: &Path,
+    checkpoint: drape::Checkpoint,
+) -> drape::RunReport {
+    use drape::{RunControl, RunOptions, run_scene_with};
+    let options = RunOptions {
+        resume: Some(checkpoint),
+        ..RunOptions::default()
+    };
+    run_scene_with(scene, out, options, &mut |_| RunControl::Continue).unwrap()
+}
+
 /// A state's positions and velocities, bit for bit.
 pub fn state_bits(s: &drape_model::State) -> Vec<u64> {
     s.x.iter()

@@ -1312,6 +1312,20 @@ pub(crate) mod fixtures {
         }
     }
 
+    /// One normal pass of `contact` with Δt = τ = 1 ms and no
+    /// force-driven tool behind the `supports`: what the tests run.
+    pub fn normal_pass(
+        contact: &mut PlyContact,
+        x: &mut [Vector3<f64>],
+        v: &mut [Vector3<f64>],
+        mass: &[f64],
+        movable: &[bool],
+        supports: &mut [Support],
+        force: &mut [Vector3<f64>],
+    ) -> super::PlyStep {
+        contact.normal(x, v, mass, movable, 1e-3, 1e-3, supports, &mut [], force)
+    }
+
     /// Nodes 0..4 held on a tool below them (normal +z).
     pub fn bottom_supports() -> Vec<Support> {
         (0..4)

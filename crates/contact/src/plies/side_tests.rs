@@ -25,17 +25,7 @@ fn sweep(x: &mut [Vector3<f64>], contact: &mut PlyContact, steps: usize) -> Vec<
         for p in &mut x[..4] {
             p.x += 0.01;
         }
-        contact.normal(
-            x,
-            &mut v,
-            &mass,
-            &movable,
-            1e-3,
-            1e-3,
-            &mut [],
-            &mut [],
-            &mut force,
-        );
+        super::fixtures::normal_pass(contact, x, &mut v, &mass, &movable, &mut [], &mut force);
     }
     v
 }

@@ -1,6 +1,7 @@
 //! Tests of the ply pass: the narrow phase's closest points, the normal
 //! and friction solves on small stacks.
 
+use super::fixtures::normal_pass;
 use super::*;
 
 /// Two unit squares (two triangles each) 0.9 apart with offsets of 0.5
@@ -61,14 +62,12 @@ fn overlapping_plies_are_pushed_apart_by_mass() {
     let mut mass = vec![3.0; 4];
     mass.extend([1.0; 4]);
     let mut force = vec![Vector3::zeros(); 8];
-    let step = contact.normal(
+    let step = normal_pass(
+        &mut contact,
         &mut x,
         &mut v,
         &mass,
         &[true; 8],
-        1e-3,
-        1e-3,
-        &mut [],
         &mut [],
         &mut force,
     );
@@ -95,14 +94,12 @@ fn nodes_on_nodes_make_one_row_per_pair_with_the_deeper_gap() {
         let mut force = vec![Vector3::zeros(); 8];
         let mut first = None;
         for _ in 0..passes {
-            let step = contact.normal(
+            let step = normal_pass(
+                &mut contact,
                 &mut x,
                 &mut v,
                 &mass,
                 &[true; 8],
-                1e-3,
-                1e-3,
-                &mut [],
                 &mut [],
                 &mut force,
             );
@@ -152,14 +149,12 @@ fn a_repeated_step_starts_from_the_last_forces() {
     let movable: Vec<bool> = (0..8).map(|i| i >= 4).collect();
     let mut force = vec![Vector3::zeros(); 8];
     let (dt, tau) = (1e-3, 1e-3);
-    let first = contact.normal(
+    let first = normal_pass(
+        &mut contact,
         &mut x,
         &mut v,
         &mass,
         &movable,
-        dt,
-        tau,
-        &mut [],
         &mut [],
         &mut force,
     );
@@ -177,14 +172,12 @@ fn a_repeated_step_starts_from_the_last_forces() {
     for p in &mut x[4..] {
         p.z -= 0.1;
     }
-    let second = contact.normal(
+    let second = normal_pass(
+        &mut contact,
         &mut x,
         &mut v,
         &mass,
         &movable,
-        dt,
-        tau,
-        &mut [],
         &mut [],
         &mut force,
     );
@@ -204,15 +197,13 @@ fn a_supported_lower_ply_sends_the_push_to_the_upper() {
     let mass = vec![1.0; 8];
     let mut force = vec![Vector3::zeros(); 8];
     let mut supports = fixtures::bottom_supports();
-    contact.normal(
+    normal_pass(
+        &mut contact,
         &mut x,
         &mut v,
         &mass,
         &[true; 8],
-        1e-3,
-        1e-3,
         &mut supports,
-        &mut [],
         &mut force,
     );
     // To the solve's tolerance: 1e-6 of the 0.1 mm violation.
@@ -256,15 +247,13 @@ fn a_chain_of_plies_is_solved_to_the_stated_tolerance() {
     mass[4..8].fill(2.0);
     let mut force = vec![Vector3::zeros(); 12];
     let mut supports = fixtures::bottom_supports();
-    let step = contact.normal(
+    let step = normal_pass(
+        &mut contact,
         &mut x,
         &mut v,
         &mass,
         &[true; 12],
-        1e-3,
-        1e-3,
         &mut supports,
-        &mut [],
         &mut force,
     );
     let tolerance = NORMAL_TOLERANCE * 0.1;
@@ -321,14 +310,12 @@ fn friction_sticks_below_the_cone_and_slides_on_it() {
         let fixed: Vec<bool> = (0..8).map(|i| i >= 4).collect();
         let mut force = vec![Vector3::zeros(); 8];
         let (dt, tau) = (1e-3, 1e-3);
-        contact.normal(
+        normal_pass(
+            &mut contact,
             &mut x,
             &mut v,
             &mass,
             &fixed,
-            dt,
-            tau,
-            &mut [],
             &mut [],
             &mut force,
         );

@@ -73,15 +73,12 @@ impl PlyContact {
             ));
         }
         self.pass = carry.pass;
-        self.reference_x.clone_from(&carry.reference_x);
         // The candidate lists of those positions, in their order: rebuilt
         // at the next step's positions they could list a node's faces in
         // another order and a tie go the other way.
-        if !self.reference_x.is_empty() {
-            for s in &mut self.searches {
-                let reach = s.offset + self.margin;
-                super::build_candidates(s, &self.layers, &carry.reference_x, reach);
-            }
+        self.reference_x.clear();
+        if !carry.reference_x.is_empty() {
+            self.refresh(&carry.reference_x);
         }
         for (s, w) in self.searches.iter_mut().zip(&carry.warm) {
             for (to, &(normal, tangential, pass)) in s.warm.iter_mut().zip(w) {

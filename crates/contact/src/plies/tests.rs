@@ -218,6 +218,39 @@ fn a_supported_lower_ply_sends_the_push_to_the_upper() {
 }
 
 #[test]
+fn a_node_put_back_out_beside_a_tool_is_shifted_along_it_not_thrown() {
+    // A small upper quad 0.05 mm behind the lower square's mid-plane
+    // (inside it: put back out, 0.35 mm, as a shift of position), the
+    // square on a tool. The square's share of the shift went into the
+    // tool, whose support took it back as a velocity (tens of mm/s with
+    // these unit masses). The quad takes the whole shift instead, and
+    // nothing moves after.
+    let quad =
+        [[4.0, 4.0], [6.0, 4.0], [6.0, 6.0], [4.0, 6.0]].map(|[a, b]| Vector3::new(a, b, -0.05));
+    let (mut x, mut contact) = fixtures::on_square(quad);
+    let mut v = vec![Vector3::zeros(); 8];
+    let mass = vec![1.0; 8];
+    let mut force = vec![Vector3::zeros(); 8];
+    let mut supports = fixtures::bottom_supports();
+    normal_pass(
+        &mut contact,
+        &mut x,
+        &mut v,
+        &mass,
+        &[true; 8],
+        &mut supports,
+        &mut force,
+    );
+    for i in 0..4 {
+        assert_eq!(x[i].z, 0.0, "{}", x[i]);
+        assert!((x[i + 4].z - 0.3).abs() < 1e-12, "{}", x[i + 4]);
+    }
+    for vi in &v {
+        assert!(vi.norm() < 1e-9, "{vi}");
+    }
+}
+
+#[test]
 fn a_chain_of_plies_is_solved_to_the_stated_tolerance() {
     // Three unit squares 0.9 mm apart (offsets 1 mm: each interface
     // 0.1 mm inside), the bottom one on a tool, the middle one twice

@@ -277,11 +277,6 @@ struct Hit {
     /// `normal` is in the ply's plane, out of the end, and `w` the
     /// weights of the nearest point of the end.
     end: bool,
-    /// The row can begin violated by more than the step's motion brought
-    /// (its rule starts beside the ply's free end, where the node was
-    /// free): what is beyond that goes as a shift of position, like
-    /// [`Self::recover`]'s, not as a velocity that would throw the node.
-    sudden: bool,
 }
 
 impl Hit {
@@ -294,7 +289,6 @@ impl Hit {
         found: false,
         recover: false,
         end: false,
-        sudden: false,
     };
 }
 
@@ -348,8 +342,9 @@ struct Constraint {
     search: u32,
     /// How much of the violation goes as a shift of position before the
     /// solve (mm): all of it for a node back to its side
-    /// ([`Hit::recover`]), what is beyond the step's motion for a row
-    /// that can begin violated ([`Hit::sudden`]), else none.
+    /// ([`Hit::recover`]), what is beyond the step's motion for a node
+    /// put back out through the end ([`Hit::end`]) or deep in the ply at
+    /// the step's start, else none.
     shift: f64,
 }
 
@@ -663,19 +658,22 @@ impl PlyContact {
                 }
                 let shift = if hit.recover {
                     -gap
-                } else if hit.sudden {
-                    // What the two plies' motion over this step brought
-                    // of the violation is stopped as a velocity (an
-                    // inelastic impact); the rest was there before. Beside
-                    // the end on the node's own side only for a node that
-                    // was on the far side at the start of the step, or
-                    // within half the offset of the mid-plane: one resting
-                    // on the edge of the ply below (at about the offset)
-                    // keeps its row as it was. Level with the mid-plane,
-                    // the side is round-off (a top-ply node stepped down
-                    // onto the die beside the bottom ply's edge, 5.5e-9 mm
-                    // "above" it at the step's start, was thrown up the
-                    // whole offset at 34 m/s).
+                } else {
+                    // What the plies' motion over this step brought of the
+                    // violation is stopped as a velocity (an inelastic
+                    // impact). The rest was there before the step and goes
+                    // as a shift of position, for a node put back out
+                    // through the end and for one within half the offset
+                    // of the mid-surface at the step's start (come in from
+                    // the far side, sideways through the end, or level
+                    // with the mid-plane, where the side is round-off). A
+                    // node resting on the ply, about the offset from it
+                    // (also on the edge of an equal blank), keeps its row
+                    // as it was. As velocities these threw two top-ply
+                    // nodes of a stacked deep drawing, one on the die level
+                    // with the bottom ply's edge, one come in through that
+                    // edge to 0.02 mm over its mid-surface, at 34 and
+                    // 12 m/s.
                     let rel = v[node as usize]
                         - hit
                             .nodes
@@ -689,8 +687,6 @@ impl PlyContact {
                     } else {
                         0.0
                     }
-                } else {
-                    0.0
                 };
                 // The last step's force, as this step's multiplier: in a
                 // forming run the plies press on each other much as they
@@ -753,9 +749,10 @@ impl PlyContact {
         // out on its side before the solve, by the row's own projection
         // (its masses' shares), as a shift of position only: its depth is
         // up to the plies' thickness, which as a velocity (dx/dt) would
-        // throw it at metres a second. So is the part of a sudden row's
-        // violation (a node come up beside a ply's end, or in through it)
-        // that the step's motion did not bring. The row stays in the
+        // throw it at metres a second. So is the part of a row's
+        // violation that the step's motion did not bring, where the node
+        // was deep in the ply at the step's start or goes out through its
+        // end. The row stays in the
         // solve with the shift in its gap, so the others cannot push it
         // back in.
         // A node resting on a tool is shifted along the tool, not into

@@ -152,3 +152,19 @@ fn a_node_level_with_the_end_is_shifted_not_thrown() {
         assert!(v[i].norm() < 1e-9, "{}", v[i]);
     }
 }
+
+#[test]
+fn a_node_come_in_through_the_end_is_shifted_not_thrown() {
+    // 0.4 mm beside the end (clear of it), 0.02 mm over the mid-plane,
+    // driven in at 0.5 mm a step: over the face, 0.28 mm inside its hold,
+    // none of which the step's motion (along the face) brought. It goes
+    // on top as a shift of position, its velocity as it came; as a
+    // velocity it left at 280 mm/s upwards.
+    let (mut x, mut c) = plies([10.4, 0.02]);
+    let drive = Vector3::new(-500.0, 0.0, 0.0);
+    let v = step(&mut x, &mut c, drive, 0.0);
+    for i in [5, 6] {
+        assert!((x[i].z - 0.3).abs() < 1e-9, "{}", x[i]);
+        assert!((v[i] - drive).norm() < 1e-9, "{}", v[i]);
+    }
+}

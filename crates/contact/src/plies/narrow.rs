@@ -251,7 +251,7 @@ impl Master<'_> {
             // plies whose edges lie on each other (equal blanks) rest on
             // each other's edges; a node that comes up into it from the
             // far side beside the end starts inside by up to the offset,
-            // which goes as a shift of position ([`Hit::sudden`]).
+            // which goes as a shift of position ([`super::PlyContact::normal`]).
             let gap = along - offset;
             return (gap <= self.reach).then_some(Hit {
                 gap,
@@ -262,7 +262,6 @@ impl Master<'_> {
                 found: true,
                 recover: false,
                 end: false,
-                sudden: true,
             });
         }
         // On the far side, the way out through the ply's square end where
@@ -285,7 +284,6 @@ impl Master<'_> {
                 found: true,
                 recover: false,
                 end: true,
-                sudden: true,
             });
         }
         let (normal, gap, recover) = if along > 0.0 {
@@ -317,7 +315,6 @@ impl Master<'_> {
             found: true,
             recover,
             end: false,
-            sudden: false,
         })
     }
 }

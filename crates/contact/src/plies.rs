@@ -787,8 +787,8 @@ impl PlyContact {
             let s = slave * (impulse * c.inv[0]);
             self.dx[c.slave as usize] += s;
             self.shift[c.slave as usize] += s;
-            for k in 0..3 {
-                let m = masters[k] * (impulse * c.w[k] * c.inv[k + 1]);
+            for (k, along) in masters.iter().enumerate() {
+                let m = along * (impulse * c.w[k] * c.inv[k + 1]);
                 self.dx[c.masters[k] as usize] += m;
                 self.shift[c.masters[k] as usize] += m;
             }

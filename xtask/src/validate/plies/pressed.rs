@@ -28,9 +28,10 @@ use crate::validate::{Check, note, quick_mode};
 ///
 /// Measured (2026-11-28, a 2-core machine): quick, overlap 2.0e-6 of the
 /// thickness and the holder's force carried to 9e-7, in 26 s. The whole
-/// stroke fails (2026-11-29): it stops at t = 0.352 s, a bottom-ply node
-/// thrown 1.08 mm into the die at the holder's inner edge, where the plies'
-/// free edges meet edge-on (docs/notes/stack-cost.md).
+/// stroke fails (2026-11-29, eleventh session): it stops at t = 0.355 s,
+/// where the bottom ply's free edge, drawn in past the holder's inner
+/// edge, goes unstable at the mass-scaled step, a node moving 0.64 mm in
+/// one step (docs/notes/stack-cost.md).
 pub fn pressed_stack() -> Vec<Check> {
     let cells = 24;
     let end = if quick_mode() { 0.1 } else { 0.5 };

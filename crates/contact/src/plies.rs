@@ -752,13 +752,14 @@ impl PlyContact {
         // throw it at metres a second. So is the part of a row's
         // violation that the step's motion did not bring, where the node
         // was deep in the ply at the step's start or goes out through its
-        // end. The row stays in the
-        // solve with the shift in its gap, so the others cannot push it
-        // back in.
+        // end. The row stays in the solve with the shift in its gap, so
+        // the others cannot push it back in.
+        //
         // A node resting on a tool is shifted along the tool, not into
         // it: what the tool's support took back of a shift would leave the
         // solve as a velocity (a bottom-ply node on the die, put back out
-        // of a steep fold of the ply above, went up at 14.6 m/s).
+        // of a steep fold of the ply above, went up at 14.6 m/s). Shifted
+        // rows are few (none in most steps), so each scans the supports.
         for c in &self.constraints {
             if c.shift <= 0.0 {
                 continue;

@@ -781,6 +781,8 @@ impl PlyContact {
                 - (0..3)
                     .map(|k| c.w[k] * c.w[k] * c.inv[k + 1] * c.normal.dot(&masters[k]))
                     .sum::<f64>();
+            // Every node held that way by a tool: the solve takes the
+            // row as it is, as a velocity.
             if opens <= 0.0 {
                 continue;
             }

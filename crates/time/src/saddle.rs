@@ -20,12 +20,12 @@
 //!
 //! A has K̂'s pattern (a row acts on one node, so C's part lands in that
 //! node's diagonal block): its symbolic analysis is made once for the run
-//! and every Newton iteration is one numeric Cholesky of it, plus one solve
-//! per force-driven tool for S (a dense matrix of the tools' size). On the
-//! shipped hemisphere (40 × 40) this Cholesky takes 6.8 ms where the LDLᵀ
-//! of the whole saddle-point system over every candidate's slots took
-//! 10.1 ms (one state, best of 20), and the analysis when the candidates
-//! change is gone.
+//! and every Newton iteration is one numeric LDLᵀ of it, plus one solve per
+//! force-driven tool for S (a dense matrix of the tools' size). On the
+//! shipped hemisphere (40 × 40) this takes 7.4 ms where the LDLᵀ of the
+//! whole saddle-point system over every candidate's slots took 10.1 ms
+//! (one state, best of 20), and the analysis when the candidates change is
+//! gone.
 //!
 //! D holds the rows' compliance plus, on rigid rows, a regularisation
 //! ([`drape_contact::REGULARISATION`]·A_kk) that keeps the pivots of
@@ -36,10 +36,9 @@
 //! Inertia: the system has one negative pivot per held row (−D) plus the
 //! negative pivots of [A B; Bᵀ k_d + C_dᵀD⁻¹C_d] (Haynsworth), so the
 //! linearised problem is convex on the held rows' null space exactly when
-//! the Cholesky of A succeeds and S > 0. Where A is not positive definite
-//! (compressed resin) it is factorised by LDLᵀ and its negative pivots are
-//! reported; the driver treats them as the condensed solver treats
-//! negative curvature.
+//! A's LDLᵀ and S have no negative pivot. Where they have (compressed
+//! resin) they are reported; the driver treats them as the condensed
+//! solver treats negative curvature.
 //!
 //! Not here: which rows are held (the contact pass), assembly of K̂
 //! ([`crate::tangent`]).
@@ -81,9 +80,11 @@ pub struct SaddleSystem {
     node_block: Vec<[usize; 6]>,
     symbolic: Option<SymbolicCholesky<usize>>,
     factor_values: Vec<f64>,
+    stack: MemBuffer,
     /// Whether A was factorised by Cholesky (else LDLᵀ).
     cholesky: bool,
-    stack: MemBuffer,
+    /// Whether the last system was indefinite.
+    indefinite: bool,
     /// The force-driven tools, in the system's order.
     free_tools: Vec<usize>,
     /// Per free tool: B's column (3·N).
@@ -164,8 +165,9 @@ impl SaddleSystem {
             node_block: Vec::new(),
             symbolic: None,
             factor_values: Vec::new(),
-            cholesky: true,
             stack: MemBuffer::new(StackReq::EMPTY),
+            cholesky: true,
+            indefinite: false,
             free_tools: Vec::new(),
             coupling: Vec::new(),
             coupled: Vec::new(),
@@ -315,16 +317,23 @@ impl SaddleSystem {
             unreachable!("analysed above");
         };
         let a = SparseColMatRef::new(matrix.as_ref(), &self.values);
-        let llt = symbolic.factorize_numeric_llt(
-            &mut self.factor_values,
-            a,
-            Side::Upper,
-            LltRegularization::default(),
-            Par::Seq,
-            MemStack::new(&mut self.stack),
-            Default::default(),
-        );
-        self.cholesky = llt.is_ok();
+        // Cholesky, or LDLᵀ where it meets a non-positive pivot. After an
+        // indefinite system LDLᵀ comes first: compressed resin stays
+        // compressed over the iterations (a fifth of the deep drawings'
+        // systems), and a failed Cholesky costs up to a whole
+        // factorisation.
+        self.cholesky = !self.indefinite
+            && symbolic
+                .factorize_numeric_llt(
+                    &mut self.factor_values,
+                    a,
+                    Side::Upper,
+                    LltRegularization::default(),
+                    Par::Seq,
+                    MemStack::new(&mut self.stack),
+                    Default::default(),
+                )
+                .is_ok();
         let mut extra = 0;
         if !self.cholesky {
             let ldlt = symbolic.factorize_numeric_ldlt(
@@ -357,6 +366,7 @@ impl SaddleSystem {
         let negative = small_ldlt(&mut self.schur, tools)
             .map_err(|k| SaddleError::ZeroPivot(self.dofs + k))?;
         extra += negative;
+        self.indefinite = extra > 0;
         self.factor_seconds += started.elapsed().as_secs_f64();
         if extra > 0 {
             return Err(SaddleError::Indefinite { extra });

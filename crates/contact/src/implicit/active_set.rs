@@ -30,7 +30,8 @@
 //! Hüeber–Stadler–Wohlmuth with the stick regularised, chosen over
 //! Alart–Curnier's augmented Lagrangian because the latter's generalised
 //! Jacobian couples the slip force to λ_N (μ·d·∂λ_N): not symmetric, so no
-//! LDLᵀ; here the slip force lags one iteration behind λ_N, as in the
+//! symmetric factorisation (faer's sparse LU of the shipped hemisphere's
+//! matrix takes 4× its Cholesky); here the slip force lags one iteration behind λ_N, as in the
 //! condensed solver, and a slipping pair converges linearly in that term.
 //!
 //! **A step that would jump a contact.** The semi-smooth step trusts the
@@ -49,9 +50,9 @@
 //! dependent (how the clamping force is shared among them is
 //! indeterminate), so [C 0] alone would make the system singular. Every
 //! rigid row gets a small compliance ε = [`REGULARISATION`]·A_kk on its
-//! diagonal, which makes the matrix quasi-definite (an LDLᵀ exists in any
-//! symmetric order, so the symbolic analysis is reused) and picks the
-//! least-squares share; the driver then removes ε's bias by iterative
+//! diagonal, which makes the matrix quasi-definite (the driver eliminates
+//! the rows onto the nodes, K̂ + Cᵀ·D⁻¹·C, with no zero pivot) and picks
+//! the least-squares share; the driver then removes ε's bias by iterative
 //! refinement against the unregularised system. With friction each row
 //! has its own cone, μ times its share, so the share must not move
 //! between iterations: after each solve the clamp of a force-driven

@@ -17,13 +17,15 @@ pub enum ContactSolver {
     /// The reference.
     Condensed,
     /// Semi-smooth Newton on the complementarity, one active set per
-    /// iteration: one LDLᵀ of the saddle-point system [K̂ Cᵀ; C −εD] and
-    /// a few solves with it (`drape_contact`'s `active_set` module).
+    /// iteration: one factorisation of the saddle-point system
+    /// [K̂ Cᵀ; C −εD] with its rows eliminated onto the nodes
+    /// ([`crate::saddle`]) and a few solves with it (`drape_contact`'s
+    /// `active_set` module).
     ///
-    /// The default: the faster on three of the four shipped contact
-    /// scenes (not on deep-drawing-0-90) and on the quick work–precision
-    /// bench's 10 × 10 hemisphere (0.8 s against 1.8 s, closer to the
-    /// reference), and it passes the validation cases the condensed
+    /// The default: the faster on the four shipped contact scenes
+    /// (deep-drawing-0-90: 33.6 s against 60.7 s) and on the quick
+    /// work–precision bench's 10 × 10 hemisphere (0.8 s against 1.8 s,
+    /// closer to the reference), and it passes the validation cases the condensed
     /// solver passes, at the same tolerances (measurements: the scene
     /// reference, *The implicit solver*, and docs/performance.md).
     #[default]

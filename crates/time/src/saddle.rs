@@ -20,12 +20,12 @@
 //!
 //! A has K̂'s pattern (a row acts on one node, so C's part lands in that
 //! node's diagonal block): its symbolic analysis is made once for the run
-//! and every Newton iteration is one numeric LDLᵀ of it, plus one solve per
-//! force-driven tool for S (a dense matrix of the tools' size). On the
-//! shipped hemisphere (40 × 40) this takes 7.4 ms where the LDLᵀ of the
-//! whole saddle-point system over every candidate's slots took 10.1 ms
-//! (one state, best of 20), and the analysis when the candidates change is
-//! gone.
+//! and every Newton iteration is one numeric Cholesky of it (LDLᵀ where it
+//! is indefinite), plus one solve per force-driven tool for S (a dense
+//! matrix of the tools' size). On the shipped hemisphere (40 × 40) A's
+//! Cholesky takes 6.8 ms where the LDLᵀ of the whole saddle-point system
+//! over every candidate's slots took 10.1 ms (one state, best of 20), and
+//! the analysis when the candidates change is gone.
 //!
 //! D holds the rows' compliance plus, on rigid rows, a regularisation
 //! ([`drape_contact::REGULARISATION`]·A_kk) that keeps the pivots of
@@ -36,9 +36,9 @@
 //! Inertia: the system has one negative pivot per held row (−D) plus the
 //! negative pivots of [A B; Bᵀ k_d + C_dᵀD⁻¹C_d] (Haynsworth), so the
 //! linearised problem is convex on the held rows' null space exactly when
-//! A's LDLᵀ and S have no negative pivot. Where they have (compressed
-//! resin) they are reported; the driver treats them as the condensed
-//! solver treats negative curvature.
+//! A is positive definite and S > 0. Where they are not (compressed resin)
+//! A is factorised by LDLᵀ and the negative pivots are reported; the
+//! driver treats them as the condensed solver treats negative curvature.
 //!
 //! Not here: which rows are held (the contact pass), assembly of K̂
 //! ([`crate::tangent`]).

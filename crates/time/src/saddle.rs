@@ -439,8 +439,8 @@ impl SaddleSystem {
             let d = Self::factorised_compliance(row);
             let c = Self::direction(row, fixed);
             let i = 3 * row.node as usize;
-            for a in 0..3 {
-                f1[i + a] += c[a] * h3 / d;
+            for (f, ca) in f1[i..i + 3].iter_mut().zip(c) {
+                *f += ca * h3 / d;
             }
             if let Some((k, cd)) = self.tool_of(row) {
                 self.tool_residual[k] += cd * h3 / d;
@@ -531,8 +531,8 @@ impl SaddleSystem {
                 let c = Self::direction(row, fixed);
                 let i = 3 * row.node as usize;
                 let mu = self.mu[r];
-                for a in 0..3 {
-                    self.residual[i + a] -= c[a] * mu;
+                for (res, ca) in self.residual[i..i + 3].iter_mut().zip(c) {
+                    *res -= ca * mu;
                 }
                 let mut v = c[0] * self.z[i] + c[1] * self.z[i + 1] + c[2] * self.z[i + 2]
                     - row.compliance * mu;

@@ -31,8 +31,9 @@
 //! Alart–Curnier's augmented Lagrangian because the latter's generalised
 //! Jacobian couples the slip force to λ_N (μ·d·∂λ_N): not symmetric, so no
 //! symmetric factorisation (faer's sparse LU of the shipped hemisphere's
-//! matrix takes 4× its Cholesky); here the slip force lags one iteration behind λ_N, as in the
-//! condensed solver, and a slipping pair converges linearly in that term.
+//! matrix takes 4× its Cholesky); here the slip force lags one iteration
+//! behind λ_N, as in the condensed solver, and a slipping pair converges
+//! linearly in that term.
 //!
 //! **A step that would jump a contact.** The semi-smooth step trusts the
 //! set of the last iterate; a force-driven holder with no row held moves

@@ -24,10 +24,10 @@ pub enum ContactSolver {
     ///
     /// The default: the faster on the four shipped contact scenes
     /// (deep-drawing-0-90: 33.6 s against 60.7 s) and on the quick
-    /// work–precision bench's 10 × 10 hemisphere (0.8 s against 1.8 s,
-    /// closer to the reference), and it passes the validation cases the condensed
-    /// solver passes, at the same tolerances (measurements: the scene
-    /// reference, *The implicit solver*, and docs/performance.md).
+    /// work–precision bench's 10 × 10 hemisphere (1.4 s against 2.1 s,
+    /// as close to the reference), and it passes the validation cases the
+    /// condensed solver passes, at the same tolerances (measurements: the
+    /// scene reference, *The implicit solver*, and docs/performance.md).
     #[default]
     ActiveSet,
 }

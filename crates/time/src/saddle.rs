@@ -57,7 +57,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
-use crate::tangent::SparseTangent;
+use crate::tangent::{SparseTangent, add_symmetric_product};
 
 /// Refinement steps at most per solve: the regularisation's bias shrinks
 /// by about [`drape_contact::REGULARISATION`] times the row's share per
@@ -72,7 +72,8 @@ pub struct SaddleSystem {
     dofs: usize,
     /// K̂'s pattern (upper triangle), the same for the whole run.
     symbolic_matrix: Option<SymbolicSparseColMat<usize>>,
-    /// K̂'s values at the last factorisation (for the refinement).
+    /// K̂'s values at the last factorisation: the refinement's residual
+    /// (A's values less the rows' CᵀD⁻¹C would cancel entries 1/D large).
     tangent_values: Vec<f64>,
     /// A's values.
     values: Vec<f64>,
@@ -106,8 +107,6 @@ pub struct SaddleSystem {
     product: Vec<f64>,
     /// Numeric factorisations done.
     pub factorisations: u64,
-    /// Symbolic analyses done (one per run: A's pattern is K̂'s).
-    pub analyses: u64,
     /// Seconds in numeric factorisations (and analyses).
     pub factor_seconds: f64,
     /// Solves with the factors (the tools' and the refinement's included).
@@ -182,7 +181,6 @@ impl SaddleSystem {
             row_residual: Vec::new(),
             product: Vec::new(),
             factorisations: 0,
-            analyses: 0,
             factor_seconds: 0.0,
             solves: 0,
         }
@@ -205,7 +203,6 @@ impl SaddleSystem {
         )
         .map_err(|e| SaddleError::Symbolic(format!("{e:?}")))?;
         self.factor_seconds += started.elapsed().as_secs_f64();
-        self.analyses += 1;
         let (ptr, rows) = (matrix.col_ptr(), matrix.row_idx());
         let at = |i: usize, j: usize| {
             ptr[j]
@@ -568,17 +565,8 @@ impl SaddleSystem {
     /// residual −= K̂·z (K̂ from its upper triangle).
     fn subtract_tangent_product(&mut self) {
         let matrix = self.symbolic_matrix.as_ref().expect("analysed");
-        let (ptr, idx) = (matrix.col_ptr(), matrix.row_idx());
-        let (z, res, values) = (&self.z, &mut self.residual, &self.tangent_values);
-        for j in 0..z.len() {
-            for k in ptr[j]..ptr[j + 1] {
-                let (i, v) = (idx[k], values[k]);
-                res[i] -= v * z[j];
-                if i != j {
-                    res[j] -= v * z[i];
-                }
-            }
-        }
+        let k = SparseColMatRef::new(matrix.as_ref(), &self.tangent_values);
+        add_symmetric_product(k, &self.z, &mut self.residual, -1.0);
     }
 }
 

@@ -256,6 +256,28 @@ fn assemble_batch(
     failed.map_or(Ok(()), Err)
 }
 
+/// y += `scale`·K·x for the symmetric K stored as its upper triangle
+/// (`scale` ±1 keeps every product exact, so the sums are those of
+/// adding or subtracting K·x term by term).
+pub(crate) fn add_symmetric_product(
+    k: SparseColMatRef<'_, usize, f64>,
+    x: &[f64],
+    y: &mut [f64],
+    scale: f64,
+) {
+    let (ptr, rows, values) = (k.col_ptr(), k.row_idx(), k.val());
+    for j in 0..k.ncols() {
+        let range = ptr[j]..ptr[j + 1];
+        for (&i, &v) in rows[range.clone()].iter().zip(&values[range]) {
+            let v = scale * v;
+            y[i] += v * x[j];
+            if i != j {
+                y[j] += v * x[i];
+            }
+        }
+    }
+}
+
 impl SparseTangent {
     /// The pattern, maps and symbolic factorisation of `model`'s elements;
     /// `constrained[3·node + component]` marks the prescribed dofs.
@@ -695,19 +717,7 @@ impl SparseTangent {
     /// triangle): for residual checks.
     pub fn multiply(&self, x: &[f64], y: &mut [f64]) {
         y.fill(0.0);
-        let (ptr, rows) = (
-            self.symbolic_matrix.col_ptr(),
-            self.symbolic_matrix.row_idx(),
-        );
-        for j in 0..self.n {
-            let range = ptr[j]..ptr[j + 1];
-            for (&i, &v) in rows[range.clone()].iter().zip(&self.values[range]) {
-                y[i] += v * x[j];
-                if i != j {
-                    y[j] += v * x[i];
-                }
-            }
-        }
+        add_symmetric_product(self.matrix(), x, y, 1.0);
     }
 
     /// Adds the symmetric `block` to node `i`'s 3 × 3 diagonal block of the

@@ -109,7 +109,8 @@ fn main() {
                 let per = |n: u64| n as f64 / t.steps.max(1) as f64;
                 println!(
                     "ply pass: {} steps, {:.0} constraints, {:.2} normal sweeps (max {}, capped {}, stalled {}), \
-                     {:.2} friction sweeps (max {}, capped {}, stalled {}), {} candidate pairs now",
+                     {:.2} friction sweeps (max {}, capped {}, stalled {}), {} candidate pairs now, \
+                     {} nodes shifted",
                     t.steps,
                     per(t.constraints),
                     per(t.normal_sweeps),
@@ -121,6 +122,7 @@ fn main() {
                     t.friction_capped,
                     t.friction_stalled,
                     pl.candidate_pairs(),
+                    t.shifted_nodes,
                 );
             }
         }

@@ -392,6 +392,12 @@ impl ExplicitContact {
         }
     }
 
+    /// The shifts of position the ply pass made at the last step (see
+    /// [`PlyContact::shifts`]); none without plies.
+    pub fn position_shifts(&self) -> &[(u32, Vector3<f64>)] {
+        self.plies.as_ref().map_or(&[], PlyContact::shifts)
+    }
+
     /// Adds contact between the plies of a laminate (see [`PlyContact`]):
     /// solved after the tools' normal constraints, with the nodes on a tool
     /// held there, before the tools' friction and its own.

@@ -397,6 +397,10 @@ pub struct PlyTotals {
     pub friction_capped: u64,
     /// Steps whose friction solve stopped on a plateau (`FRICTION_STALL`).
     pub friction_stalled: u64,
+    /// Nodes moved by a shift of position (put back out on their side of
+    /// a ply), summed over the steps ([`PlyContact::shifts`]).
+    #[serde(default)]
+    pub shifted_nodes: u64,
 }
 
 /// The ply–ply contact pass.
@@ -419,6 +423,10 @@ pub struct PlyContact {
     /// The part of each node's `dx` that moves it back to its side of a
     /// ply it came round ([`Hit::recover`]): a position correction only.
     shift: Vec<Vector3<f64>>,
+    /// The shifts of the last normal pass, by node (in the order the
+    /// constraints visit them): what the driver's energy balance counts
+    /// as the contact's work, not as motion ([`Self::shifts`]).
+    shifted: Vec<(u32, Vector3<f64>)>,
     /// Each constraint's tangential force in the friction solve.
     f_t: Vec<Vector3<f64>>,
     /// Each node's reference area (for the pressure).
@@ -495,6 +503,7 @@ impl PlyContact {
             constraints: Vec::with_capacity(2 * n),
             dx: vec![Vector3::zeros(); n],
             shift: vec![Vector3::zeros(); n],
+            shifted: Vec::new(),
             f_t: Vec::with_capacity(2 * n),
             area,
             slip: vec![0.0; n],
@@ -511,6 +520,16 @@ impl PlyContact {
     /// The layers.
     pub fn layers(&self) -> &[PlyLayer] {
         &self.layers
+    }
+
+    /// The nodes the last normal pass moved by a shift of position (a
+    /// node put back out on its side of a ply, see the module doc), and
+    /// each one's shift (mm). A shift changes no velocity, so the
+    /// driver's energy balance, which integrates work over the motion,
+    /// counts the work it takes against the node's forces as the
+    /// contact's.
+    pub fn shifts(&self) -> &[(u32, Vector3<f64>)] {
+        &self.shifted
     }
 
     /// Number of candidate (node, face) pairs of the broad phase.
@@ -557,6 +576,7 @@ impl PlyContact {
         force: &mut [Vector3<f64>],
     ) -> PlyStep {
         tool_shift.fill(0.0);
+        self.shifted.clear();
         for &i in &self.touched {
             self.pressure[i as usize] = 0.0;
         }
@@ -890,7 +910,10 @@ impl PlyContact {
                     v[i] += (dx[i] - shift[i]) / dt;
                     dx[i] = Vector3::zeros();
                 }
-                shift[i] = Vector3::zeros();
+                if shift[i] != Vector3::zeros() {
+                    self.shifted.push((i as u32, shift[i]));
+                    shift[i] = Vector3::zeros();
+                }
             }
             if c.mu > 0.0 {
                 let f = c.normal * (c.mu * lambda_scale);
@@ -920,6 +943,7 @@ impl PlyContact {
         totals.constraints += step.active as u64;
         totals.normal_sweeps += step.sweeps as u64;
         totals.max_normal_sweeps = totals.max_normal_sweeps.max(step.sweeps);
+        totals.shifted_nodes += self.shifted.len() as u64;
         if step.stalled {
             totals.normal_stalled += 1;
         } else if step.residual > tolerance {

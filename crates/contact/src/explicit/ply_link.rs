@@ -248,7 +248,7 @@ impl ExplicitContact {
 mod tests {
     use nalgebra::Vector3;
 
-    use crate::plies::{PlyContact, PlyInterface, fixtures};
+    use crate::plies::{NORMAL_TOLERANCE, PlyContact, PlyInterface, fixtures};
     use crate::surface::Surface;
     use crate::tool::{Amplitude, Tool, ToolMotion};
     use crate::{ContactSettings, ExplicitContact};
@@ -293,8 +293,8 @@ mod tests {
         // at 25 times their mass it ran out of sweeps 1e-5 short).
         let (h, m, f, holder_mass, dt) = (0.1, 1e-6, 3.0, 4e-6, 1e-5);
         // What the holder's force moves it by in a step (mm), the
-        // violation the ply pass starts from; its solve stops at 1e-6 of
-        // it, and so do the positions and the forces.
+        // violation the ply pass starts from; its solve stops at its
+        // tolerance of it, and so do the positions and the forces.
         let squeeze = f * dt * dt / holder_mass;
         let floor = Tool {
             name: "floor".into(),
@@ -327,18 +327,18 @@ mod tests {
                 .unwrap();
             for (i, (p, q)) in x.iter().zip(&start).enumerate() {
                 assert!(
-                    (p - q).norm() < 1e-6 * squeeze,
+                    (p - q).norm() < NORMAL_TOLERANCE * squeeze,
                     "step {step}: node {i} at {p:?}"
                 );
             }
             let holder = contact.tool_state[1].displacement;
             assert!(
-                holder.abs() < 1e-6 * squeeze,
+                holder.abs() < NORMAL_TOLERANCE * squeeze,
                 "step {step}: holder moved {holder}"
             );
             for (t, &carried) in contact.tool_force.iter().enumerate() {
                 assert!(
-                    (carried - f).abs() < 1e-6 * f,
+                    (carried - f).abs() < NORMAL_TOLERANCE * f,
                     "step {step}: tool {t} carries {carried} N of {f}"
                 );
             }
@@ -391,12 +391,12 @@ mod tests {
         for i in 4..8 {
             let into_lid = x[i].z - (lid_z - offset);
             assert!(
-                into_lid < 1e-6 * offset,
+                into_lid < NORMAL_TOLERANCE * rise,
                 "node {i} {into_lid:e} mm into the lid"
             );
             let apart = x[i].z - x[i - 4].z;
             assert!(
-                apart > 2.0 * offset * (1.0 - 1e-6),
+                apart > 2.0 * offset - NORMAL_TOLERANCE * rise,
                 "node {i}: plies {apart} apart"
             );
         }

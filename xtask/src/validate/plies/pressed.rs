@@ -118,8 +118,9 @@ pub fn pressed_stack() -> Vec<Check> {
             "|holder's contact force − its force| / its force, largest over the frames after the ramp",
             0.0,
             worst_force,
-            // The normal solve stops at 1e-6 of a step's violation; the
-            // force follows it (9e-7 measured in the quick run).
+            // The normal solve stops at 1e-4 of a step's violation, or on
+            // the clamp's plateau far below it (3.4e-7 measured in the
+            // quick run).
             1e-5,
         ),
     ]

@@ -432,6 +432,8 @@ pub struct PlyContact {
     shifted: Vec<(u32, Vector3<f64>)>,
     /// Each constraint's tangential force in the friction solve.
     f_t: Vec<Vector3<f64>>,
+    /// The velocities before the friction sweeps.
+    v_before: Vec<Vector3<f64>>,
     /// Each node's reference area (for the pressure).
     area: Vec<f64>,
     /// Accumulated tangential slip of each node on the ply below (mm).
@@ -508,6 +510,7 @@ impl PlyContact {
             shift: vec![Vector3::zeros(); n],
             shifted: Vec::new(),
             f_t: Vec::with_capacity(2 * n),
+            v_before: Vec::with_capacity(n),
             area,
             slip: vec![0.0; n],
             pressure: vec![0.0; n],
@@ -1036,6 +1039,11 @@ impl PlyContact {
         // constraint's relative tangential velocity exactly zero where it
         // sticks (given the others), which an over-relaxed one overshoots.
         let mut omega = FRICTION_OMEGA;
+        // The sweeps read and write the velocities only; the positions
+        // follow once, from what the sweeps changed (half the stores of
+        // an update).
+        self.v_before.clear();
+        self.v_before.extend_from_slice(v);
         for _ in 0..FRICTION_SWEEPS {
             sweeps += 1;
             let mut change: f64 = 0.0;
@@ -1055,13 +1063,9 @@ impl PlyContact {
                 }
                 change = change.max(d.norm());
                 self.f_t[k] = new;
-                let dv = d * (tau * c.inv[0]);
-                v[c.slave as usize] += dv;
-                x[c.slave as usize] += dv * dt;
+                v[c.slave as usize] += d * (tau * c.inv[0]);
                 for k in 0..3 {
-                    let dv = d * (-c.w[k] * tau * c.inv[k + 1]);
-                    v[c.masters[k] as usize] += dv;
-                    x[c.masters[k] as usize] += dv * dt;
+                    v[c.masters[k] as usize] += d * (-c.w[k] * tau * c.inv[k + 1]);
                 }
             }
             for t in tools.iter_mut() {
@@ -1079,9 +1083,7 @@ impl PlyContact {
                 }
                 change = change.max(d.norm());
                 t.force = new;
-                let dv = d * (tau * m_inv);
-                v[i] += dv;
-                x[i] += dv * dt;
+                v[i] += d * (tau * m_inv);
             }
             if change <= FRICTION_TOLERANCE * largest {
                 if omega == 1.0 {
@@ -1096,6 +1098,11 @@ impl PlyContact {
                     break;
                 }
                 window = change;
+            }
+        }
+        for ((x, v), v0) in x.iter_mut().zip(v.iter()).zip(&self.v_before) {
+            if v != v0 {
+                *x += (v - v0) * dt;
             }
         }
         let totals = &mut self.totals;

@@ -163,8 +163,8 @@ const PAIR_WEIGHT: f64 = 0.9;
 
 /// Over-relaxation of the projected Gauss–Seidel sweeps of the normal
 /// solve: any factor in (0, 2) converges to the same multipliers on this
-/// convex problem. On the four-ply hemisphere (12 × 12 cells, at
-/// [`NORMAL_TOLERANCE`]) 1.5 takes 53 sweeps per step over the whole
+/// convex problem. On the four-ply hemisphere (12 × 12 cells, at the
+/// earlier tolerance of 1e-6) 1.5 takes 53 sweeps per step over the whole
 /// stroke against 79 at 1.3, and over the first 0.3 s 28 against 34 at
 /// 1.3, 52 at 1.1 and 42 at 1.7.
 const NORMAL_OMEGA: f64 = 1.5;
@@ -366,7 +366,7 @@ pub struct PlyStep {
     pub active: usize,
     /// Gauss–Seidel sweeps.
     pub sweeps: usize,
-    /// Largest linearised gap violation left (mm): at most 1e-6
+    /// Largest linearised gap violation left (mm): at most 1e-4
     /// (`NORMAL_TOLERANCE`) of the largest at the start unless the sweeps
     /// ran out or stalled.
     pub residual: f64,
@@ -963,7 +963,7 @@ impl PlyContact {
     /// applied already), solved together: projected Gauss–Seidel on each
     /// constraint's tangential force, the force that stops the relative
     /// sliding over the step projected on the disc of radius μλ, until no
-    /// force changes by more than 1e-6 (`FRICTION_TOLERANCE`) of the largest
+    /// force changes by more than 1e-5 (`FRICTION_TOLERANCE`) of the largest
     /// cap. Together,
     /// because a ply that sticks to the one below drags it on the tool:
     /// friction solved one contact after the other would let a sticking

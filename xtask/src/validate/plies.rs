@@ -133,8 +133,9 @@ fn mean_along(model: &Model, x: &[Vector3<f64>], ply: usize, along: Vector3<f64>
 ///
 /// Tolerances: while sticking the slide is 0 to 1e-9 mm and the friction
 /// equals F to 1e-6 and the sliding friction μN to 1e-6 (the issue asks
-/// 1 %; the multipliers come out within 6e-7 at μ = 0.3 at the normal
-/// solve's tolerance, 1e-4 of a step's violation, 2e-10 at 1e-6); the slide to 1e-5
+/// 1 %; the multipliers come out within 3e-9 at the normal solve's
+/// tolerance, 1e-5 of a step's violation, and within 6e-7 to 6e-6 at
+/// 1e-4); the slide to 1e-5
 /// (central differences integrate the cubic exactly but for the onset
 /// falling inside a step, an error of order (Δt/T)², Δt/T ≈ 2e-4).
 fn sled() -> Vec<Check> {
@@ -264,7 +265,7 @@ fn incline_run(alpha: f64, mu_tool: f64, mu_ply: f64, time: f64) -> (f64, f64) {
 ///
 /// Tolerances: a sticking ply's slide 0 to 1e-9 mm (the joint friction
 /// solve stops at 1e-5 of the largest cap per sweep, which lets a sticking
-/// node creep 1e-5 of what its cap would move it: 1.2e-10 and 2.6e-10 mm
+/// node creep 1e-5 of what its cap would move it: 6e-11 and 3.8e-10 mm
 /// here, while 1e-4 would not pass); a sliding one's to 1e-6 relative (every node
 /// has the same acceleration, which central differences integrate
 /// exactly; a sliding node's friction is on its cap, which the solve's

@@ -88,7 +88,8 @@ fn a_node_driven_round_the_free_end_stays_beside_it() {
                 );
             }
         }
-        assert_eq!(c.max_overlap(&x), 0.0, "step {k}");
+        // Out of the end to the solve's tolerance of the step's 0.1 mm.
+        assert!(c.max_overlap(&x) <= NORMAL_TOLERANCE * 0.1, "step {k}");
     }
 }
 
@@ -107,7 +108,11 @@ fn a_free_end_coming_over_a_node_behind_it_pushes_it_along() {
             let end = x[1].x;
             for i in [5, 6] {
                 assert_eq!(x[i].z, depth, "step {k}: {}", x[i]);
-                assert!(x[i].x >= end - 1e-9, "step {k}: {} behind {end}", x[i]);
+                assert!(
+                    x[i].x >= end - NORMAL_TOLERANCE * 0.01,
+                    "step {k}: {} behind {end}",
+                    x[i]
+                );
                 if end > 10.2 {
                     // Pushed: at the end, moving with it, to the solve's
                     // tolerance of the step's 0.01 mm.
@@ -116,7 +121,10 @@ fn a_free_end_coming_over_a_node_behind_it_pushes_it_along() {
                     assert!((v[i].x - 10.0).abs() < tolerance / DT, "step {k}: {}", v[i]);
                 }
             }
-            assert_eq!(c.max_overlap(&x), 0.0, "depth {depth}, step {k}");
+            assert!(
+                c.max_overlap(&x) <= NORMAL_TOLERANCE * 0.01,
+                "depth {depth}, step {k}"
+            );
         }
     }
 }

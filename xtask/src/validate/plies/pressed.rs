@@ -118,7 +118,7 @@ pub fn pressed_stack() -> Vec<Check> {
             "|holder's contact force − its force| / its force, largest over the frames after the ramp",
             0.0,
             worst_force,
-            // The normal solve stops at 1e-4 of a step's violation, or on
+            // The normal solve stops at 1e-5 of a step's violation, or on
             // the clamp's plateau far below it (3.4e-7 measured in the
             // quick run).
             1e-5,

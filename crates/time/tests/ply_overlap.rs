@@ -9,46 +9,15 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
-use drape_constitutive::Material;
 use drape_contact::ContactPhase;
-use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
-use drape_model::stack::PlyModel;
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion, State};
 use drape_time::{
     Explicit, ExplicitSettings, Frame, Observer, Pass, RunError, ply_overlap_tolerance,
 };
 use nalgebra::Vector3;
 
-fn glass() -> Material {
-    Material::preset("glass-serge-4x3").expect("preset")
-}
-
-/// A glass ply 40 mm wide and `rows` 10 mm quads high, centred at
-/// `center`, with embedded fibres.
-fn glass_ply(name: &str, center: Vector3<f64>, rows: usize) -> PlyModel {
-    let material = glass();
-    let blank = RectangleBlank {
-        width: 40.0,
-        height: 10.0 * rows as f64,
-        center,
-        orientation_deg: 0.0,
-        element: ElementKind::Quad,
-        meshing: Meshing::Cells([4, rows]),
-        fibres: FibreRepresentation::Embedded,
-    };
-    PlyModel {
-        model: Model::from_mesh(
-            &blank.mesh().expect("mesh"),
-            &material,
-            FibreRepresentation::Embedded,
-        )
-        .expect("model"),
-        name: name.into(),
-        thickness: material.thickness,
-        orientation_deg: 0.0,
-        friction_below: 0.0,
-    }
-}
+mod common;
+use common::{glass, glass_ply};
 
 /// Two 40 mm glass plies of 10 mm quads, the bottom one held, the top
 /// one's centre node moved down by `push` mm along a ramp over 0.01 s;

@@ -776,10 +776,12 @@ impl<'m> Explicit<'m> {
                 let (xn, vn, fi, fe) = (&self.x_new, &self.v_new, &self.forces.f_int, &self.f_ext);
                 let constrained = &self.constraints.constrained;
                 let f_c = self.contact.as_ref().map(|c| &c.force);
+                // Mass-proportional damping at the mid-step velocity.
+                let damping_force = |i: usize| (v[i] + vn[i]) * 0.5 * (damping * m[i]);
                 let terms = |i: usize| -> [f64; 5] {
                     let dx = v[i] * (0.5 * dt_prev) + (xn[i] - x[i]) * 0.5;
                     let v_mid = (v[i] + vn[i]) * 0.5;
-                    let damp = v_mid * (damping * m[i]);
+                    let damp = damping_force(i);
                     let mut w_bc = 0.0;
                     if constrained[i].iter().any(|&c| c) && dt_avg > 0.0 {
                         // The force the constraint applies: m·a − (f_ext − f_int − damping).
@@ -817,7 +819,7 @@ impl<'m> Explicit<'m> {
                     for &(i, s) in contact.position_shifts() {
                         let i = i as usize;
                         let s = Vector3::from_fn(|k, _| if constrained[i][k] { 0.0 } else { s[k] });
-                        let damp = (v[i] + vn[i]) * (0.5 * damping * m[i]);
+                        let damp = damping_force(i);
                         w_int += fi[i].dot(&s) * 0.5;
                         w_ext += fe[i].dot(&s) * 0.5;
                         w_damp += damp.dot(&s) * 0.5;

@@ -939,7 +939,10 @@ impl MembraneBatch {
         let (h_m, t_f) = (m.resin_thickness(), m.family_thickness());
         let c_alg = m.resin.algorithmic_matrix(dt);
         let xe = self.gather(e, x);
-        k_out.fill(0.0);
+        // Summed on the stack, column-major as `k_out`, and copied once:
+        // the heap matrix's checked indexing inside the loop cost more.
+        let d = 3 * nn;
+        let mut k = [0.0; 9 * MAX_NODES * MAX_NODES];
         for p in 0..self.shape.points() {
             let h = &h_in[p * self.stride..(p + 1) * self.stride];
             let r = self
@@ -998,12 +1001,21 @@ impl MembraneBatch {
                 let (i, c) = (ic / 2, ic % 2);
                 let mut d_f = Matrix3x2::zeros();
                 d_f[(i, c)] = 1.0;
-                // dC = E_icᵀ·F + Fᵀ·E_ic: row and column c get F's row i.
-                let d_c = d_f.tr_mul(&r.f) + r.f.tr_mul(&d_f);
-                let d_s = d_s_unit[0] * d_c[(0, 0)]
-                    + d_s_unit[1] * d_c[(1, 1)]
-                    + d_s_unit[2] * d_c[(0, 1)];
-                let mut d_p = (d_f * s + r.f * d_s) * h_m;
+                // dC = E_icᵀ·F + Fᵀ·E_ic: row and column c get F's row i,
+                // so dS takes two of the three unit dC, and dF·S is S's
+                // row c in row i. Written out, these skip only products
+                // and sums with exact zeros: the same bits as the general
+                // products, with a fraction of the work.
+                let d_s = if c == 0 {
+                    d_s_unit[0] * (r.f[(i, 0)] + r.f[(i, 0)]) + d_s_unit[2] * r.f[(i, 1)]
+                } else {
+                    d_s_unit[1] * (r.f[(i, 1)] + r.f[(i, 1)]) + d_s_unit[2] * r.f[(i, 0)]
+                };
+                let mut d_p = r.f * d_s;
+                for j in 0..2 {
+                    d_p[(i, j)] += s[(c, j)];
+                }
+                let mut d_p = d_p * h_m;
                 if self.section.embedded_fibres {
                     for (k, fib) in r.fibres.iter().enumerate() {
                         let (tau_f, e_t) = r.fibre_law[k];
@@ -1027,13 +1039,15 @@ impl MembraneBatch {
                 for (b, gb) in grads.iter().enumerate() {
                     for i in 0..3 {
                         let col = towards_a[2 * i] * gb[0] + towards_a[2 * i + 1] * gb[1];
-                        for j in 0..3 {
-                            k_out[(3 * a + j, 3 * b + i)] += col[j];
+                        let out = &mut k[(3 * b + i) * d + 3 * a..][..3];
+                        for (o, v) in out.iter_mut().zip(col.iter()) {
+                            *o += v;
                         }
                     }
                 }
             }
         }
+        k_out.copy_from_slice(&k[..d * d]);
         Ok(())
     }
 

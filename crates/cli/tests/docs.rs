@@ -21,7 +21,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::{temp, text, workspace};
+use common::{TempFolder, temp, text, workspace};
 
 /// The pages whose commands are run.
 const COMMAND_PAGES: [&str; 2] = ["README.md", "docs/user-guide.md"];
@@ -195,7 +195,7 @@ fn check(shown: &Shown, dir: &Path) -> Result<(), String> {
 }
 
 /// A scratch folder with a copy of the shipped scenes, as a clone has them.
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> TempFolder {
     fn copy(from: &Path, to: &Path) {
         std::fs::create_dir_all(to).unwrap();
         for entry in std::fs::read_dir(from).unwrap() {
@@ -226,7 +226,6 @@ fn every_documented_command_works() {
                 failures.push(e);
             }
         }
-        let _ = std::fs::remove_dir_all(&dir);
     }
     assert!(
         count >= 10,

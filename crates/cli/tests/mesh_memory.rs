@@ -138,22 +138,22 @@ fn measure() {
     // The blank: 150 × 150 quads (22 500) on a plane, so the tool is
     // a few bytes.
     let k = 150;
-    std::fs::write(dir.as_path().join("plate.inp"), plate_inp(k)).unwrap();
+    std::fs::write(dir.join("plate.inp"), plate_inp(k)).unwrap();
     let blank = format!(
         "[simulation]\nend_time = 1e-3\n\n[fabric]\nmaterial = \"glass-serge-4x3\"\n\
          fibres = \"embedded\"\nblank = {{ mesh = \"plate.inp\" }}\n\n[[tools]]\nname = \"floor\"\n\
          friction = 0.1\ngeometry = {{ kind = \"plane\", point = [0, 0, -1], normal = [0, 0, 1] }}\n\n{OUTPUT}"
     );
-    let per_element = peak_of(|| read_and_run(dir.as_path(), &blank)) as f64 / (k * k) as f64;
+    let per_element = peak_of(|| read_and_run(&*dir, &blank)) as f64 / (k * k) as f64;
     // The tool: 2 × 200² triangles (80 000) under a 4 × 4 rectangle.
     let t = 200;
-    std::fs::write(dir.as_path().join("floor.stl"), floor_stl(t)).unwrap();
+    std::fs::write(dir.join("floor.stl"), floor_stl(t)).unwrap();
     let tool = format!(
         "[simulation]\nend_time = 1e-3\n\n[fabric]\nmaterial = \"glass-serge-4x3\"\n\
          fibres = \"trusses\"\nblank = {{ width = 40, height = 40, cells = [4, 4] }}\n\n[[tools]]\n\
          name = \"floor\"\nfriction = 0.1\ngeometry = {{ kind = \"mesh\", file = \"floor.stl\" }}\n\n{OUTPUT}"
     );
-    let per_triangle = peak_of(|| read_and_run(dir.as_path(), &tool)) as f64 / (2 * t * t) as f64;
+    let per_triangle = peak_of(|| read_and_run(&*dir, &tool)) as f64 / (2 * t * t) as f64;
     eprintln!("peak: {per_element:.0} B per blank element, {per_triangle:.0} B per tool triangle");
     for (what, estimate, measured) in [
         ("blank element", BLANK_BYTES_PER_ELEMENT as f64, per_element),

@@ -21,8 +21,9 @@ pub fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// An empty folder of this test file and process, named `name`.
-pub fn temp(name: &str) -> PathBuf {
+/// An empty folder of this test file and process, named `name`, removed
+/// when the test that made it passes (kept after a failure, to look at).
+pub fn temp(name: &str) -> TempFolder {
     let dir = std::env::temp_dir().join(format!(
         "drape-{}-{}-{name}",
         env!("CARGO_CRATE_NAME"),
@@ -30,7 +31,32 @@ pub fn temp(name: &str) -> PathBuf {
     ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    TempFolder(dir)
+}
+
+/// [`temp`]'s folder: a path, removed on drop unless the thread is
+/// panicking (a failed assertion).
+pub struct TempFolder(PathBuf);
+
+impl std::ops::Deref for TempFolder {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TempFolder {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempFolder {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
 }
 
 /// Standard output and error together.

@@ -144,7 +144,7 @@ fn measure() {
          fibres = \"embedded\"\nblank = {{ mesh = \"plate.inp\" }}\n\n[[tools]]\nname = \"floor\"\n\
          friction = 0.1\ngeometry = {{ kind = \"plane\", point = [0, 0, -1], normal = [0, 0, 1] }}\n\n{OUTPUT}"
     );
-    let per_element = peak_of(|| read_and_run(&*dir, &blank)) as f64 / (k * k) as f64;
+    let per_element = peak_of(|| read_and_run(&dir, &blank)) as f64 / (k * k) as f64;
     // The tool: 2 × 200² triangles (80 000) under a 4 × 4 rectangle.
     let t = 200;
     std::fs::write(dir.join("floor.stl"), floor_stl(t)).unwrap();
@@ -153,7 +153,7 @@ fn measure() {
          fibres = \"trusses\"\nblank = {{ width = 40, height = 40, cells = [4, 4] }}\n\n[[tools]]\n\
          name = \"floor\"\nfriction = 0.1\ngeometry = {{ kind = \"mesh\", file = \"floor.stl\" }}\n\n{OUTPUT}"
     );
-    let per_triangle = peak_of(|| read_and_run(&*dir, &tool)) as f64 / (2 * t * t) as f64;
+    let per_triangle = peak_of(|| read_and_run(&dir, &tool)) as f64 / (2 * t * t) as f64;
     eprintln!("peak: {per_element:.0} B per blank element, {per_triangle:.0} B per tool triangle");
     for (what, estimate, measured) in [
         ("blank element", BLANK_BYTES_PER_ELEMENT as f64, per_element),

@@ -940,7 +940,7 @@ impl MembraneBatch {
         let c_alg = m.resin.algorithmic_matrix(dt);
         let xe = self.gather(e, x);
         // Summed on the stack, column-major as `k_out`, and copied once:
-        // the heap matrix's checked indexing inside the loop cost more.
+        // no checked indexing of the heap matrix inside the loops.
         let d = 3 * nn;
         let mut k = [0.0; 9 * MAX_NODES * MAX_NODES];
         for p in 0..self.shape.points() {

@@ -248,16 +248,16 @@ impl ExplicitContact {
 mod tests {
     use nalgebra::Vector3;
 
-    use crate::plies::{NORMAL_TOLERANCE, PlyContact, PlyInterface, fixtures};
+    use crate::plies::{NORMAL_COMPLIANCE, NORMAL_TOLERANCE, PlyContact, PlyInterface, fixtures};
     use crate::surface::Surface;
     use crate::tool::{Amplitude, Tool, ToolMotion};
     use crate::{ContactSettings, ExplicitContact};
 
     /// Two unit squares of thickness h, one on the other (μ_ply = 0), as
-    /// `contact`'s ply pass; their nodes' positions, the bottom ply's on
-    /// z = h/2.
-    fn two_plies(contact: &mut ExplicitContact, h: f64) -> Vec<Vector3<f64>> {
-        contact.set_plies(PlyContact::new(
+    /// `contact`'s ply pass with the rows' `compliance`; their nodes'
+    /// positions, the bottom ply's on z = h/2.
+    fn two_plies(contact: &mut ExplicitContact, h: f64, compliance: f64) -> Vec<Vector3<f64>> {
+        let mut plies = PlyContact::new(
             vec![
                 fixtures::square_layer(0, 0.5 * h),
                 fixtures::square_layer(4, 0.5 * h),
@@ -269,7 +269,9 @@ mod tests {
             }],
             vec![0.25; 8],
             1.0,
-        ));
+        );
+        plies.compliance = compliance;
+        contact.set_plies(plies);
         let square = |z: f64| {
             [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| Vector3::new(x, y, z))
         };
@@ -280,11 +282,14 @@ mod tests {
 
     /// Two plies (unit squares, thickness h) on a floor under a blank
     /// holder pressed down by F, the holder's face on the top ply: the
-    /// holder's force goes through both plies into the floor, and nothing
-    /// moves. The tool pass alone pushes the top ply into the bottom one
-    /// by the holder's predictor; with the holder held where the tool pass
-    /// left it, the ply pass cannot put the plies apart (the stack shipped
-    /// as a deep drawing threw a node 0.75 mm in one step).
+    /// holder's force goes through both plies into the floor. The tool
+    /// pass alone pushes the top ply into the bottom one by the holder's
+    /// predictor; with the holder held where the tool pass left it, the ply
+    /// pass cannot put the plies apart (the stack shipped as a deep drawing
+    /// threw a node 0.75 mm in one step). With rigid ply rows nothing
+    /// moves; with the compliant rows of a run the top ply and the holder
+    /// settle by the rows' give, every column alike, and then carry the
+    /// force.
     #[test]
     fn a_stack_pressed_by_a_force_driven_holder_carries_its_force_to_the_floor() {
         // The holder weighs the top ply, as the shipped deep drawing's
@@ -296,51 +301,83 @@ mod tests {
         // violation the ply pass starts from; its solve stops at its
         // tolerance of it, and so do the positions and the forces.
         let squeeze = f * dt * dt / holder_mass;
-        let floor = Tool {
-            name: "floor".into(),
-            surface: Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
-            motion: ToolMotion::Fixed,
-            friction: 0.0,
-        };
-        let holder = Tool {
-            name: "holder".into(),
-            surface: Surface::plane(Vector3::new(0.0, 0.0, 2.0 * h), -Vector3::z()).unwrap(),
-            motion: ToolMotion::Force {
-                direction: -Vector3::z(),
-                force: f,
-                amplitude: Amplitude::Constant,
-                mass: holder_mass,
-            },
-            friction: 0.0,
-        };
-        let settings = ContactSettings {
-            offset: 0.5 * h,
-            ..ContactSettings::default()
-        };
-        let mut contact = ExplicitContact::new(vec![floor, holder], 8, settings);
-        let mut x = two_plies(&mut contact, h);
-        let start = x.clone();
-        let mut v = vec![Vector3::zeros(); 8];
-        for step in 1..=20 {
-            contact
-                .enforce(&mut x, &mut v, &[m; 8], &[true; 8], step as f64 * dt, dt)
-                .unwrap();
-            for (i, (p, q)) in x.iter().zip(&start).enumerate() {
+        let tolerance = NORMAL_TOLERANCE * squeeze;
+        for kappa in [0.0, NORMAL_COMPLIANCE] {
+            // A column's row at rest carries F/4, which alone would move
+            // its two nodes apart by (F/4)·Δt²·(2/m) in a step: the row
+            // holds its gap at κ times that.
+            let give = kappa * 0.25 * f * dt * dt * 2.0 / m;
+            let floor = Tool {
+                name: "floor".into(),
+                surface: Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
+                motion: ToolMotion::Fixed,
+                friction: 0.0,
+            };
+            let holder = Tool {
+                name: "holder".into(),
+                surface: Surface::plane(Vector3::new(0.0, 0.0, 2.0 * h), -Vector3::z()).unwrap(),
+                motion: ToolMotion::Force {
+                    direction: -Vector3::z(),
+                    force: f,
+                    amplitude: Amplitude::Constant,
+                    mass: holder_mass,
+                },
+                friction: 0.0,
+            };
+            let settings = ContactSettings {
+                offset: 0.5 * h,
+                ..ContactSettings::default()
+            };
+            let mut contact = ExplicitContact::new(vec![floor, holder], 8, settings);
+            let mut x = two_plies(&mut contact, h, kappa);
+            let start = x.clone();
+            let mut v = vec![Vector3::zeros(); 8];
+            for step in 1..=20 {
+                contact
+                    .enforce(&mut x, &mut v, &[m; 8], &[true; 8], step as f64 * dt, dt)
+                    .unwrap();
+                let sink: Vec<f64> = (4..8).map(|i| start[i].z - x[i].z).collect();
+                let holder = contact.tool_state[1].displacement;
+                for i in 0..4 {
+                    let p = x[i];
+                    assert!(
+                        (p - start[i]).norm() < tolerance,
+                        "κ {kappa}, step {step}: node {i} at {p:?}"
+                    );
+                    let p = x[i + 4];
+                    assert!(
+                        (p.xy() - start[i + 4].xy()).norm() < tolerance,
+                        "κ {kappa}, step {step}: node {} at {p:?}",
+                        i + 4
+                    );
+                    // Every column alike: the rows' share is unique.
+                    assert!(
+                        (sink[i] - holder).abs() < tolerance,
+                        "κ {kappa}, step {step}: node {} sank {} with the holder at {holder}",
+                        i + 4,
+                        sink[i]
+                    );
+                }
+                // While the holder rings on the rows' give (ten steps) it
+                // sinks at most 4 % beyond it; then it rests there and
+                // carries its force.
                 assert!(
-                    (p - q).norm() < NORMAL_TOLERANCE * squeeze,
-                    "step {step}: node {i} at {p:?}"
+                    holder > -tolerance && holder < 1.04 * give + tolerance,
+                    "κ {kappa}, step {step}: holder moved {holder} (give {give})"
                 );
-            }
-            let holder = contact.tool_state[1].displacement;
-            assert!(
-                holder.abs() < NORMAL_TOLERANCE * squeeze,
-                "step {step}: holder moved {holder}"
-            );
-            for (t, &carried) in contact.tool_force.iter().enumerate() {
+                if step < 10 && kappa > 0.0 {
+                    continue;
+                }
                 assert!(
-                    (carried - f).abs() < NORMAL_TOLERANCE * f,
-                    "step {step}: tool {t} carries {carried} N of {f}"
+                    (holder - give).abs() < tolerance,
+                    "κ {kappa}, step {step}: holder moved {holder} (give {give})"
                 );
+                for (t, &carried) in contact.tool_force.iter().enumerate() {
+                    assert!(
+                        (carried - f).abs() < NORMAL_TOLERANCE * f,
+                        "κ {kappa}, step {step}: tool {t} carries {carried} N of {f}"
+                    );
+                }
             }
         }
     }
@@ -369,7 +406,8 @@ mod tests {
             ..ContactSettings::default()
         };
         let mut contact = ExplicitContact::new(vec![lid], 8, settings);
-        let mut x = two_plies(&mut contact, h);
+        // Rigid rows: the lid's hold is what this measures.
+        let mut x = two_plies(&mut contact, h, 0.0);
         let mut v = vec![Vector3::zeros(); 8];
         // The bottom ply ten times heavier: it pushes the top ply up by
         // 10/11 of what it rises into it.

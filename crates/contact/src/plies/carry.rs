@@ -30,6 +30,10 @@ pub struct PlyCarry {
     pub overlap_peak: Vec<f64>,
     /// The solves' sums so far.
     pub totals: PlyTotals,
+    /// The step the rows' give is set at (Δt·τ, s²); 0 in a checkpoint
+    /// written before the rows gave.
+    #[serde(default)]
+    pub spring_step: f64,
 }
 
 impl PlyContact {
@@ -52,6 +56,7 @@ impl PlyContact {
             friction_dissipation: self.friction_dissipation,
             overlap_peak: self.overlap_peak.clone(),
             totals: self.totals,
+            spring_step: self.spring_step,
         }
     }
 
@@ -73,6 +78,7 @@ impl PlyContact {
             ));
         }
         self.pass = carry.pass;
+        self.spring_step = carry.spring_step;
         // The candidate lists of those positions, in their order: rebuilt
         // at the next step's positions they could list a node's faces in
         // another order and a tie go the other way.

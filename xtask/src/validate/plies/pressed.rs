@@ -27,11 +27,17 @@ use crate::validate::{Check, note, quick_mode};
 /// ply pass moving the holder (not investigated).
 ///
 /// Measured (2026-11-28, a 2-core machine): quick, overlap 2.0e-6 of the
-/// thickness and the holder's force carried to 9e-7, in 26 s. The whole
-/// stroke fails (2026-11-29, eleventh session): it stops at t = 0.355 s,
-/// where the bottom ply's free edge, drawn in past the holder's inner
-/// edge, goes unstable at the mass-scaled step, a node moving 0.64 mm in
-/// one step (docs/notes/stack-cost.md).
+/// thickness and the holder's force carried to 9e-7, in 26 s. With rigid
+/// ply rows the whole stroke stopped at t = 0.355 s (2026-11-29): the
+/// stack drew in to one side, the holder's clamp shared unevenly, and the
+/// bottom ply's free edge, drawn in past the holder's inner edge, went
+/// unstable. With the compliant rows (`NORMAL_COMPLIANCE`, fifteenth
+/// session) it draws the whole stroke, centred, but the plies overlap by
+/// 3.3 % of the thickness where they wrap the die's fillet on faces
+/// coarser than it, and the holder's contact force differs from its own
+/// by 1.5e-2 at a frame: the check's 1e-5 holds for a holder at rest on
+/// the stack, which the drawing flange does not leave it
+/// (docs/notes/stack-cost.md).
 pub fn pressed_stack() -> Vec<Check> {
     let cells = 24;
     let end = if quick_mode() { 0.1 } else { 0.5 };

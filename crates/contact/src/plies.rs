@@ -110,7 +110,7 @@ pub use overlap::PlyOverlap;
 /// toward −y from t = 0.2 s (−10.9 mm by 0.35 s), drew in 40 mm on one
 /// edge and 5 mm on the other, and stopped at t = 0.356 s on a node thrown
 /// into the die. With κ = 0.025 it stays centred (mean displacement
-/// 0.000 mm at every frame to 0.3 s) and draws the whole stroke. And on
+/// within 0.001 mm at every frame) and draws the whole stroke. And on
 /// a dome, a lower ply's nodes under the upper ply's chord faces make rows
 /// nearly dependent on the upper ply's own (docs/notes/stack-cost.md):
 /// the four-ply hemisphere's last 10 641 steps took 102 normal sweeps a

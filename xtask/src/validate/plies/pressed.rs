@@ -33,11 +33,11 @@ use crate::validate::{Check, note, quick_mode};
 /// bottom ply's free edge, drawn in past the holder's inner edge, went
 /// unstable. With the compliant rows (`NORMAL_COMPLIANCE`, fifteenth
 /// session) it draws the whole stroke, centred, but the plies overlap by
-/// 3.3 % of the thickness where they wrap the die's fillet on faces
+/// 3.1 % of the thickness where they wrap the die's fillet on faces
 /// coarser than it, and the holder's contact force differs from its own
-/// by 1.5e-2 at a frame: the check's 1e-5 holds for a holder at rest on
-/// the stack, which the drawing flange does not leave it
-/// (docs/notes/stack-cost.md).
+/// by 7.5e-4 at a frame: the check's 1e-5 holds for a holder at rest on
+/// the stack, which the drawing flange does not leave it (not traced
+/// further; docs/notes/stack-cost.md).
 pub fn pressed_stack() -> Vec<Check> {
     let cells = 24;
     let end = if quick_mode() { 0.1 } else { 0.5 };

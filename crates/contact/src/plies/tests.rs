@@ -151,6 +151,16 @@ fn nodes_on_nodes_make_one_row_per_pair_with_the_deeper_gap() {
     assert!(overlap < 1e-8, "{overlap}");
 }
 
+/// Unit masses with the lower ply's nodes fixed, and zeroed forces, for
+/// [`two_squares`].
+fn lower_fixed() -> (Vec<f64>, Vec<bool>, Vec<Vector3<f64>>) {
+    (
+        vec![1.0; 8],
+        (0..8).map(|i| i >= 4).collect(),
+        vec![Vector3::zeros(); 8],
+    )
+}
+
 #[test]
 fn a_repeated_step_starts_from_the_last_forces() {
     // The lower ply fixed, the upper pushed 0.1 mm into it twice: the
@@ -161,9 +171,7 @@ fn a_repeated_step_starts_from_the_last_forces() {
     // by the give the first left (a_compliant_row_gives_and_takes_it_back).
     contact.compliance = 0.0;
     let mut v = vec![Vector3::zeros(); 8];
-    let mass = vec![1.0; 8];
-    let movable: Vec<bool> = (0..8).map(|i| i >= 4).collect();
-    let mut force = vec![Vector3::zeros(); 8];
+    let (mass, movable, mut force) = lower_fixed();
     let (dt, tau) = (1e-3, 1e-3);
     let first = normal_pass(
         &mut contact,
@@ -398,9 +406,7 @@ fn a_compliant_row_gives_and_takes_it_back() {
     // pushing, takes the same share of what is left.
     let (mut x, mut contact) = two_squares(0.9);
     let mut v = vec![Vector3::zeros(); 8];
-    let mass = vec![1.0; 8];
-    let movable: Vec<bool> = (0..8).map(|i| i >= 4).collect();
-    let mut force = vec![Vector3::zeros(); 8];
+    let (mass, movable, mut force) = lower_fixed();
     let kappa = NORMAL_COMPLIANCE;
     let keeps = kappa / (1.0 + kappa);
     let mut left = 0.1;
@@ -441,9 +447,7 @@ fn a_shortened_step_keeps_the_rows_give() {
     // keeps that give, as a spring would, instead of taking it back at
     // once and throwing the ply off at κ·a·Δt²/Δt' (2.5 mm/s here).
     let (mut x, mut contact) = two_squares(1.0);
-    let mass = vec![1.0; 8];
-    let movable: Vec<bool> = (0..8).map(|i| i >= 4).collect();
-    let mut force = vec![Vector3::zeros(); 8];
+    let (mass, movable, mut force) = lower_fixed();
     let a = 100.0;
     let give = NORMAL_COMPLIANCE * a * 1e-6;
     for (k, dt) in [1e-3; 6].into_iter().chain([1e-6]).enumerate() {

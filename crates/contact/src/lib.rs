@@ -71,8 +71,8 @@ pub use mesh_file::{MeshBuffers, MeshFileError, read_obj, read_stl};
 pub use mesh_repair::{RepairError, RepairOptions, RepairReport, repair};
 pub use phases::ContactPhase;
 pub use plies::{
-    DrivenTool, PlyCarry, PlyContact, PlyInterface, PlyLayer, PlyOverlap, PlyStep, PlyTotals,
-    Support, ToolFriction,
+    DrivenTool, FaceBend, PlyCarry, PlyContact, PlyInterface, PlyLayer, PlyOverlap, PlyStep,
+    PlyTotals, Support, ToolFriction,
 };
 pub use rim::{RimError, Sides, ToolPlace};
 pub use surface::{Aabb, ProfileSegment, Projection, Surface, SurfaceError};

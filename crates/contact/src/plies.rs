@@ -93,7 +93,7 @@ mod narrow;
 mod overlap;
 pub use carry::PlyCarry;
 use narrow::{FaceBound, Master, closest_on_triangle, face_bounds};
-pub use overlap::PlyOverlap;
+pub use overlap::{FaceBend, PlyOverlap};
 
 /// The ply rows' compliance, as a share of each row's own step: a row
 /// holds g + κ·μ/m ≥ 0 instead of g ≥ 0 (μ its multiplier, m its
@@ -505,6 +505,8 @@ pub struct PlyContact {
     /// Each interface's largest overlap over the checks so far (mm)
     /// ([`Self::record_overlap`]).
     overlap_peak: Vec<f64>,
+    /// The deepest overlap at the checks so far ([`Self::worst_overlap`]).
+    worst_overlap: Option<PlyOverlap>,
 }
 
 impl PlyContact {
@@ -573,6 +575,7 @@ impl PlyContact {
             totals: PlyTotals::default(),
             pass: 0,
             overlap_peak: vec![0.0; interfaces.len()],
+            worst_overlap: None,
         }
     }
 

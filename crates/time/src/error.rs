@@ -101,11 +101,7 @@ pub enum RunError {
         "step {step}, t = {time:.6e} s: node {node} of ply `{ply}` at ({:.3}, {:.3}, {:.3}) mm \
          is {overlap:.4e} mm inside ply `{into}` (tolerance {tolerance:.3e} mm, the lesser of a \
          tenth of the thinnest ply's thickness and a hundredth of the shortest element edge): \
-         the ply–ply contact did not keep the plies apart (it puts a node that came round a \
-         ply's free edge or a fold into the ply back on its side, but not one whose motion is \
-         prescribed, nor one that crossed the whole ply within one step, nor one that came \
-         round the free edge farther behind the ply than the contact's reach); hold the stack more (springs, a holder) so its flanges do not fold \
-         over, or lower `simulation.safety_factor`",
+         the ply–ply contact did not keep the plies apart; {advice}",
         .at[0], .at[1], .at[2]
     )]
     PlyOverlap {
@@ -117,14 +113,18 @@ pub enum RunError {
         overlap: f64,
         /// The tolerance (mm).
         tolerance: f64,
-        /// The node's ply.
-        ply: String,
+        /// The node's ply (boxed, as the names below, to keep the error
+        /// small).
+        ply: Box<str>,
         /// The ply it is inside.
-        into: String,
+        into: Box<str>,
         /// The node.
         node: usize,
         /// Where it is (mm).
         at: [f64; 3],
+        /// What likely put it there and what to change
+        /// ([`crate::ply_check`]).
+        advice: Box<str>,
     },
     /// The settings or the model cannot run.
     #[error("cannot run: {0}")]

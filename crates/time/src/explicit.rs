@@ -999,6 +999,14 @@ impl<'m> Explicit<'m> {
             });
             crate::completion::check_at_end(model, state, &u, None)?;
         }
+        if let Some(w) = self
+            .contact
+            .as_ref()
+            .and_then(|c| c.plies())
+            .and_then(|p| crate::ply_check::overlap_warning(model, p))
+        {
+            self.warnings.push(w);
+        }
         for (tool, touched) in model.tools.iter().zip(&self.tool_touched) {
             if tool.is_force_driven() && !touched && !stopped {
                 self.warnings.push(format!(

@@ -10,6 +10,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
 use drape_contact::ContactPhase;
+use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion, State};
 use drape_time::{
     Explicit, ExplicitSettings, Frame, Observer, Pass, RunError, ply_overlap_tolerance,
@@ -111,10 +112,7 @@ fn a_ply_pushed_through_its_neighbour_stops_the_run_naming_it() {
     else {
         panic!("{error}");
     };
-    assert_eq!(
-        (ply.as_str(), into.as_str(), node),
-        ("top", "bottom", centre as usize)
-    );
+    assert_eq!((&**ply, &**into, node), ("top", "bottom", centre as usize));
     assert_eq!(told, tolerance);
     // At the first check after 1 ms (a step may end past it).
     assert!((0.001..0.001 + 1.01 * dt).contains(&time), "{time}");
@@ -124,12 +122,109 @@ fn a_ply_pushed_through_its_neighbour_stops_the_run_naming_it() {
         "{at:?}"
     );
     let message = error.to_string();
-    for word in ["node", "`top`", "inside ply `bottom`", "tolerance"] {
+    for word in [
+        "node",
+        "`top`",
+        "inside ply `bottom`",
+        "tolerance",
+        "hold the stack more",
+    ] {
         assert!(message.contains(word), "{message}");
     }
+    // Flat faces: nothing to refine.
+    assert!(!message.contains("too coarse"), "{message}");
     // Frames 0 and 0.5 ms were published; the state is the last of them.
     assert_eq!(times.len(), 2, "{times:?}");
     assert_eq!(state.time, times[1]);
+}
+
+/// The plies of [`pushed`] wrapped round a cylinder of radius 25 mm about
+/// the y axis (the bottom ply's mid-surface on it, the top one's h
+/// outside): their 10 mm faces sag L²/8R = 0.5 mm under their nodes, more
+/// than half the 0.57 mm between the plies. The stop says so, and what
+/// faces would do (√(4·R·h) ≈ 7.6 mm).
+#[test]
+fn a_ply_pushed_through_a_coarse_bend_is_told_to_refine_there() {
+    let h = glass().thickness;
+    let radius = 25.0;
+    // Each ply's mesh wrapped before its model is built (the elements'
+    // rest shape is the wrapped one), both mid-surfaces starting at
+    // z = h/2 and 3h/2 as [`pushed`]'s.
+    let wrapped = |name: &str, z: f64| {
+        let mut ply = glass_ply(name, Vector3::new(0.0, 0.0, z), 4);
+        let blank = RectangleBlank {
+            width: 40.0,
+            height: 40.0,
+            center: Vector3::new(0.0, 0.0, z),
+            orientation_deg: 0.0,
+            element: ElementKind::Quad,
+            meshing: Meshing::Cells([4, 4]),
+            fibres: FibreRepresentation::Embedded,
+        };
+        let mut mesh = blank.mesh().expect("mesh");
+        for x in &mut mesh.x0 {
+            let r = radius + x.z - 0.5 * h;
+            let t = x.x / radius;
+            *x = Vector3::new(r * t.sin(), x.y, r * t.cos() - radius + 0.5 * h);
+        }
+        ply.model =
+            Model::from_mesh(&mesh, &glass(), FibreRepresentation::Embedded).expect("model");
+        ply
+    };
+    let mut model =
+        Model::stack(vec![wrapped("bottom", 0.5 * h), wrapped("top", 1.5 * h)]).expect("stack");
+    let bottom: Vec<u32> = model.plies[0].nodes.clone().collect();
+    model.boundary.push(BoundaryCondition::fixed(bottom));
+    let centre = model.plies[1]
+        .nodes
+        .clone()
+        .find(|&i| model.x0[i as usize].xy().norm() < 1e-9)
+        .expect("a node at the centre");
+    // The rest of the top ply held too: only the pushed node moves (a
+    // wrapped ply let go springs about on the coarse bend).
+    let top: Vec<u32> = model.plies[1]
+        .nodes
+        .clone()
+        .filter(|&i| i != centre)
+        .collect();
+    model.boundary.push(BoundaryCondition::fixed(top));
+    model.boundary.push(BoundaryCondition {
+        nodes: vec![centre],
+        components: [false, false, true],
+        motion: Motion::Displacement {
+            value: Vector3::new(0.0, 0.0, -1.5 * h),
+            amplitude: Amplitude::Ramp { duration: 0.01 },
+        },
+    });
+    let (error, ..) = run_until_stopped(&model);
+    let RunError::PlyOverlap { ref into, .. } = error else {
+        panic!("{error}");
+    };
+    let message = error.to_string();
+    // Which ply's faces the deepest node is measured against depends on
+    // round-off (the two are as deep); either bends with the cylinder.
+    for word in [
+        &format!("ply `{into}`'s faces there are too coarse for its bend"),
+        "refine the blank where it wraps that bend",
+    ] {
+        assert!(message.contains(word), "{message}");
+    }
+    // The radius and the faces' size it gives: about the cylinder's
+    // (the top ply's mid-surface lies at 25.57 mm, the dent bends it a
+    // little more) and √(4·R·h) ≈ 7.6 mm.
+    let number_after = |key: &str| -> f64 {
+        let rest = &message[message.find(key).expect(key) + key.len()..];
+        rest.split_whitespace()
+            .next()
+            .expect("a number")
+            .parse()
+            .expect("a number")
+    };
+    let r = number_after("a bend of radius");
+    assert!((24.0..28.0).contains(&r), "{message}");
+    let faces = number_after("(faces of at most");
+    assert!(((4.0 * r * h).sqrt() - faces).abs() < 0.06, "{message}");
+    assert!(!message.contains("hold the stack more"), "{message}");
 }
 
 #[test]
@@ -156,7 +251,7 @@ fn a_free_edge_slid_under_its_neighbour_stops_the_run() {
     else {
         panic!("{error}");
     };
-    assert_eq!((ply.as_str(), into.as_str()), ("top", "bottom"));
+    assert_eq!((&**ply, &**into), ("top", "bottom"));
     // A node of the top ply's left edge (x = 22.25 at the start), at the
     // first check after the edge passes x = 20 at 2.25 ms.
     assert!((model.x0[node][0] - 22.25).abs() < 1e-9, "{node}");
@@ -228,9 +323,25 @@ fn a_ply_pushed_within_the_tolerance_completes_and_reports_its_peak() {
     let (model, _) = pushed(0.05 * h);
     let mut state = model.initial_state();
     let mut driver = Explicit::new(&model, settings()).expect("driver");
-    driver
+    let summary = driver
         .run(&mut state, &mut Times(Vec::new()))
         .expect("completes");
+    // Past the 1 % of the thickness a formed laminate is held to: the run
+    // warns where (flat plies: no word of their bend).
+    let warned: Vec<&String> = summary
+        .warnings
+        .iter()
+        .filter(|w| w.starts_with("the plies were inside each other"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", summary.warnings);
+    for word in [
+        "5.0 % of the thinnest ply's",
+        "ply `top`",
+        "in ply `bottom`",
+    ] {
+        assert!(warned[0].contains(word), "{}", warned[0]);
+    }
+    assert!(!warned[0].contains("too coarse"), "{}", warned[0]);
     let peaks = driver
         .contact()
         .and_then(|c| c.plies())

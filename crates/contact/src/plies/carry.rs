@@ -9,7 +9,7 @@
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
-use super::{PlyContact, PlyTotals, Warm};
+use super::{PlyContact, PlyOverlap, PlyTotals, Warm};
 
 /// The ply pass's state between steps ([`PlyContact::carry`],
 /// [`PlyContact::restore`]).
@@ -34,6 +34,10 @@ pub struct PlyCarry {
     /// written before the rows gave.
     #[serde(default)]
     pub spring_step: f64,
+    /// The deepest overlap at the checks so far; none in a checkpoint
+    /// written before it was kept.
+    #[serde(default)]
+    pub worst_overlap: Option<PlyOverlap>,
 }
 
 impl PlyContact {
@@ -57,6 +61,7 @@ impl PlyContact {
             overlap_peak: self.overlap_peak.clone(),
             totals: self.totals,
             spring_step: self.spring_step,
+            worst_overlap: self.worst_overlap,
         }
     }
 
@@ -98,6 +103,7 @@ impl PlyContact {
         self.slip.clone_from(&carry.slip);
         self.friction_dissipation = carry.friction_dissipation;
         self.overlap_peak.clone_from(&carry.overlap_peak);
+        self.worst_overlap = carry.worst_overlap;
         self.totals = carry.totals;
         Ok(())
     }

@@ -43,12 +43,13 @@
 //! Not for the contact's own solve: that is [`PlyContact::normal`].
 
 use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
 
 use super::narrow::{p_of, through_end};
 use super::{PlyContact, closest_on_triangle, on_outline};
 
 /// The deepest node of one ply inside its neighbour.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PlyOverlap {
     /// How deep (mm, > 0).
     pub depth: f64,
@@ -62,6 +63,44 @@ pub struct PlyOverlap {
     pub node: u32,
     /// Where the node is (mm).
     pub position: Vector3<f64>,
+    /// How the face of `into` the depth was measured from bends
+    /// ([`FaceBend`]); None for a degenerate face.
+    pub bend: Option<FaceBend>,
+}
+
+/// How far a face's flat middle lies inside the curved ply its nodes
+/// describe, where the ply bends round a tool: the node-to-face contact
+/// holds the neighbour's nodes off the flat faces, so a neighbour whose
+/// nodes lie on the curved surface reaches through a face by about `sag`.
+/// Per edge of the face, e from node i to node j, with each node's normal
+/// nᵢ the area-weighted mean of its faces': the surface through both nodes
+/// with those normals lies e·(nⱼ − nᵢ)/8 off the edge's middle (to second
+/// order: Phong's tessellation at α = ½, exact for a quadric), and bends
+/// along the edge with the radius |e|²/(8·sag). On a cylinder of radius R
+/// an edge across it of length L = 2R·sin(φ/2) gives R(1 − cos(φ/2)) to
+/// second order and R exactly, and an edge along a helix the same sag. A
+/// face 12.5 mm across bent over a 10 mm die fillet sags about 2 mm,
+/// several times a glass ply's 0.57 mm; the hemisphere stacks' 14.6 mm
+/// faces on the 120 mm punch 0.22 mm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FaceBend {
+    /// The largest of the edges' sags (mm).
+    pub sag: f64,
+    /// The sharpest of the edges' bends: its radius (mm; infinite where
+    /// no edge turns), ...
+    pub radius: f64,
+    /// ... that edge's length (mm) ...
+    pub edge: f64,
+    /// ... and the angle its nodes' normals turn by (degrees).
+    pub turn_deg: f64,
+}
+
+impl FaceBend {
+    /// The longest face edge whose sag over this bend is at most `sag`
+    /// (mm): √(8·R·sag) to first order.
+    pub fn edge_for_sag(&self, sag: f64) -> f64 {
+        (8.0 * self.radius * sag).sqrt()
+    }
 }
 
 impl PlyContact {
@@ -72,16 +111,18 @@ impl PlyContact {
         let slave = &self.layers[s.slave];
         let faces = &self.layers[s.master].faces;
         let outline = &self.outline[s.master];
-        let mut worst: Option<PlyOverlap> = None;
+        let mut worst: Option<(PlyOverlap, u32)> = None;
         for local in 0..slave.node_count as usize {
             let node = slave.first_node + local as u32;
             let p = x[node as usize];
             let range = s.cand_ptr[local] as usize..s.cand_ptr[local + 1] as usize;
             let mut depth: f64 = 0.0;
+            let mut depth_face = u32::MAX;
             // The nearest face that takes the node, and how deep the node
             // is behind it (0 when in front of it).
             let mut nearest = f64::INFINITY;
             let mut through: f64 = 0.0;
+            let mut through_face = u32::MAX;
             for &f in &s.cand[range] {
                 let [a, b, c] = faces[f as usize].map(|n| x[n as usize]);
                 let nf = (b - a).cross(&(c - a));
@@ -91,29 +132,47 @@ impl PlyContact {
                 }
                 let (q, w) = closest_on_triangle(&p, &a, &b, &c);
                 let (d, up, bits) = (p - q, nf * (s.side / len), outline[f as usize]);
-                depth = depth.max(node_depth(d, up, s.offset, w, bits, [a, b, c]));
+                let here = node_depth(d, up, s.offset, w, bits, [a, b, c]);
+                if here > depth {
+                    depth = here;
+                    depth_face = f;
+                }
                 if let Some(t) = behind_depth(d, up, s.offset, w, bits, [a, b, c])
                     && d.norm_squared() < nearest
                 {
                     nearest = d.norm_squared();
                     through = t;
+                    through_face = f;
                 }
             }
-            let depth = depth.max(through);
-            if depth > 0.0 && worst.is_none_or(|w| depth > w.depth) {
-                worst = Some(PlyOverlap {
-                    depth,
-                    // [`Self::new`] pushes the searches in pairs, one
-                    // pair per interface in order.
-                    interface: k / 2,
-                    ply: s.slave,
-                    into: s.master,
-                    node,
-                    position: p,
-                });
+            let (depth, face) = if through > depth {
+                (through, through_face)
+            } else {
+                (depth, depth_face)
+            };
+            if depth > 0.0 && worst.is_none_or(|w| depth > w.0.depth) {
+                worst = Some((
+                    PlyOverlap {
+                        depth,
+                        // [`Self::new`] pushes the searches in pairs, one
+                        // pair per interface in order.
+                        interface: k / 2,
+                        ply: s.slave,
+                        into: s.master,
+                        node,
+                        position: p,
+                        bend: None,
+                    },
+                    face,
+                ));
             }
         }
-        worst
+        worst.map(|(o, face)| PlyOverlap {
+            bend: faces
+                .get(face as usize)
+                .and_then(|f| face_bend(&self.layers[s.master], *f, x)),
+            ..o
+        })
     }
 
     /// The deepest node of any ply inside a neighbour at `x`, over the
@@ -144,6 +203,9 @@ impl PlyContact {
             };
             let peak = &mut self.overlap_peak[o.interface];
             *peak = peak.max(o.depth);
+            if self.worst_overlap.is_none_or(|w| o.depth > w.depth) {
+                self.worst_overlap = Some(o);
+            }
             if worst.is_none_or(|w| o.depth > w.depth) {
                 worst = Some(o);
             }
@@ -157,6 +219,59 @@ impl PlyContact {
     pub fn overlap_peaks(&self) -> &[f64] {
         &self.overlap_peak
     }
+
+    /// The deepest overlap over the calls of [`Self::record_overlap`] so
+    /// far (where, and how the face there bends).
+    pub fn worst_overlap(&self) -> Option<&PlyOverlap> {
+        self.worst_overlap.as_ref()
+    }
+}
+
+/// [`FaceBend`] of the face `face` of `layer` at `x`: the largest sag
+/// of its edges, and the sharpest of their bends.
+fn face_bend(layer: &super::PlyLayer, face: [u32; 3], x: &[Vector3<f64>]) -> Option<FaceBend> {
+    let mut normals = [Vector3::zeros(); 3];
+    for f in &layer.faces {
+        let [a, b, c] = f.map(|n| x[n as usize]);
+        let n = (b - a).cross(&(c - a));
+        for (k, node) in face.iter().enumerate() {
+            if f.contains(node) {
+                normals[k] += n;
+            }
+        }
+    }
+    let normals = [
+        normals[0].try_normalize(0.0)?,
+        normals[1].try_normalize(0.0)?,
+        normals[2].try_normalize(0.0)?,
+    ];
+    let mut bend = FaceBend {
+        sag: 0.0,
+        radius: f64::INFINITY,
+        edge: 0.0,
+        turn_deg: 0.0,
+    };
+    for k in 0..3 {
+        let j = (k + 1) % 3;
+        let e = x[face[j] as usize] - x[face[k] as usize];
+        let sag = (e.dot(&(normals[j] - normals[k])) / 8.0).abs();
+        bend.sag = bend.sag.max(sag);
+        let radius = if sag > 0.0 {
+            e.norm_squared() / (8.0 * sag)
+        } else {
+            f64::INFINITY
+        };
+        if radius < bend.radius {
+            bend.radius = radius;
+            bend.edge = e.norm();
+            bend.turn_deg = normals[k]
+                .dot(&normals[j])
+                .clamp(-1.0, 1.0)
+                .acos()
+                .to_degrees();
+        }
+    }
+    Some(bend)
 }
 
 /// How deep a node at `d` from its closest point (weights `w`) on a face
@@ -433,5 +548,69 @@ mod tests {
         let o = c.record_overlap(&x).expect("inside");
         assert!((o.depth - 0.1).abs() < 1e-12, "{o:?}");
         assert_eq!(o.node, 4);
+    }
+
+    /// A strip of 12.5 mm faces wrapped round a cylinder of radius 10 mm
+    /// (a die's fillet) about the y axis, five nodes across and two
+    /// along, its quads' diagonals in a zigzag so that every node has as
+    /// many triangles on either side (its normal exactly radial inside):
+    /// a face inside bends with the cylinder's radius, its edges across
+    /// turning φ = 2·asin(L/2R), and sags R·sin²(φ/2)/2 = L²/8R, its
+    /// diagonal as much as the edge across it.
+    #[test]
+    fn a_face_wrapped_round_a_fillet_sags_by_its_chord() {
+        let (r, l): (f64, f64) = (10.0, 12.5);
+        let phi = 2.0 * (l / (2.0 * r)).asin();
+        let node = |i: u32, j: u32| j * 5 + i;
+        let x: Vec<Vector3<f64>> = (0..2)
+            .flat_map(|j| {
+                (0..5).map(move |i| {
+                    let t = f64::from(i) * phi;
+                    Vector3::new(r * t.sin(), 8.0 * f64::from(j), r * t.cos())
+                })
+            })
+            .collect();
+        let mut faces = Vec::new();
+        for i in 0..4 {
+            let [a, b, c, d] = [node(i, 0), node(i + 1, 0), node(i + 1, 1), node(i, 1)];
+            // Wound with the normal outward (+z at the top).
+            if i % 2 == 0 {
+                faces.extend([[a, b, d], [b, c, d]]);
+            } else {
+                faces.extend([[a, b, c], [a, c, d]]);
+            }
+        }
+        let layer = PlyLayer {
+            first_node: 0,
+            node_count: 10,
+            faces,
+            half_thickness: 0.285,
+        };
+        for f in &layer.faces {
+            let [a, b, c] = f.map(|n| x[n as usize]);
+            let mid = (a + b + c) / 3.0;
+            assert!(
+                (b - a)
+                    .cross(&(c - a))
+                    .dot(&Vector3::new(mid.x, 0.0, mid.z))
+                    > 0.0
+            );
+        }
+        // The faces of the quad between the second and third columns.
+        for face in [layer.faces[2], layer.faces[3]] {
+            let bend = face_bend(&layer, face, &x).expect("a face");
+            let sag = r * (0.5 * phi).sin().powi(2) / 2.0;
+            assert!((sag - l * l / (8.0 * r)).abs() < 1e-12);
+            assert!((bend.sag - sag).abs() < 1e-12, "{bend:?} against {sag}");
+            assert!((bend.radius - r).abs() < 1e-12, "{bend:?}");
+            assert!((bend.edge - l).abs() < 1e-12, "{bend:?}");
+            assert!((bend.turn_deg - phi.to_degrees()).abs() < 1e-9, "{bend:?}");
+            // Faces of √(8·R·s) sag s.
+            assert!((bend.edge_for_sag(sag) - l).abs() < 1e-12);
+        }
+        // Flat: no sag, no bend.
+        let flat: Vec<Vector3<f64>> = x.iter().map(|p| Vector3::new(p.x, p.y, 0.0)).collect();
+        let bend = face_bend(&layer, layer.faces[2], &flat).expect("a face");
+        assert_eq!((bend.sag, bend.radius), (0.0, f64::INFINITY));
     }
 }

@@ -123,7 +123,7 @@ pub enum RunError {
         /// Where it is (mm).
         at: [f64; 3],
         /// What likely put it there and what to change
-        /// ([`crate::ply_check`]).
+        /// (the faces' bend, where it explains the overlap).
         advice: Box<str>,
     },
     /// The settings or the model cannot run.

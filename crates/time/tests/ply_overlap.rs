@@ -11,6 +11,7 @@ use std::time::Duration;
 
 use drape_contact::ContactPhase;
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
+use drape_model::stack::PlyModel;
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion, State};
 use drape_time::{
     Explicit, ExplicitSettings, Frame, Observer, Pass, RunError, ply_overlap_tolerance,
@@ -26,7 +27,13 @@ use common::{glass, glass_ply};
 fn pushed(push: f64) -> (Model, u32) {
     let h = glass().thickness;
     let ply = |name: &str| glass_ply(name, Vector3::new(0.0, 0.0, 0.5 * h), 4);
-    let mut model = Model::stack(vec![ply("bottom"), ply("top")]).expect("stack");
+    pushed_plies([ply("bottom"), ply("top")], push)
+}
+
+/// [`pushed`] of the plies `plies` (bottom, top), each a 5 × 5-node
+/// lattice with a node at x = y = 0.
+fn pushed_plies(plies: [PlyModel; 2], push: f64) -> (Model, u32) {
+    let mut model = Model::stack(plies.into()).expect("stack");
     let bottom: Vec<u32> = model.plies[0].nodes.clone().collect();
     model.boundary.push(BoundaryCondition::fixed(bottom));
     let centre = model.plies[1]
@@ -139,49 +146,44 @@ fn a_ply_pushed_through_its_neighbour_stops_the_run_naming_it() {
 }
 
 /// The plies of [`pushed`] wrapped round a cylinder of radius 25 mm about
-/// the y axis (the bottom ply's mid-surface on it, the top one's h
-/// outside): their 10 mm faces sag L²/8R = 0.5 mm under their nodes, more
-/// than half the 0.57 mm between the plies. The stop says so, and what
-/// faces would do (√(4·R·h) ≈ 7.6 mm).
+/// the y axis, the bottom ply's mid-surface on it and the top one's h
+/// outside it, the same axis: their 10 mm faces sag L²/8R = 0.5 mm under
+/// their nodes, more than half the 0.57 mm between the plies. The stop
+/// says so, and what faces would do (√(4·R·h) ≈ 7.6 mm).
 #[test]
 fn a_ply_pushed_through_a_coarse_bend_is_told_to_refine_there() {
     let h = glass().thickness;
     let radius = 25.0;
     // Each ply's mesh wrapped before its model is built (the elements'
-    // rest shape is the wrapped one), both mid-surfaces starting at
-    // z = h/2 and 3h/2 as [`pushed`]'s.
-    let wrapped = |name: &str, z: f64| {
-        let mut ply = glass_ply(name, Vector3::new(0.0, 0.0, z), 4);
+    // rest shape is the wrapped one), `out` from the cylinder, its pole at
+    // z = h/2 as [`pushed`]'s plies: the stack lifts the top one by h
+    // along the bottom one's mean normal (+z), onto the same axis.
+    let wrapped = |name: &str, out: f64| {
+        let mut ply = glass_ply(name, Vector3::new(0.0, 0.0, 0.5 * h), 4);
         let blank = RectangleBlank {
             width: 40.0,
             height: 40.0,
-            center: Vector3::new(0.0, 0.0, z),
+            center: Vector3::zeros(),
             orientation_deg: 0.0,
             element: ElementKind::Quad,
             meshing: Meshing::Cells([4, 4]),
             fibres: FibreRepresentation::Embedded,
         };
         let mut mesh = blank.mesh().expect("mesh");
+        let r = radius + out;
         for x in &mut mesh.x0 {
-            let r = radius + x.z - 0.5 * h;
+            // The bottom ply's angles: the top one's nodes straight out.
             let t = x.x / radius;
-            *x = Vector3::new(r * t.sin(), x.y, r * t.cos() - radius + 0.5 * h);
+            *x = Vector3::new(r * t.sin(), x.y, r * t.cos() - r + 0.5 * h);
         }
         ply.model =
             Model::from_mesh(&mesh, &glass(), FibreRepresentation::Embedded).expect("model");
         ply
     };
-    let mut model =
-        Model::stack(vec![wrapped("bottom", 0.5 * h), wrapped("top", 1.5 * h)]).expect("stack");
-    let bottom: Vec<u32> = model.plies[0].nodes.clone().collect();
-    model.boundary.push(BoundaryCondition::fixed(bottom));
-    let centre = model.plies[1]
-        .nodes
-        .clone()
-        .find(|&i| model.x0[i as usize].xy().norm() < 1e-9)
-        .expect("a node at the centre");
-    // The rest of the top ply held too: only the pushed node moves (a
-    // wrapped ply let go springs about on the coarse bend).
+    let (mut model, centre) = pushed_plies([wrapped("bottom", 0.0), wrapped("top", h)], 1.5 * h);
+    // The rest of the top ply held too, and the pushed node along the
+    // axis and across: only its push moves anything (a wrapped ply let go
+    // springs about on the coarse bend).
     let top: Vec<u32> = model.plies[1]
         .nodes
         .clone()
@@ -190,9 +192,9 @@ fn a_ply_pushed_through_a_coarse_bend_is_told_to_refine_there() {
     model.boundary.push(BoundaryCondition::fixed(top));
     model.boundary.push(BoundaryCondition {
         nodes: vec![centre],
-        components: [false, false, true],
+        components: [true, true, false],
         motion: Motion::Displacement {
-            value: Vector3::new(0.0, 0.0, -1.5 * h),
+            value: Vector3::zeros(),
             amplitude: Amplitude::Ramp { duration: 0.01 },
         },
     });

@@ -159,7 +159,6 @@ fn a_ply_pushed_through_a_coarse_bend_is_told_to_refine_there() {
     // z = h/2 as [`pushed`]'s plies: the stack lifts the top one by h
     // along the bottom one's mean normal (+z), onto the same axis.
     let wrapped = |name: &str, out: f64| {
-        let mut ply = glass_ply(name, Vector3::new(0.0, 0.0, 0.5 * h), 4);
         let blank = RectangleBlank {
             width: 40.0,
             height: 40.0,
@@ -176,9 +175,13 @@ fn a_ply_pushed_through_a_coarse_bend_is_told_to_refine_there() {
             let t = x.x / radius;
             *x = Vector3::new(r * t.sin(), x.y, r * t.cos() - r + 0.5 * h);
         }
-        ply.model =
-            Model::from_mesh(&mesh, &glass(), FibreRepresentation::Embedded).expect("model");
-        ply
+        PlyModel {
+            model: Model::from_mesh(&mesh, &glass(), FibreRepresentation::Embedded).expect("model"),
+            name: name.into(),
+            thickness: h,
+            orientation_deg: 0.0,
+            friction_below: 0.0,
+        }
     };
     let (mut model, centre) = pushed_plies([wrapped("bottom", 0.0), wrapped("top", h)], 1.5 * h);
     // The rest of the top ply held too, and the pushed node along the

@@ -31,13 +31,18 @@ use crate::completion::{model_size, shortest_edge};
 /// ply's, because the check is one number for the stack and a thin ply
 /// pushed a tenth of a thick one's thickness is through a third of itself.
 pub fn ply_overlap_tolerance(model: &Model) -> f64 {
-    let thinnest = model
+    let thinnest = thinnest(model);
+    let physical = (0.1 * thinnest).min(0.01 * shortest_edge(model));
+    physical.max(1e-9 * model_size(model))
+}
+
+/// The thinnest ply's thickness (mm).
+fn thinnest(model: &Model) -> f64 {
+    model
         .plies
         .iter()
         .map(|p| p.thickness)
-        .fold(f64::INFINITY, f64::min);
-    let physical = (0.1 * thinnest).min(0.01 * shortest_edge(model));
-    physical.max(1e-9 * model_size(model))
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Measures the plies at `state` (keeping the peaks) and fails when a
@@ -129,11 +134,7 @@ fn advice(model: &Model, o: &PlyOverlap) -> Option<String> {
 /// faces' bend tells ([`advice`]).
 pub(crate) fn overlap_warning(model: &Model, plies: &PlyContact) -> Option<String> {
     let o = plies.worst_overlap()?;
-    let thinnest = model
-        .plies
-        .iter()
-        .map(|p| p.thickness)
-        .fold(f64::INFINITY, f64::min);
+    let thinnest = thinnest(model);
     if o.depth.is_nan() || o.depth <= 0.01 * thinnest {
         return None;
     }

@@ -10,7 +10,6 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
 
 use drape_contact::ContactPhase;
-use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::stack::PlyModel;
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion, State};
 use drape_time::{
@@ -19,7 +18,7 @@ use drape_time::{
 use nalgebra::Vector3;
 
 mod common;
-use common::{glass, glass_ply};
+use common::{glass, glass_ply, glass_ply_mapped};
 
 /// Two 40 mm glass plies of 10 mm quads, the bottom one held, the top
 /// one's centre node moved down by `push` mm along a ramp over 0.01 s;
@@ -159,29 +158,12 @@ fn a_ply_pushed_through_a_coarse_bend_is_told_to_refine_there() {
     // z = h/2 as [`pushed`]'s plies: the stack lifts the top one by h
     // along the bottom one's mean normal (+z), onto the same axis.
     let wrapped = |name: &str, out: f64| {
-        let blank = RectangleBlank {
-            width: 40.0,
-            height: 40.0,
-            center: Vector3::zeros(),
-            orientation_deg: 0.0,
-            element: ElementKind::Quad,
-            meshing: Meshing::Cells([4, 4]),
-            fibres: FibreRepresentation::Embedded,
-        };
-        let mut mesh = blank.mesh().expect("mesh");
         let r = radius + out;
-        for x in &mut mesh.x0 {
+        glass_ply_mapped(name, Vector3::zeros(), 4, |x| {
             // The bottom ply's angles: the top one's nodes straight out.
             let t = x.x / radius;
-            *x = Vector3::new(r * t.sin(), x.y, r * t.cos() - r + 0.5 * h);
-        }
-        PlyModel {
-            model: Model::from_mesh(&mesh, &glass(), FibreRepresentation::Embedded).expect("model"),
-            name: name.into(),
-            thickness: h,
-            orientation_deg: 0.0,
-            friction_below: 0.0,
-        }
+            Vector3::new(r * t.sin(), x.y, r * t.cos() - r + 0.5 * h)
+        })
     };
     let (mut model, centre) = pushed_plies([wrapped("bottom", 0.0), wrapped("top", h)], 1.5 * h);
     // The rest of the top ply held too, and the pushed node along the

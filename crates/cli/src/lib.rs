@@ -40,7 +40,7 @@ pub use setup::run_setup;
 
 use drape_io::results::{
     CutbackRow, DrawInMm, EnergyRow, EnergySummary, FrameData, ImplicitRunInfo, Peaks, ResultsDir,
-    ResultsError, RunInfo, Summary, ToolMeshes, max_yarn_tension,
+    ResultsError, RunInfo, Summary, ToolForceRow, ToolMeshes, max_yarn_tension,
 };
 use drape_io::scene::{Scene, SceneFile, Solver};
 use drape_model::{Measures, State};
@@ -109,6 +109,9 @@ pub struct Checkpoint {
     /// The implicit attempts cut back so far (`cutbacks.csv`).
     #[serde(default)]
     pub cutbacks: Vec<CutbackRow>,
+    /// The tools at the frames so far (`tool_forces.csv`).
+    #[serde(default)]
+    pub tool_rows: Vec<ToolForceRow>,
     /// The frames written so far: (index, time).
     pub frames: Vec<(usize, f64)>,
     /// The peaks over the frames so far.
@@ -258,6 +261,7 @@ struct Recorder<'a> {
     write_frames: bool,
     rows: Vec<EnergyRow>,
     cutbacks: Vec<CutbackRow>,
+    tool_rows: Vec<ToolForceRow>,
     max_shear_deg: f64,
     error: Option<ResultsError>,
     last_energy: Energies,
@@ -351,6 +355,14 @@ impl Observer for Recorder<'_> {
             energy: *frame.energy,
         });
         self.last_energy = *frame.energy;
+        if let Some(c) = frame.contact {
+            self.tool_rows.push(ToolForceRow {
+                time: frame.state.time,
+                step: frame.state.step,
+                state: c.tool_state.to_vec(),
+                force: c.tool_force.to_vec(),
+            });
+        }
         let Ok(fields) = frame.model.element_fields(frame.state) else {
             return;
         };
@@ -414,6 +426,7 @@ impl Observer for Recorder<'_> {
             driver: driver.clone(),
             rows: self.rows.clone(),
             cutbacks: self.cutbacks.clone(),
+            tool_rows: self.tool_rows.clone(),
             frames: self.results.frames(),
             peaks: self.peaks,
         };
@@ -543,54 +556,57 @@ pub fn run_in(
         .resume
         .as_ref()
         .map_or_else(Peaks::default, |c| c.peaks);
-    let (record, mut state, rows, cutbacks, driver, last_checkpoint) = match options.resume {
-        Some(c) => (
-            SceneRecord {
-                scene_file: c.scene_file,
-                overrides: c.overrides,
-                scene: c.scene,
-                inputs: c.inputs,
-                checkpoint_every: options.checkpoint_every.or(c.checkpoint_every),
-            },
-            // (A history that does not fit is left for the driver's state
-            // check to report.)
-            State {
-                history: model
-                    .history_from_element_major(&c.state.history)
-                    .unwrap_or(c.state.history),
-                ..c.state
-            },
-            c.rows,
-            c.cutbacks,
-            Some(c.driver),
-            None,
-        ),
-        None => {
-            let mut inputs = Vec::new();
-            for path in scene.input_files() {
-                let input = InputFile::of(&path).map_err(|source| ResultsError {
-                    path: path.clone(),
-                    source,
-                })?;
-                inputs.push(input);
-            }
-            (
+    let (record, mut state, rows, cutbacks, tool_rows, driver, last_checkpoint) =
+        match options.resume {
+            Some(c) => (
                 SceneRecord {
-                    // Absolute: a resume may start from anywhere.
-                    scene_file: std::path::absolute(&scene.file).unwrap_or(scene.file.clone()),
-                    overrides: options.overrides,
-                    scene: scene.resolved_spec(),
-                    inputs,
-                    checkpoint_every: options.checkpoint_every,
+                    scene_file: c.scene_file,
+                    overrides: c.overrides,
+                    scene: c.scene,
+                    inputs: c.inputs,
+                    checkpoint_every: options.checkpoint_every.or(c.checkpoint_every),
                 },
-                model.initial_state(),
-                Vec::new(),
-                Vec::new(),
+                // (A history that does not fit is left for the driver's state
+                // check to report.)
+                State {
+                    history: model
+                        .history_from_element_major(&c.state.history)
+                        .unwrap_or(c.state.history),
+                    ..c.state
+                },
+                c.rows,
+                c.cutbacks,
+                c.tool_rows,
+                Some(c.driver),
                 None,
-                None,
-            )
-        }
-    };
+            ),
+            None => {
+                let mut inputs = Vec::new();
+                for path in scene.input_files() {
+                    let input = InputFile::of(&path).map_err(|source| ResultsError {
+                        path: path.clone(),
+                        source,
+                    })?;
+                    inputs.push(input);
+                }
+                (
+                    SceneRecord {
+                        // Absolute: a resume may start from anywhere.
+                        scene_file: std::path::absolute(&scene.file).unwrap_or(scene.file.clone()),
+                        overrides: options.overrides,
+                        scene: scene.resolved_spec(),
+                        inputs,
+                        checkpoint_every: options.checkpoint_every,
+                    },
+                    model.initial_state(),
+                    Vec::new(),
+                    Vec::new(),
+                    Vec::new(),
+                    None,
+                    None,
+                )
+            }
+        };
     let last_checkpoint =
         last_checkpoint.or_else(|| driver.as_ref().map(|_| (state.step, state.time)));
     // Where a resumed run picks up: one that fails before its first step
@@ -606,6 +622,7 @@ pub fn run_in(
         write_frames: scene.spec.output.vtu,
         rows,
         cutbacks,
+        tool_rows,
         max_shear_deg: 0.0,
         error: None,
         last_energy: Energies::default(),
@@ -851,6 +868,8 @@ pub fn run_in(
         }
     };
     keep(results.write_energy(&recorder.rows));
+    let tool_names: Vec<&str> = model.tools.iter().map(|t| t.name.as_str()).collect();
+    keep(results.write_tool_forces(&tool_names, &recorder.tool_rows));
     if solver == Solver::Implicit {
         keep(results.write_cutbacks(&recorder.cutbacks));
     }

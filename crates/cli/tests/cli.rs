@@ -326,9 +326,24 @@ fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
         resumed.summary.max_shear_deg,
         straight.summary.max_shear_deg
     );
-    // Same energy history and frames as the uninterrupted run.
+    // Same energy history, tool forces and frames as the uninterrupted run.
     let csv = |d: &str| std::fs::read_to_string(dir.join(d).join("energy.csv")).unwrap();
     assert_eq!(csv("resumed"), csv("straight"));
+    let forces = |d: &str| std::fs::read_to_string(dir.join(d).join("tool_forces.csv")).unwrap();
+    assert_eq!(forces("resumed"), forces("straight"));
+    // A row per frame (5) for the one tool; the punch pushes the blank up
+    // against its springs: a positive mean force once it presses.
+    let straight_forces = forces("straight");
+    let lines: Vec<&str> = straight_forces.lines().collect();
+    assert_eq!(lines.len(), 6, "{straight_forces}");
+    assert_eq!(lines[0], drape_io::results::TOOL_FORCES_HEADER);
+    assert!(
+        lines[1].ends_with(','),
+        "no mean at the first frame: {}",
+        lines[1]
+    );
+    let mean: f64 = lines[5].rsplit(',').next().unwrap().parse().unwrap();
+    assert!(mean > 0.0, "{straight_forces}");
     assert!(out.join("frames/frame_00004.vtu").is_file());
 
     // The same resumed through the command line, from another directory,
@@ -428,6 +443,8 @@ fn an_implicit_run_resumes_bit_for_bit() {
     assert_eq!(bits(&resumed.state), bits(&straight.state));
     let csv = |d: &str| std::fs::read_to_string(dir.join(d).join("energy.csv")).unwrap();
     assert_eq!(csv("resumed"), csv("straight"));
+    let forces = |d: &str| std::fs::read_to_string(dir.join(d).join("tool_forces.csv")).unwrap();
+    assert_eq!(forces("resumed"), forces("straight"));
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -826,6 +826,13 @@ impl ExplicitContact {
         if self.plies.is_some() {
             self.ply_friction(x, v, mass, movable, dt, tau);
         }
+        // Over the step to t_new, so that the impulse between two frames
+        // over their time apart is the mean force, exact for a constant one.
+        // (The tool's momentum moves by f·Δt_mean: the two sums differ by
+        // half the change of the step between the frames, times f.)
+        for (state, f) in self.tool_state.iter_mut().zip(&self.tool_force) {
+            state.impulse += f * dt;
+        }
         Ok(step)
     }
 
@@ -1410,6 +1417,59 @@ mod tests {
             );
             assert!((x[0].z - offset).abs() < 1e-15 && v[0].z.abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn a_holder_landing_on_the_fabric_gets_its_momentum_back_as_impulse() {
+        // A force-driven holder moving down at v₀ lands on a node resting on
+        // the floor and stops there in one step. The force sampled at that
+        // step is far from F (the holder's momentum goes into it); the
+        // impulse is what balances the holder's momentum: over the steps,
+        // M·(v − v₀) = Σ F·Δt_mean − impulse.
+        let (m, f, big_m, offset, dt) = (1e-6, 3.0, 1e-4, 0.1, 1e-5);
+        let v0 = 1.0;
+        let holder = Tool {
+            name: "holder".into(),
+            surface: Surface::plane(
+                Vector3::new(0.0, 0.0, 2.0 * offset + 2.5 * v0 * dt),
+                -Vector3::z(),
+            )
+            .unwrap(),
+            motion: ToolMotion::Force {
+                direction: -Vector3::z(),
+                force: f,
+                amplitude: Amplitude::Constant,
+                mass: big_m,
+            },
+            friction: 0.0,
+        };
+        let mut contact = ExplicitContact::new(vec![floor(0.0), holder], 1, settings(offset));
+        contact.tool_state[1].velocity = v0;
+        let mut x = vec![Vector3::new(0.0, 0.0, offset)];
+        let mut v = vec![Vector3::zeros()];
+        let mut largest: f64 = 0.0;
+        let steps = 8;
+        for step in 1..=steps {
+            contact
+                .enforce(&mut x, &mut v, &[m], &[true], step as f64 * dt, dt)
+                .unwrap();
+            largest = largest.max(contact.tool_force[1]);
+        }
+        let state = contact.tool_state[1];
+        assert!(
+            state.velocity.abs() < 1e-9,
+            "the holder rests: {}",
+            state.velocity
+        );
+        // M·v₀/Δt alone is 3⅓·F.
+        assert!(largest > 4.0 * f, "the landing's sampled force {largest} N");
+        let balance = big_m * (state.velocity - v0) - (f * steps as f64 * dt - state.impulse);
+        assert!(
+            balance.abs() < 1e-12 * big_m * v0,
+            "momentum {} N·s, impulse {} N·s",
+            big_m * (state.velocity - v0),
+            state.impulse
+        );
     }
 
     #[test]

@@ -1485,6 +1485,7 @@ impl ImplicitContact {
             self.tool_state[t] = ToolState {
                 displacement: self.trial[t],
                 velocity: inc.velocity(s.velocity, a0, a),
+                impulse: s.impulse,
             };
             self.tool_acceleration[t] = a;
         }
@@ -1512,6 +1513,11 @@ impl ImplicitContact {
             } else {
                 pair.normal.dot(&axis) * pair.lambda
             };
+        }
+        // The force at the increment's end over the increment: first order
+        // in h, as the end-point equilibrium the increment solves.
+        for (state, f) in self.tool_state.iter_mut().zip(&self.tool_force) {
+            state.impulse += f * inc.h;
         }
         (active, stick, slip)
     }

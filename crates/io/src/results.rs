@@ -8,6 +8,7 @@
 //! | `series.pvd` | VTK collection of the frames with their times (open this in ParaView) | [`ResultsDir::write_frame`] |
 //! | `energy.csv` | energy history | [`ResultsDir::write_energy`] |
 //! | `cutbacks.csv` | implicit runs: every increment cut back, when and why | [`ResultsDir::write_cutbacks`] |
+//! | `tool_forces.csv` | each tool's displacement, velocity and force on the fabric per frame | [`ResultsDir::write_tool_forces`] |
 //! | `profiles.csv` | shear along the blank's diagonal and median (a laminate: each ply's, a `ply` column first) | [`ResultsDir::write_profiles`] |
 //! | `summary.json` | derived measures and run statistics ([`Summary`]) | [`ResultsDir::write_summary`] |
 //! | `shear_map.png`, `waviness_map.png`, `profiles.png` | pictures | [`ResultsDir::write_pictures`] |
@@ -63,6 +64,7 @@ mod profiles;
 pub(crate) use pictures::boundary_edges;
 pub mod read;
 mod summary;
+mod tool_forces;
 mod tools;
 mod vtk;
 
@@ -71,6 +73,7 @@ pub use pictures::maps::MapPanel;
 pub use pictures::sweep::{SweepAxis, SweepRun};
 pub use pictures::work_precision::{WorkPrecisionPanel, WorkPrecisionPoint, pareto_front};
 pub use summary::{Peaks, RunSetup, max_yarn_tension};
+pub use tool_forces::{TOOL_FORCES_HEADER, ToolForceRow, tool_forces_csv};
 pub use tools::{ToolMesh, ToolMeshes};
 
 use std::collections::BTreeMap;
@@ -461,12 +464,13 @@ pub struct ResultsDir {
 }
 
 /// The files a [`ResultsDir`] writes at its top level.
-const OUTPUT_FILES: [&str; 13] = [
+const OUTPUT_FILES: [&str; 14] = [
     "series.pvd",
     "trusses.pvd",
     "tools.pvd",
     "energy.csv",
     "cutbacks.csv",
+    "tool_forces.csv",
     "profiles.csv",
     "summary.json",
     "shear_map.png",

@@ -460,8 +460,11 @@ fn a_strip_drawn_through_a_pinch_settles() {
         // interval it is the pull times the distance drawn.
         let mut work = Vec::new();
         let mut reaction = Vec::new();
+        let mut impulse = Vec::new();
         let mut observer = Frames(|fr: &Frame<'_>| {
             work.push(fr.energy.boundary_work);
+            let tools = fr.contact.unwrap().tool_state;
+            impulse.push((fr.state.time, [tools[0].impulse, tools[1].impulse]));
             reaction.push(
                 pulled
                     .iter()
@@ -498,6 +501,18 @@ fn a_strip_drawn_through_a_pinch_settles() {
             (last - expected).abs() < 1e-6 * expected,
             "{solver:?}: reaction {last} N against 2μF = {expected} N"
         );
+        // The clamped holder and the floor each carry F over the last frame
+        // interval, by their impulses.
+        let [.., (t0, i0), (t1, i1)] = impulse[..] else {
+            panic!("{solver:?}: {} frames", impulse.len());
+        };
+        for k in 0..2 {
+            let mean = (i1[k] - i0[k]) / (t1 - t0);
+            assert!(
+                (mean - force).abs() < 1e-6 * force,
+                "{solver:?}: tool {k} carried {mean} N"
+            );
+        }
     }
 }
 

@@ -238,9 +238,14 @@ fn a_pinched_strip_slides_at_twice_mu_times_the_holder_force() {
         },
     });
     let mut sliding = Vec::new();
+    let mut impulses = Vec::new();
     let mut observer = Frames(|fr: &Frame<'_>| {
         let contact = fr.contact.unwrap();
         if fr.state.time >= t_clamp {
+            impulses.push((
+                fr.state.time,
+                [contact.tool_state[0].impulse, contact.tool_state[1].impulse],
+            ));
             // Each tool carries F; the holder rests on the strip.
             assert!(
                 (contact.tool_force[0] - f).abs() < 1e-3 * f,
@@ -279,6 +284,14 @@ fn a_pinched_strip_slides_at_twice_mu_times_the_holder_force() {
         (mean - 2.0 * mu * f).abs() < 0.01 * 2.0 * mu * f,
         "pull {mean}"
     );
+    // Between frames, the impulses give each tool's mean force: F.
+    for w in impulses.windows(2) {
+        let ((t0, i0), (t1, i1)) = (w[0], w[1]);
+        for k in 0..2 {
+            let mean = (i1[k] - i0[k]) / (t1 - t0);
+            assert!((mean - f).abs() < 1e-6 * f, "tool {k} at {t1}: {mean} N");
+        }
+    }
 }
 
 /// Capstan: a strip wrapped half round a fixed vertical cylinder (its

@@ -17,8 +17,8 @@ use crate::validate::{Check, note, quick_mode};
 /// 0.2, the holder raised by one ply thickness (15 µm clear of the top
 /// ply, as shipped): the run reaches its end time; no ply is inside the other
 /// beyond 1 % of the thickness (measured from the positions); after the
-/// holder's force has ramped up, the force the holder's contact carries is
-/// its own at every frame (the holder at rest on the stack).
+/// holder's force has ramped up, the force the holder's contact carries
+/// between two frames (its impulse over their time apart) is its own.
 ///
 /// 24 × 24 cells, the whole stroke; in `--quick` its first 0.1 s (the
 /// holder's force ramped up and held, the punch not yet at the blank).
@@ -34,10 +34,16 @@ use crate::validate::{Check, note, quick_mode};
 /// unstable. With the compliant rows (`NORMAL_COMPLIANCE`, fifteenth
 /// session) it draws the whole stroke, centred, but the plies overlap by
 /// 3.1 % of the thickness where they wrap the die's fillet on faces
-/// coarser than it, and the holder's contact force differs from its own
-/// by 7.5e-4 at a frame: the check's 1e-5 holds for a holder at rest on
-/// the stack, which the drawing flange does not leave it (not traced
-/// further; docs/notes/stack-cost.md).
+/// coarser than it.
+///
+/// The force is compared between frames, not at them: the check sampled
+/// the holder's contact force at each frame until 2026-11-29, and over the
+/// stroke it differed from the holder's own by up to 7.5e-4. Traced: the
+/// 10 kg holder rings on the compliant ply rows (its velocity at the
+/// frames ±0.1 mm/s about a steady sinking of 0.7 µm over the stroke, its
+/// acceleration up to 14 m/s², nanometres of motion), and the sampled force
+/// holds its inertia; before the punch reaches the blank it is at rest and
+/// the sample within 2e-9.
 pub fn pressed_stack() -> Vec<Check> {
     let cells = 24;
     let end = if quick_mode() { 0.1 } else { 0.5 };
@@ -82,16 +88,22 @@ pub fn pressed_stack() -> Vec<Check> {
         } => (*force, amplitude.clone()),
         _ => panic!("the shipped holder is force-driven"),
     };
-    let (mut overlap, mut frames, mut worst_force, mut pressed_frames) = (0.0f64, 0, 0.0f64, 0);
+    let (mut overlap, mut frames, mut worst_force, mut worst_sample) = (0.0f64, 0, 0.0f64, 0.0f64);
+    let (mut pressed_frames, mut last) = (0, None::<(f64, f64)>);
     let mut observer = Frames(|f: &Frame<'_>| {
         overlap = overlap.max(overlap_between(f.model, &f.state.x, 0, 1));
         frames += 1;
         let Some(c) = &f.contact else { return };
         // After the ramp (the amplitude at its full value).
         if (ramp.value(f.state.time) - 1.0).abs() < 1e-12 {
-            let carried = c.tool_force[holder];
-            worst_force = worst_force.max((carried - force).abs() / force);
-            pressed_frames += 1;
+            let impulse = c.tool_state[holder].impulse;
+            if let Some((t0, i0)) = last {
+                let carried = (impulse - i0) / (f.state.time - t0);
+                worst_force = worst_force.max((carried - force).abs() / force);
+                pressed_frames += 1;
+            }
+            worst_sample = worst_sample.max((c.tool_force[holder] - force).abs() / force);
+            last = Some((f.state.time, impulse));
         }
     });
     let mut state = model.initial_state();
@@ -103,7 +115,7 @@ pub fn pressed_stack() -> Vec<Check> {
         Err(e) => format!(" It stopped at t = {:.4} s: {e}", state.time),
     };
     note(format!(
-        "Two plies (0/90 under ±45, μ_ply = 0.2, {cells} × {cells} cells) deep drawn under the shipped holder's {force:.0} N to t = {end} s: reached t = {:.3} s; largest overlap {overlap:.3e} mm = {:.3e} of the ply thickness over {frames} frames; the holder's contact carried its force to {worst_force:.2e} at each of the {pressed_frames} frames after its ramp.{stopped}",
+        "Two plies (0/90 under ±45, μ_ply = 0.2, {cells} × {cells} cells) deep drawn under the shipped holder's {force:.0} N to t = {end} s: reached t = {:.3} s; largest overlap {overlap:.3e} mm = {:.3e} of the ply thickness over {frames} frames; the holder's contact carried its force to {worst_force:.2e} between each two of the frames after its ramp ({pressed_frames} intervals; sampled at the frames, to {worst_sample:.2e}).{stopped}",
         state.time,
         overlap / h,
     ));
@@ -121,12 +133,13 @@ pub fn pressed_stack() -> Vec<Check> {
             1e-2,
         ),
         Check::abs(
-            "|holder's contact force − its force| / its force, largest over the frames after the ramp",
+            "|holder's mean contact force between frames − its force| / its force, largest after the ramp",
             0.0,
             worst_force,
-            // The normal solve stops at 1e-5 of a step's violation, or on
-            // the clamp's plateau far below it (3.4e-7 measured in the
-            // quick run).
+            // Beside the normal solve's stop at 1e-5 of a step's
+            // violation, the holder's momentum changes between frames: its
+            // velocity by up to 0.2 mm/s, 10 kg over 25 ms: 0.08 N, 4e-7 of
+            // the force (2.4e-7 measured, 2026-11-29).
             1e-5,
         ),
     ]

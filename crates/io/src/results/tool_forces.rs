@@ -1,0 +1,118 @@
+//! `tool_forces.csv`: where each tool is and what force it puts on the
+//! fabric at each output frame, the punch force–stroke curve of a deep
+//! drawing and the holder force a blank carries. Not a contact-pressure
+//! field: that is the VTU's `contact_force` per node.
+
+use std::fmt::Write as _;
+
+use drape_contact::ToolState;
+use serde::{Deserialize, Serialize};
+
+use super::{ResultsDir, ResultsError, fmt_f64};
+
+/// The tools at one output frame (the rows of `tool_forces.csv` of that
+/// frame, one per tool).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ToolForceRow {
+    /// Time (s).
+    pub time: f64,
+    /// Completed steps.
+    pub step: u64,
+    /// Each tool's state (displacement, velocity, impulse), in the scene's
+    /// order.
+    pub state: Vec<ToolState>,
+    /// Each tool's contact force on the fabric at the frame (N): along the
+    /// tool's axis for a moving tool, positive when it pushes the fabric
+    /// the way it moves; the sum of the normal forces for a fixed one.
+    pub force: Vec<f64>,
+}
+
+/// The header of `tool_forces.csv`.
+pub const TOOL_FORCES_HEADER: &str =
+    "time,step,tool,displacement_mm,velocity_mm_per_s,force_n,mean_force_n";
+
+/// The CSV text of `rows` for the tools `names`: one line per frame and
+/// tool; `mean_force_n` is the impulse since the frame before over the time
+/// between them (empty at the first frame).
+pub fn tool_forces_csv(names: &[&str], rows: &[ToolForceRow]) -> String {
+    let mut csv = String::with_capacity(64 + rows.len() * names.len() * 80);
+    csv.push_str(TOOL_FORCES_HEADER);
+    csv.push('\n');
+    let mut before: Option<&ToolForceRow> = None;
+    for row in rows {
+        for (t, name) in names.iter().enumerate() {
+            let (Some(s), Some(f)) = (row.state.get(t), row.force.get(t)) else {
+                continue;
+            };
+            let mean = before
+                .and_then(|b| {
+                    let dt = row.time - b.time;
+                    let i0 = b.state.get(t)?.impulse;
+                    (dt > 0.0).then(|| (s.impulse - i0) / dt)
+                })
+                .map_or_else(String::new, fmt_f64);
+            let _ = writeln!(
+                csv,
+                "{},{},\"{}\",{},{},{},{mean}",
+                fmt_f64(row.time),
+                row.step,
+                name.replace('"', "\"\""),
+                fmt_f64(s.displacement),
+                fmt_f64(s.velocity),
+                fmt_f64(*f),
+            );
+        }
+        before = Some(row);
+    }
+    csv
+}
+
+impl ResultsDir {
+    /// Writes `tool_forces.csv` ([`tool_forces_csv`]); nothing without
+    /// tools.
+    pub fn write_tool_forces(
+        &self,
+        names: &[&str],
+        rows: &[ToolForceRow],
+    ) -> Result<(), ResultsError> {
+        if names.is_empty() {
+            return Ok(());
+        }
+        self.write_file("tool_forces.csv", tool_forces_csv(names, rows).as_bytes())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_mean_force_is_the_impulse_between_frames_over_their_time() {
+        let state = |u: f64, impulse: f64| ToolState {
+            displacement: u,
+            velocity: 2.0,
+            impulse,
+        };
+        let rows = [
+            ToolForceRow {
+                time: 0.0,
+                step: 0,
+                state: vec![state(0.0, 0.0), state(0.0, 0.0)],
+                force: vec![0.0, 0.0],
+            },
+            ToolForceRow {
+                time: 0.5,
+                step: 10,
+                state: vec![state(1.0, 3.0), state(0.0, 0.25)],
+                force: vec![7.0, 0.4],
+            },
+        ];
+        let csv = tool_forces_csv(&["punch", "a \"die\""], &rows);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines[0], TOOL_FORCES_HEADER);
+        assert_eq!(lines[1], "0,0,\"punch\",0,2,0,");
+        assert_eq!(lines[3], "0.5,10,\"punch\",1,2,7,6");
+        assert_eq!(lines[4], "0.5,10,\"a \"\"die\"\"\",0,2,0.4,0.5");
+        assert_eq!(lines.len(), 5);
+    }
+}

@@ -247,6 +247,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             .into_iter()
             .collect(),
         plies: Vec::new(),
+        tools: Vec::new(),
     };
     dir.write_summary(&summary)?;
     Ok(KinematicReport {

@@ -40,7 +40,7 @@ pub use setup::run_setup;
 
 use drape_io::results::{
     CutbackRow, DrawInMm, EnergyRow, EnergySummary, FrameData, ImplicitRunInfo, Peaks, ResultsDir,
-    ResultsError, RunInfo, Summary, ToolForceRow, ToolMeshes, max_yarn_tension,
+    ResultsError, RunInfo, Summary, ToolForceRow, ToolMeshes, ToolSummary, max_yarn_tension,
 };
 use drape_io::scene::{Scene, SceneFile, Solver};
 use drape_model::{Measures, State};
@@ -857,8 +857,11 @@ pub fn run_in(
         },
         warnings,
         plies: Vec::new(),
+        tools: Vec::new(),
     };
     summary.plies = std::mem::take(&mut recorder.plies);
+    let tool_names: Vec<&str> = model.tools.iter().map(|t| t.name.as_str()).collect();
+    summary.tools = ToolSummary::of(&tool_names, &recorder.tool_rows);
     let results = &recorder.results;
     // Every file is tried, the first failure kept: the summary comes last
     // and says what is missing.
@@ -868,7 +871,6 @@ pub fn run_in(
         }
     };
     keep(results.write_energy(&recorder.rows));
-    let tool_names: Vec<&str> = model.tools.iter().map(|t| t.name.as_str()).collect();
     keep(results.write_tool_forces(&tool_names, &recorder.tool_rows));
     if solver == Solver::Implicit {
         keep(results.write_cutbacks(&recorder.cutbacks));

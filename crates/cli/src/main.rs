@@ -604,6 +604,17 @@ fn print_summary(s: &Summary, out: &Path) {
             String::new()
         }
     );
+    for t in s.tools.iter().filter(|t| t.max_force_n != 0.0) {
+        let travel = if t.displacement_mm == 0.0 {
+            String::new()
+        } else {
+            format!("travel {:.2} mm; ", t.displacement_mm)
+        };
+        println!(
+            "tool {:<12} {travel}force on the fabric {:.1} N at the end, {:.1} N largest (t = {:.6} s)",
+            t.name, t.force_n, t.max_force_n, t.max_force_time_s
+        );
+    }
     println!("above locking     {:.0} mm²", s.area_above_locking_mm2);
     println!(
         "wrinkle indicator max waviness {:.1}°, area above 5° {:.0} mm²",

@@ -344,6 +344,14 @@ fn a_resumed_run_ends_where_an_uninterrupted_one_does() {
     );
     let mean: f64 = lines[5].rsplit(',').next().unwrap().parse().unwrap();
     assert!(mean > 0.0, "{straight_forces}");
+    // The summary's tool is the file's: its last mean, its largest.
+    let tool = &straight.summary.tools[0];
+    assert_eq!((tool.name.as_str(), tool.force_n), ("punch", mean));
+    let means = lines[2..]
+        .iter()
+        .map(|l| l.rsplit(',').next().unwrap().parse::<f64>().unwrap());
+    assert_eq!(tool.max_force_n, means.fold(f64::MIN, f64::max));
+    assert_eq!(resumed.summary.tools, straight.summary.tools);
     assert!(out.join("frames/frame_00004.vtu").is_file());
 
     // The same resumed through the command line, from another directory,

@@ -73,7 +73,7 @@ pub use pictures::maps::MapPanel;
 pub use pictures::sweep::{SweepAxis, SweepRun};
 pub use pictures::work_precision::{WorkPrecisionPanel, WorkPrecisionPoint, pareto_front};
 pub use summary::{Peaks, RunSetup, max_yarn_tension};
-pub use tool_forces::{TOOL_FORCES_HEADER, ToolForceRow, tool_forces_csv};
+pub use tool_forces::{TOOL_FORCES_HEADER, ToolForceRow, ToolSummary, tool_forces_csv};
 pub use tools::{ToolMesh, ToolMeshes};
 
 use std::collections::BTreeMap;
@@ -445,6 +445,10 @@ pub struct Summary {
     /// Each ply of a laminate at the last frame (none for one ply).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub plies: Vec<PlySummary>,
+    /// Each tool's travel and force on the fabric (`tool_forces.csv`'s
+    /// means between frames); none without tools, or for a kinematic drape.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tools: Vec<ToolSummary>,
 }
 
 /// An output directory being filled by a run.

@@ -67,6 +67,65 @@ pub fn tool_forces_csv(names: &[&str], rows: &[ToolForceRow]) -> String {
     csv
 }
 
+/// One tool over a run, for `summary.json`: its travel and the force it
+/// put on the fabric, as means over the frame intervals.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ToolSummary {
+    /// The tool's name.
+    pub name: String,
+    /// Its displacement along its axis at the last frame (mm).
+    pub displacement_mm: f64,
+    /// Its mean force over the last frame interval (N; the sampled force
+    /// where there is one frame only).
+    pub force_n: f64,
+    /// The largest mean force over a frame interval (N) and the time at
+    /// that interval's end (s).
+    pub max_force_n: f64,
+    /// See `max_force_n`.
+    pub max_force_time_s: f64,
+}
+
+impl ToolSummary {
+    /// Each tool of `names` over the frames `rows` (none without rows).
+    pub fn of(names: &[&str], rows: &[ToolForceRow]) -> Vec<Self> {
+        let Some(last) = rows.last() else {
+            return Vec::new();
+        };
+        names
+            .iter()
+            .enumerate()
+            .filter_map(|(t, name)| {
+                let state = last.state.get(t)?;
+                let mut summary = Self {
+                    name: (*name).to_owned(),
+                    displacement_mm: state.displacement,
+                    force_n: *last.force.get(t)?,
+                    max_force_n: 0.0,
+                    max_force_time_s: last.time,
+                };
+                let means = rows.windows(2).filter_map(|w| {
+                    let dt = w[1].time - w[0].time;
+                    let di = w[1].state.get(t)?.impulse - w[0].state.get(t)?.impulse;
+                    (dt > 0.0).then(|| (w[1].time, di / dt))
+                });
+                let mut any = false;
+                for (time, mean) in means {
+                    if !any || mean.abs() > summary.max_force_n.abs() {
+                        summary.max_force_n = mean;
+                        summary.max_force_time_s = time;
+                    }
+                    summary.force_n = mean;
+                    any = true;
+                }
+                if !any {
+                    summary.max_force_n = summary.force_n;
+                }
+                Some(summary)
+            })
+            .collect()
+    }
+}
+
 impl ResultsDir {
     /// Writes `tool_forces.csv` ([`tool_forces_csv`]); nothing without
     /// tools.
@@ -114,5 +173,41 @@ mod tests {
         assert_eq!(lines[3], "0.5,10,\"punch\",1,2,7,6");
         assert_eq!(lines[4], "0.5,10,\"a \"\"die\"\"\",0,2,0.4,0.5");
         assert_eq!(lines.len(), 5);
+        let summary = ToolSummary::of(&["punch", "die"], &rows);
+        assert_eq!(summary[0].force_n, 6.0);
+        assert_eq!(
+            (summary[0].max_force_n, summary[0].max_force_time_s),
+            (6.0, 0.5)
+        );
+        assert_eq!(summary[0].displacement_mm, 1.0);
+        assert_eq!(summary[1].force_n, 0.5);
+    }
+
+    #[test]
+    fn a_tool_s_largest_force_is_its_largest_mean_between_frames() {
+        let row = |time: f64, impulse: f64, force: f64| ToolForceRow {
+            time,
+            step: 0,
+            state: vec![ToolState {
+                displacement: time,
+                velocity: 0.0,
+                impulse,
+            }],
+            force: vec![force],
+        };
+        // Means 4, 10 (largest, though sampled at 1) and 2 N.
+        let rows = [
+            row(0.0, 0.0, 0.0),
+            row(1.0, 4.0, 4.0),
+            row(1.5, 9.0, 1.0),
+            row(2.5, 11.0, 2.0),
+        ];
+        let s = &ToolSummary::of(&["punch"], &rows)[0];
+        assert_eq!((s.max_force_n, s.max_force_time_s), (10.0, 1.5));
+        assert_eq!((s.force_n, s.displacement_mm), (2.0, 2.5));
+        // One frame: its sampled force.
+        let s = &ToolSummary::of(&["punch"], &rows[1..2])[0];
+        assert_eq!((s.force_n, s.max_force_n), (4.0, 4.0));
+        assert!(ToolSummary::of(&["punch"], &[]).is_empty());
     }
 }

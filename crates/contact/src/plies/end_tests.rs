@@ -182,3 +182,25 @@ fn a_node_come_in_through_the_end_is_shifted_not_thrown() {
         assert!((v[i] - drive).norm() < 1e-9, "{}", v[i]);
     }
 }
+
+#[test]
+fn a_node_level_with_the_mid_plane_at_the_end_is_at_the_end_either_side() {
+    // The two plies drawn under a fixed holder at t = 0.45 s: a `p45`
+    // node on the die, level with `p0`'s mid-plane, held at `p0`'s end
+    // plane by the end's row to 7.6e-5 mm. Its height over the mid-plane
+    // is round-off of either sign; the overlap measure read it 0.5699 mm
+    // inside (the offset) on the near side, and the run stopped.
+    for height in [1e-12, -1e-12] {
+        let (x, mut c) = plies([10.0 - 1e-4, height]);
+        let overlap = c.record_overlap(&x).map_or(0.0, |o| o.depth);
+        assert!(
+            (overlap - 1e-4).abs() < 1e-9,
+            "at {height} mm: {overlap} mm inside"
+        );
+    }
+    // In front and clear of the end, the depth is the one below the
+    // offset, as before.
+    let (x, mut c) = plies([9.0, 0.2]);
+    let overlap = c.record_overlap(&x).map_or(0.0, |o| o.depth);
+    assert!((overlap - 0.1).abs() < 1e-9, "{overlap}");
+}

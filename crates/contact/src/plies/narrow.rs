@@ -340,6 +340,14 @@ pub(super) fn through_end(
     (e < offset - along).then_some((q, wc, m))
 }
 
+/// How far a node in front of face `v` (its closest point at the weights
+/// `w`, `bits` the face's outline features) is inside the ply's square
+/// free end: the distance from its closest point to the nearest point of
+/// the end (None where the face has no outline feature).
+pub(super) fn inside_end(bits: u8, v: [Vector3<f64>; 3], w: &[f64; 3]) -> Option<f64> {
+    nearest_outline(bits, v, &p_of(&v, w)).map(|(e, _, _)| e)
+}
+
 /// The point of the face `v` at the barycentric weights `w`.
 pub(super) fn p_of(v: &[Vector3<f64>; 3], w: &[f64; 3]) -> Vector3<f64> {
     v[0] * w[0] + v[1] * w[1] + v[2] * w[2]

@@ -1419,6 +1419,22 @@ mod tests {
         }
     }
 
+    /// A frictionless holder: a plane at height `z` facing down, pushed
+    /// down by `force` (N), of `mass` (t).
+    fn pressing_plane(z: f64, force: f64, mass: f64) -> Tool {
+        Tool {
+            name: "holder".into(),
+            surface: Surface::plane(Vector3::new(0.0, 0.0, z), -Vector3::z()).unwrap(),
+            motion: ToolMotion::Force {
+                direction: -Vector3::z(),
+                force,
+                amplitude: Amplitude::Constant,
+                mass,
+            },
+            friction: 0.0,
+        }
+    }
+
     #[test]
     fn a_holder_landing_on_the_fabric_gets_its_momentum_back_as_impulse() {
         // A force-driven holder moving down at v₀ lands on a node resting on
@@ -1428,21 +1444,7 @@ mod tests {
         // M·(v − v₀) = Σ F·Δt_mean − impulse.
         let (m, f, big_m, offset, dt) = (1e-6, 3.0, 1e-4, 0.1, 1e-5);
         let v0 = 1.0;
-        let holder = Tool {
-            name: "holder".into(),
-            surface: Surface::plane(
-                Vector3::new(0.0, 0.0, 2.0 * offset + 2.5 * v0 * dt),
-                -Vector3::z(),
-            )
-            .unwrap(),
-            motion: ToolMotion::Force {
-                direction: -Vector3::z(),
-                force: f,
-                amplitude: Amplitude::Constant,
-                mass: big_m,
-            },
-            friction: 0.0,
-        };
+        let holder = pressing_plane(2.0 * offset + 2.5 * v0 * dt, f, big_m);
         let mut contact = ExplicitContact::new(vec![floor(0.0), holder], 1, settings(offset));
         contact.tool_state[1].velocity = v0;
         let mut x = vec![Vector3::new(0.0, 0.0, offset)];
@@ -1479,17 +1481,7 @@ mod tests {
         // floor's constraint joins the solve, both tools carry F and the
         // node and the holder stay where they are.
         let (m, f, big_m, offset, dt) = (1e-6, 3.0, 1e-4, 0.1, 1e-5);
-        let holder = Tool {
-            name: "holder".into(),
-            surface: Surface::plane(Vector3::new(0.0, 0.0, 2.0 * offset), -Vector3::z()).unwrap(),
-            motion: ToolMotion::Force {
-                direction: -Vector3::z(),
-                force: f,
-                amplitude: Amplitude::Constant,
-                mass: big_m,
-            },
-            friction: 0.0,
-        };
+        let holder = pressing_plane(2.0 * offset, f, big_m);
         let mut contact = ExplicitContact::new(vec![floor(0.0), holder], 1, settings(offset));
         let mut x = vec![Vector3::new(0.0, 0.0, offset)];
         let mut v = vec![Vector3::zeros()];

@@ -81,10 +81,27 @@ pub fn write(
         table.push(',');
         table.push_str(key);
     }
-    for column in drape::sweep_check::MEASURE_COLUMNS {
+    // Each tool's largest mean force (a deep drawing's punch force), by
+    // the tools of the first run that has a summary (every point is the
+    // same scene), before the last column, which the table's reader
+    // checks to tell a whole header from a cut one.
+    let tools: Vec<String> = reports
+        .iter()
+        .find_map(|r| r.as_ref().ok())
+        .map(|s| s.tools.iter().map(|t| t.name.replace(',', ";")).collect())
+        .unwrap_or_default();
+    let (last, measures) = drape::sweep_check::MEASURE_COLUMNS
+        .split_last()
+        .expect("columns");
+    for column in measures {
         table.push(',');
         table.push_str(column);
     }
+    for tool in &tools {
+        table.push_str(&format!(",{tool}_max_force_n"));
+    }
+    table.push(',');
+    table.push_str(last);
     table.push('\n');
     let mut failed = false;
     for (i, (combo, report)) in combos.iter().zip(reports).enumerate() {
@@ -102,8 +119,19 @@ pub fn write(
                 // embedded fibres' truss force) is left empty, not NaN.
                 let cell = |v: f64, digits: usize| or_empty(v, |v| format!("{v:.digits$}"));
                 let balance = or_empty(s.energy.balance_error, |v| format!("{v:.3e}"));
+                let forces: String = tools
+                    .iter()
+                    .map(|name| {
+                        let force = s
+                            .tools
+                            .iter()
+                            .find(|t| t.name.replace(',', ";") == *name)
+                            .map_or(f64::NAN, |t| t.max_force_n);
+                        format!(",{}", cell(force, 1))
+                    })
+                    .collect();
                 table.push_str(&format!(
-                    ",{},{},{},{},{},{},{balance},{},{},{},{},{}\n",
+                    ",{},{},{},{},{},{},{balance},{},{},{},{}{forces},{}\n",
                     s.status,
                     cell(s.max_shear_deg, 4),
                     cell(s.draw_in_mm.dx, 4),
@@ -120,8 +148,9 @@ pub fn write(
             Err(e) => {
                 failed = true;
                 table.push_str(&format!(
-                    ",error: {},,,,,,,,,,,\n",
-                    e.replace([',', '\n'], ";")
+                    ",error: {}{}\n",
+                    e.replace([',', '\n'], ";"),
+                    ",".repeat(measures.len() + tools.len())
                 ));
             }
         }

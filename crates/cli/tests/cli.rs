@@ -67,6 +67,48 @@ fn sweep_writes_one_table() {
 }
 
 #[test]
+fn a_sweep_tables_each_tool_s_largest_force() {
+    // The punch's largest mean force per run, as its summary has it, in a
+    // column before the table's last (which the table's reader checks).
+    let dir = temp("sweep-tools");
+    let scene = dir.join("draped.toml");
+    std::fs::write(&scene, DRAPED).unwrap();
+    let out = dir.join("sweep");
+    let o = drape(&[
+        "sweep",
+        scene.to_str().unwrap(),
+        "--set",
+        "tools.0.friction=0.1,0.3",
+        "--set",
+        "output.vtu=false",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let table = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = table.lines().map(|l| l.split(',').collect()).collect();
+    assert!(
+        rows[0]
+            .join(",")
+            .ends_with(",peak_time_s,punch_max_force_n,max_fibre_tension_n_per_mm"),
+        "{table}"
+    );
+    assert!(rows.iter().all(|r| r.len() == rows[0].len()), "{table}");
+    for run in 0..2 {
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join(format!("run_{run:03}/summary.json"))).unwrap(),
+        )
+        .unwrap();
+        let force = summary["tools"][0]["max_force_n"].as_f64().unwrap();
+        assert!(force > 0.0, "{summary}");
+        let column = rows[0].len() - 2;
+        assert_eq!(rows[run + 1][column], format!("{force:.1}"), "{table}");
+    }
+    let o = drape(&["inspect", out.to_str().unwrap()]);
+    assert!(text(&o).contains("(2 runs)"), "{}", text(&o));
+}
+
+#[test]
 fn new_writes_templates_that_load() {
     let dir = temp("new");
     for t in [

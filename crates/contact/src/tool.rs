@@ -146,8 +146,8 @@ pub struct ToolState {
     /// integrated over the steps since the start (N·s). Between two frames
     /// its difference over their time apart is the mean force, which a
     /// sampled `tool_force` is not where a force-driven tool rings on a
-    /// compliant stack (a 10 kg holder on two plies: ±3e-4 of its force
-    /// from frame to frame, at nanometres of motion). Checkpoints from
+    /// compliant stack (a 10 kg holder on two plies: up to 7.5e-4 of its
+    /// force at a frame, at nanometres of motion). Checkpoints from
     /// before it start it at zero.
     #[serde(default)]
     pub impulse: f64,

@@ -45,11 +45,7 @@ pub fn tool_forces_csv(names: &[&str], rows: &[ToolForceRow]) -> String {
                 continue;
             };
             let mean = before
-                .and_then(|b| {
-                    let dt = row.time - b.time;
-                    let i0 = b.state.get(t)?.impulse;
-                    (dt > 0.0).then(|| (s.impulse - i0) / dt)
-                })
+                .and_then(|b| mean_force(b, row, t))
                 .map_or_else(String::new, fmt_f64);
             let _ = writeln!(
                 csv,
@@ -65,6 +61,14 @@ pub fn tool_forces_csv(names: &[&str], rows: &[ToolForceRow]) -> String {
         before = Some(row);
     }
     csv
+}
+
+/// Tool `t`'s mean force between the frames `before` and `row`: its
+/// impulse over their time apart (None for frames at one time).
+fn mean_force(before: &ToolForceRow, row: &ToolForceRow, t: usize) -> Option<f64> {
+    let dt = row.time - before.time;
+    let di = row.state.get(t)?.impulse - before.state.get(t)?.impulse;
+    (dt > 0.0).then(|| di / dt)
 }
 
 /// One tool over a run, for `summary.json`: its travel and the force it
@@ -103,11 +107,9 @@ impl ToolSummary {
                     max_force_n: 0.0,
                     max_force_time_s: last.time,
                 };
-                let means = rows.windows(2).filter_map(|w| {
-                    let dt = w[1].time - w[0].time;
-                    let di = w[1].state.get(t)?.impulse - w[0].state.get(t)?.impulse;
-                    (dt > 0.0).then(|| (w[1].time, di / dt))
-                });
+                let means = rows
+                    .windows(2)
+                    .filter_map(|w| Some((w[1].time, mean_force(&w[0], &w[1], t)?)));
                 let mut any = false;
                 for (time, mean) in means {
                     if !any || mean.abs() > summary.max_force_n.abs() {

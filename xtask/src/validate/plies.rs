@@ -669,8 +669,9 @@ fn rms_max(a: &[f64], b: &[f64], elements: impl Iterator<Item = (usize, usize)>)
 /// 24 × 24 cells, yarn bending on as the preset gives it) at μ_ply = 0
 /// against each ply formed alone on a mould offset by the other ply's
 /// thickness: the bottom ply (it alone touches the punch; nothing lies
-/// under it) on the same punch, the top one on a punch whose radius is the
-/// bottom ply's thickness larger (same pole: the top ply's blank starts
+/// under it) on the same punch, the top one on a frictionless punch (the
+/// bottom ply's face at μ_ply = 0) whose radius is the bottom ply's
+/// thickness larger (same pole: the top ply's blank starts
 /// one mean thickness higher in the stack, so the pair is the same,
 /// translated). The tools' contact offset in a stack is its largest half
 /// thickness: both plies have the same thickness here, so it is each
@@ -691,6 +692,25 @@ fn rms_max(a: &[f64], b: &[f64], elements: impl Iterator<Item = (usize, usize)>)
 /// single-ply scenes' mesh, where a ply alone does not fold) has floors
 /// of 1.39° and 0.96° and differences of 3.32° and 1.63°. Neither makes
 /// the comparison sharper, so the case keeps the shipped 24 × 24.
+///
+/// What couples the plies at μ_ply = 0 (measured 2026-11-30, runs not
+/// kept in the case). Before t ≈ 0.35–0.4 s each ply alone repeats itself
+/// to 0.05° RMS, and there the stack differs from the single runs by
+/// 1.17° (0/90) and 1.50° (±45) RMS off the dome, 0.43° and 0.93° on it
+/// (t = 0.4 s). With the punch frictionless in every run too, so that no
+/// ply's pressure on the other changes a friction force: 1.23° / 1.47°
+/// off, 0.40° / 1.14° on. With gravity off in every run: 1.35° / 1.54°
+/// off, 0.39° / 0.51° on. Neither is the coupling. What is left is the
+/// normal contact itself: from t ≈ 0.2 s (0.23–0.28° RMS, the single runs
+/// repeating to 0.000°) the flanges, which alone hang and fold
+/// differently (a 0/90 and a ±45 lattice), may not pass through each
+/// other, so where they touch they share one shape, and the dome's shear,
+/// drawn in from the flanges, follows. That is the mechanics of a stack,
+/// not a fault of the ply contact: a bound on a whole ply's shear holds
+/// only where tools set both plies' shapes everywhere
+/// ([`held::held_frictionless`]). The faces' sag (a node of one ply
+/// resting on the chords of the other's faces, not on the offset sphere)
+/// may add to the difference on the dome; it was not separated.
 ///
 /// Checks: the bound, each ply's RMS at the end ≤ 0.5°.
 fn hemisphere_frictionless() -> Vec<Check> {
@@ -719,15 +739,23 @@ fn hemisphere_frictionless() -> Vec<Check> {
     let top_fabric = fabric.replacen("orientation_deg = 0 ", "orientation_deg = 45 ", 1);
     assert_ne!(top_fabric, fabric);
     let h0 = stack.thickness[0];
+    // The top ply's mould is the bottom ply's face, frictionless at
+    // μ_ply = 0: its punch has no friction.
+    let punch_friction = "friction = 0.1                            # Coulomb μ between the punch and the ply it touches";
+    assert!(
+        tail.contains(punch_friction),
+        "the shipped stack scene's punch friction changed"
+    );
+    let top_tail = tail.replacen(punch_friction, "friction = 0", 1);
     let top = shear_run(
         &format!(
             "{top_fabric}{}",
-            tail.replacen(radius, &format!("radius = {},", 120.0 + h0), 1)
+            top_tail.replacen(radius, &format!("radius = {},", 120.0 + h0), 1)
         ),
         &path,
     );
-    // The noise floor: each ply alone again on a punch 1 µm larger.
-    let nudged = |fabric: &str, radius_mm: f64| {
+    // The noise floor: each ply alone again on its punch 1 µm larger.
+    let nudged = |fabric: &str, tail: &str, radius_mm: f64| {
         shear_run(
             &format!(
                 "{fabric}{}",
@@ -736,7 +764,10 @@ fn hemisphere_frictionless() -> Vec<Check> {
             &path,
         )
     };
-    let floors = [nudged(&fabric, 120.0), nudged(&top_fabric, 120.0 + h0)];
+    let floors = [
+        nudged(&fabric, tail, 120.0),
+        nudged(&top_fabric, &top_tail, 120.0 + h0),
+    ];
     let singles = [&bottom, &top];
     for (p, single) in singles.iter().enumerate() {
         assert_eq!(single.elements(), stack.plies[p].len(), "ply {p}'s mesh");
@@ -817,7 +848,7 @@ fn hemisphere_frictionless() -> Vec<Check> {
         None => String::new(),
     };
     note(format!(
-        "Two-ply hemisphere [0/90 + ±45] at μ_ply = 0 against each ply alone (24 × 24 cells, the shipped stack scene, yarn bending on in every run as the preset's rigidity gives it; the top ply alone on a punch {h0} mm larger in radius): the shear difference per element over time, on the punch's dome and off it (the flanges, where the plies hang on each other: there they share one shape at any μ_ply, so only the dome tests that no friction couples them), and beside it that of each ply alone against itself on a punch 1 µm larger (the scene's own sensitivity)\n\n{table}\nAt the end, on the dome: 0/90 RMS {:.3}° (largest {:.2}°, {} elements), ±45 RMS {:.3}° (largest {:.2}°, {} elements). {before}The noise floor at the end, {:.3}° and {:.3}° RMS, is {floor}.",
+        "Two-ply hemisphere [0/90 + ±45] at μ_ply = 0 against each ply alone (24 × 24 cells, the shipped stack scene, yarn bending on in every run as the preset's rigidity gives it; the top ply alone on a frictionless punch {h0} mm larger in radius, as the bottom ply's face is to it at μ_ply = 0): the shear difference per element over time, on the punch's dome and off it (the flanges, where the plies hang on each other: there they share one shape at any μ_ply, so only the dome tests that no friction couples them), and beside it that of each ply alone against itself on a punch 1 µm larger (the scene's own sensitivity)\n\n{table}\nAt the end, on the dome: 0/90 RMS {:.3}° (largest {:.2}°, {} elements), ±45 RMS {:.3}° (largest {:.2}°, {} elements). {before}The noise floor at the end, {:.3}° and {:.3}° RMS, is {floor}.",
         dome_end[0].0,
         dome_end[0].1,
         dome_end[0].2,

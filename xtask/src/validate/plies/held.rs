@@ -231,6 +231,23 @@ fn regions(
 /// 0.12° / 0.14°, at t = 0.325 s by 1.89° / 3.13° (floors 0.25° / 0.95°):
 /// a finer mesh does not close the gap, so the case keeps 24 × 24.
 ///
+/// Why the stack stops (traced 2026-11-30, the stop at t = 0.459 s: the
+/// bottom ply's corner node 624, free on the die where the top ply has
+/// drawn in from over it). The node slides on the die at 0.1–0.5 m/s from
+/// t ≈ 0.42 s, at 3–4 m/s by t = 0.4585 s, pushed outwards by its
+/// membrane; then its warp edge yarn snaps taut (its force 0 → 1 605 N in
+/// one step) and throws it back at 40 m/s, 0.60 mm in a step. Over
+/// 0.44–0.459 s that yarn did +537 mJ of work on the node, its membrane
+/// −305 mJ and its weft yarn −223 mJ. It is the stack's own motion, not
+/// the step: the whole model's energy balance stays closed to 2e-5 of the
+/// largest energy while its kinetic energy doubles (strain energy
+/// released as the stack snaps through a fold in the die's opening), and
+/// with a step 2.9 times shorter (`time_step = 7e-6`, the same masses) the
+/// stack stops at t = 0.463 s instead, a top-ply node thrown 1.4 mm in a
+/// step onto the punch. The tools do not set both plies' shapes in the
+/// die's opening, so this case does not reach the decoupled state it was
+/// built to test.
+///
 /// Checks: the stack draws the whole stroke; the bound, each
 /// ply's RMS ≤ 0.5° at the last frame the stack reached (the end, unless
 /// it stopped on an error, which the note then quotes).

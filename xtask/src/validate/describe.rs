@@ -19,8 +19,8 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "runs complete; the top ply's slip at μ_ply = 1 below that at 0; run times against one ply (a note)",
         ),
         "plies/hemisphere-frictionless" => (
-            "two-ply hemisphere [0/90 + ±45] at μ_ply = 0: each ply's shear against that ply formed alone on a mould offset by the other ply's thickness",
-            "the single-ply runs, element by element (same mesh), yarn bending on in all, the top ply's offset punch frictionless: RMS of the shear difference ≤ 0.5° (the issue's bound); per frame in a note, on the punch's dome and off it, beside each single run against itself on a punch 1 µm larger (the noise floor)",
+            "two-ply hemisphere [0/90 + ±45] at μ_ply = 0: each ply's shear against that ply formed alone on a mould offset by the other ply's thickness; the same for two equal 0/90 plies",
+            "the single-ply runs, element by element (same mesh), yarn bending on in all, the top ply's offset punch frictionless: RMS of the shear difference ≤ 0.5° (the issue's bound), at the end; for the equal plies at the last frame both single runs repeat themselves to 0.05°; per frame in a note, on the punch's dome and off it, beside each single run against itself on a punch 1 µm larger (the noise floor)",
         ),
         "plies/held-frictionless" => (
             "deep drawing (punch, die, fixed holder) of two plies [0/90 + ±45] at μ_ply = 0, both held by tools everywhere: each ply's shear against that ply drawn alone on the tools offset by the other ply's thickness",

@@ -817,7 +817,7 @@ fn hemisphere_frictionless() -> Vec<Check> {
     );
     let (t_equal, rms_equal) = equal
         .repeatable
-        .map(|(t, _, rms)| (t, rms))
+        .map(|r| (r.time, r.whole))
         .expect("the single runs repeat themselves at the start");
     note(format!(
         "Two-ply hemisphere [0/90 + ±45] at μ_ply = 0 against each ply alone (24 × 24 cells, the shipped stack scene, yarn bending on in every run as the preset's rigidity gives it; the top ply alone on a frictionless punch {h0} mm larger in radius, as the bottom ply's face is to it at μ_ply = 0): the shear difference per element over time, on the punch's dome and off it (the flanges, where the plies hang on each other: there they share one shape at any μ_ply, so only the dome tests that no friction couples them), and beside it that of each ply alone against itself on a punch 1 µm larger (the scene's own sensitivity)\n\n{}\n{}\n\nThe same with two equal plies, 0/90 on 0/90 (the top one alone on the same frictionless punch): each ply alone hangs and folds as the other, so this measures what the ply contact itself adds at μ_ply = 0\n\n{}\n{}",
@@ -867,9 +867,19 @@ struct FrameComparison {
     /// Each ply's RMS at the end (°).
     end: [f64; 2],
     /// The last frame at which each ply alone repeats itself within
-    /// [`REPEATS`]: its time, each ply's RMS on the dome and off it, and
-    /// over the whole ply (°).
-    repeatable: Option<(f64, [(f64, f64); 2], [f64; 2])>,
+    /// [`REPEATS`].
+    repeatable: Option<Repeatable>,
+}
+
+/// A frame at which each single run repeats itself (see
+/// [`FrameComparison`]).
+#[derive(Clone, Copy)]
+struct Repeatable {
+    time: f64,
+    /// Each ply's RMS on the dome and off it (°).
+    split: [(f64, f64); 2],
+    /// Each ply's RMS over the whole ply (°).
+    whole: [f64; 2],
 }
 
 /// Single runs closer to themselves than this (RMS, °) on a punch 1 µm
@@ -942,7 +952,11 @@ fn compare_frames(
             steady &= floor < REPEATS;
         }
         if steady {
-            repeatable = Some((frame.time, split, whole));
+            repeatable = Some(Repeatable {
+                time: frame.time,
+                split,
+                whole,
+            });
         }
         if k % 2 == 0 || k + 1 == stack.frames.len() {
             table.push_str(&row);
@@ -957,7 +971,11 @@ fn compare_frames(
         "above the issue's 0.5°: on this scene the comparison cannot resolve 0.5°"
     };
     let before = match repeatable {
-        Some((t, [(d0, f0), (d1, f1)], [w0, w1])) => format!(
+        Some(Repeatable {
+            time: t,
+            split: [(d0, f0), (d1, f1)],
+            whole: [w0, w1],
+        }) => format!(
             "Up to t = {t:.2} s each ply alone repeats itself within {REPEATS}° RMS, so what the stack differs by there is no noise: {w0:.3}° ({a}) and {w1:.3}° ({b}) over the ply, on the dome {d0:.3}° and {d1:.3}°, off it {f0:.3}° and {f1:.3}°. "
         ),
         None => String::new(),

@@ -707,8 +707,9 @@ fn rms_max(a: &[f64], b: &[f64], elements: impl Iterator<Item = (usize, usize)>)
 /// other, so where they touch they share one shape, and the dome's shear,
 /// drawn in from the flanges, follows. That is the mechanics of a stack,
 /// not a fault of the ply contact: a bound on a whole ply's shear holds
-/// only where tools set both plies' shapes everywhere
-/// ([`held::held_frictionless`]).
+/// only where tools set both plies' shapes everywhere (what
+/// [`held::held_frictionless`] tried; its die's opening leaves the stack
+/// free, and it folds there).
 ///
 /// So the case also forms two equal plies, 0/90 on 0/90, at μ_ply = 0:
 /// alone, each hangs and folds as the other, and what the stack differs by
@@ -910,7 +911,6 @@ fn compare_frames(
     for (k, frame) in stack.frames.iter().enumerate() {
         let mut row = format!("| {:.2} |", frame.time);
         let mut split = [(0.0, 0.0); 2];
-        let mut whole = [0.0; 2];
         for (p, single) in singles.iter().enumerate() {
             let first = stack.plies[p].start;
             let n = single.elements();
@@ -945,7 +945,6 @@ fn compare_frames(
                 n - count
             ));
             end[p] = rms;
-            whole[p] = rms;
             floor_end[p] = floor;
             dome_end[p] = (dome, dome_max, count);
             split[p] = (dome, flange);
@@ -955,7 +954,7 @@ fn compare_frames(
             repeatable = Some(Repeatable {
                 time: frame.time,
                 split,
-                whole,
+                whole: end,
             });
         }
         if k % 2 == 0 || k + 1 == stack.frames.len() {

@@ -219,7 +219,7 @@ impl std::fmt::Display for ContactFault {
             // frictionless plies under a fixed holder (2026-11-30) a corner
             // of the bottom ply reached 40 m/s as the stack snapped through
             // a fold in the die's opening (strain energy going to kinetic,
-            // the energy balance closed to 2e-5); a step 2.9 times shorter
+            // the energy balance closed); a step 2.9 times shorter
             // stopped the same way 4 ms later, at another node.
             FaultKind::Overrun { limit } if self.tool_travel < 0.1 * self.node_travel => write!(
                 f,

@@ -214,28 +214,36 @@ impl std::fmt::Display for ContactFault {
                  the node has crossed behind an open edge of the tool (or the tool's gap is not continuous), \
                  so it is not pushed out"
             ),
-            // A node that moved ten times as far as its tool was thrown by
-            // the fabric itself. In the stacked deep drawing of two
-            // frictionless plies under a fixed holder (2026-11-30) a corner
-            // of the bottom ply reached 40 m/s as the stack snapped through
-            // a fold in the die's opening (strain energy going to kinetic,
-            // the energy balance closed); a step 2.9 times shorter
-            // stopped the same way 4 ms later, at another node.
-            FaultKind::Overrun { limit } if self.tool_travel < 0.1 * self.node_travel => write!(
-                f,
-                ", more than the {limit:.3e} mm the contact resolves in one step (the fabric's thickness): \
-                 the tool hardly moved, so the fabric threw the node (a fold snapping through, a free edge \
-                 or corner whipping; see the run's fold warning and the waviness in the last frames), and \
-                 it is not pushed out; a shorter step may not help, holding the blank (holder, springs, \
-                 friction) or a finer mesh where it folds may"
-            ),
-            FaultKind::Overrun { limit } => write!(
-                f,
-                ", more than the {limit:.3e} mm the contact resolves in one step (the fabric's thickness): \
-                 the tool or the node moves too fast for the step (was the tool forced through the blank?), \
-                 so it is not pushed out; a shorter step (less mass scaling) or a slower tool keeps each \
-                 step's travel within it"
-            ),
+            FaultKind::Overrun { limit } => {
+                write!(
+                    f,
+                    ", more than the {limit:.3e} mm the contact resolves in one step (the fabric's thickness): "
+                )?;
+                // A node that moved ten times as far as its tool was thrown
+                // by the fabric itself. In the stacked deep drawing of two
+                // frictionless plies under a fixed holder (2026-11-30) a
+                // corner of the bottom ply reached 40 m/s as the stack
+                // snapped through a fold in the die's opening (strain
+                // energy going to kinetic, the energy balance closed); a
+                // step 2.9 times shorter stopped the same way 4 ms later,
+                // at another node.
+                if self.tool_travel < 0.1 * self.node_travel {
+                    write!(
+                        f,
+                        "the tool hardly moved, so the fabric threw the node (a fold snapping through, a free edge \
+                         or corner whipping; see the run's fold warning and the waviness in the last frames), and \
+                         it is not pushed out; a shorter step may not help, holding the blank (holder, springs, \
+                         friction) or a finer mesh where it folds may"
+                    )
+                } else {
+                    write!(
+                        f,
+                        "the tool or the node moves too fast for the step (was the tool forced through the blank?), \
+                         so it is not pushed out; a shorter step (less mass scaling) or a slower tool keeps each \
+                         step's travel within it"
+                    )
+                }
+            }
         }?;
         write!(f, "; closest point on {}", self.place)
     }

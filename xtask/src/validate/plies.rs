@@ -758,26 +758,22 @@ fn hemisphere_frictionless() -> Vec<Check> {
         "the shipped stack scene's punch friction changed"
     );
     let top_tail = tail.replacen(punch_friction, "friction = 0", 1);
-    let top = shear_run(
-        &format!(
-            "{top_fabric}{}",
-            top_tail.replacen(radius, &format!("radius = {},", 120.0 + h0), 1)
-        ),
-        &path,
-    );
-    // The noise floor: each ply alone again on its punch 1 µm larger.
-    let nudged = |fabric: &str, tail: &str, radius_mm: f64| {
+    // A ply alone (`fabric`) on the tools `tail` with the punch's radius
+    // `radius_mm`.
+    let alone = |fabric: &str, tail: &str, radius_mm: f64| {
         shear_run(
             &format!(
                 "{fabric}{}",
-                tail.replacen(radius, &format!("radius = {},", radius_mm + 1e-3), 1)
+                tail.replacen(radius, &format!("radius = {radius_mm},"), 1)
             ),
             &path,
         )
     };
+    let top = alone(&top_fabric, &top_tail, 120.0 + h0);
+    // The noise floor: each ply alone again on its punch 1 µm larger.
     let floors = [
-        nudged(&fabric, tail, 120.0),
-        nudged(&top_fabric, &top_tail, 120.0 + h0),
+        alone(&fabric, tail, 120.0 + 1e-3),
+        alone(&top_fabric, &top_tail, 120.0 + h0 + 1e-3),
     ];
     let mixed = compare_frames(
         &stack,
@@ -801,14 +797,8 @@ fn hemisphere_frictionless() -> Vec<Check> {
             .replacen(ply_45, "orientation_deg = 0", 1),
         &path,
     );
-    let top_equal = shear_run(
-        &format!(
-            "{fabric}{}",
-            top_tail.replacen(radius, &format!("radius = {},", 120.0 + h0), 1)
-        ),
-        &path,
-    );
-    let floor_equal = nudged(&fabric, &top_tail, 120.0 + h0);
+    let top_equal = alone(&fabric, &top_tail, 120.0 + h0);
+    let floor_equal = alone(&fabric, &top_tail, 120.0 + h0 + 1e-3);
     let equal = compare_frames(
         &equal,
         [&bottom, &top_equal],

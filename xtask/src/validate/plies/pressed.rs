@@ -114,6 +114,10 @@ pub fn pressed_stack() -> Vec<Check> {
         Ok(_) => String::new(),
         Err(e) => format!(" It stopped at t = {:.4} s: {e}", state.time),
     };
+    // No interval after the ramp compares nothing: that is no pass.
+    if pressed_frames == 0 {
+        worst_force = 1.0;
+    }
     note(format!(
         "Two plies (0/90 under ±45, μ_ply = 0.2, {cells} × {cells} cells) deep drawn under the shipped holder's {force:.0} N to t = {end} s: reached t = {:.3} s; largest overlap {overlap:.3e} mm = {:.3e} of the ply thickness over {frames} frames; the holder's contact carried its force to {worst_force:.2e} between each two of the frames after its ramp ({pressed_frames} intervals; sampled at the frames, to {worst_sample:.2e}).{stopped}",
         state.time,

@@ -1624,17 +1624,11 @@ mod tests {
     fn a_node_thrown_into_a_resting_tool_is_told_apart_from_a_tool_forced_through() {
         // A fixed floor at z = 0 and a node that arrives 0.45 mm into it
         // after a step of 1 mm: the fabric threw it, the tool did not move.
-        let floor = Tool {
-            name: "floor".into(),
-            surface: Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
-            motion: ToolMotion::Fixed,
-            friction: 0.0,
-        };
         let settings = ContactSettings {
             max_travel: 0.5,
             ..settings(0.1)
         };
-        let mut contact = ExplicitContact::new(vec![floor], 1, settings);
+        let mut contact = ExplicitContact::new(vec![floor(0.0)], 1, settings);
         let dt = 1e-3;
         let mut x = vec![Vector3::new(0.0, 0.0, -0.45)];
         let mut v = vec![Vector3::new(0.0, 0.0, -1.0 / dt)];

@@ -9,6 +9,7 @@ use drape_contact::ToolState;
 use serde::{Deserialize, Serialize};
 
 use super::{ResultsDir, ResultsError, fmt_f64};
+use crate::finite::or_empty;
 
 /// The tools at one output frame (the rows of `tool_forces.csv` of that
 /// frame, one per tool).
@@ -44,18 +45,21 @@ pub fn tool_forces_csv(names: &[&str], rows: &[ToolForceRow]) -> String {
             let (Some(s), Some(f)) = (row.state.get(t), row.force.get(t)) else {
                 continue;
             };
+            // Like energy.csv, a value that is not a number leaves its
+            // cell empty.
+            let cell = |v: f64| or_empty(v, fmt_f64);
             let mean = before
                 .and_then(|b| mean_force(b, row, t))
-                .map_or_else(String::new, fmt_f64);
+                .map_or_else(String::new, cell);
             let _ = writeln!(
                 csv,
                 "{},{},\"{}\",{},{},{},{mean}",
                 fmt_f64(row.time),
                 row.step,
                 name.replace('"', "\"\""),
-                fmt_f64(s.displacement),
-                fmt_f64(s.velocity),
-                fmt_f64(*f),
+                cell(s.displacement),
+                cell(s.velocity),
+                cell(*f),
             );
         }
         before = Some(row);
@@ -204,6 +208,12 @@ mod tests {
             row(1.5, 9.0, 1.0),
             row(2.5, 11.0, 2.0),
         ];
+        // A force that is not a number leaves its cells empty.
+        let mut broken = rows.clone();
+        broken[3].force[0] = f64::NAN;
+        broken[3].state[0].impulse = f64::INFINITY;
+        let csv = tool_forces_csv(&["punch"], &broken);
+        assert_eq!(csv.lines().last(), Some("2.5,0,\"punch\",2.5,0,,"), "{csv}");
         let s = &ToolSummary::of(&["punch"], &rows)[0];
         assert_eq!((s.max_force_n, s.max_force_time_s), (10.0, 1.5));
         assert_eq!((s.force_n, s.displacement_mm), (2.0, 2.5));

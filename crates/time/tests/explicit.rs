@@ -8,7 +8,8 @@ use drape_elements::{BendingBatch, yarn_triplets};
 use drape_model::blank::{ElementKind, FibreRepresentation, Meshing, RectangleBlank};
 use drape_model::{Amplitude, BoundaryCondition, Model, Motion, NodalLoad, State};
 use drape_time::{
-    Control, Explicit, ExplicitSettings, Frame, NoObserver, Observer, Progress, RunError,
+    Control, DriverState, Explicit, ExplicitSettings, Frame, NoObserver, Observer, Progress,
+    RunError,
 };
 use nalgebra::Vector3;
 
@@ -222,8 +223,16 @@ fn an_exploding_run_stops_with_a_diagnosis_and_keeps_the_last_frame() {
 
 #[test]
 fn an_observer_can_stop_the_run() {
+    // Progress is reported every 100 ms of wall time: the first
+    // checkpoint (step 100) waits that long, so the report comes a step
+    // later however fast the machine (a release build otherwise ran this
+    // model ~32 000 steps, past where it turns unstable, before the first
+    // report).
     struct StopAt(u64);
     impl Observer for StopAt {
+        fn checkpoint(&mut self, _state: &State, _driver: &DriverState) {
+            std::thread::sleep(std::time::Duration::from_millis(110));
+        }
         fn progress(&mut self, p: &Progress) -> Control {
             if p.step >= self.0 {
                 Control::Stop
@@ -236,6 +245,7 @@ fn an_observer_can_stop_the_run() {
     let mut state = model.initial_state();
     let settings = ExplicitSettings {
         end_time: 10.0,
+        checkpoint_every: Some(100),
         ..ExplicitSettings::default()
     };
     let summary = Explicit::new(&model, settings)
@@ -244,6 +254,7 @@ fn an_observer_can_stop_the_run() {
         .unwrap();
     assert!(summary.stopped);
     assert!(state.time < 10.0);
+    assert!(summary.steps <= 200, "stopped at step {}", summary.steps);
 }
 
 #[test]

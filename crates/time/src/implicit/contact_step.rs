@@ -83,7 +83,7 @@ impl Implicit<'_> {
         if let Some(contact) = &self.contact {
             for i in contact.row_nodes() {
                 let i = i as usize;
-                self.node_blocks[i] = Matrix3::from_fn(|a, b| tangent.entry(3 * i + a, 3 * i + b));
+                self.node_blocks[i] = tangent.node_block(i);
             }
         }
         let mut solve = |w: &mut [f64]| {
@@ -161,7 +161,7 @@ impl Implicit<'_> {
                 tangent.add_pressure_stiffness(model, x_iterate, t1);
             },
             &mut |tangent: &mut SparseTangent| {
-                let block = |i: usize| Matrix3::from_fn(|a, b| tangent.entry(3 * i + a, 3 * i + b));
+                let block = |i: usize| tangent.node_block(i);
                 contact.active_set_rows(&block, false, rows);
                 match saddle.factorise(tangent, fixed, contact, rows) {
                     Ok(()) => {
@@ -208,7 +208,7 @@ impl Implicit<'_> {
         for round in 0..=MAX_RESOLVES {
             if round > 0 {
                 let tangent = &self.tangent;
-                let block = |i: usize| Matrix3::from_fn(|a, b| tangent.entry(3 * i + a, 3 * i + b));
+                let block = |i: usize| tangent.node_block(i);
                 contact.active_set_rows(&block, true, &mut self.system_rows);
                 if let Err(e) =
                     self.saddle

@@ -209,14 +209,14 @@ impl SaddleSystem {
         let symbolic_error = |e| SaddleError::Symbolic(format!("{e:?}"));
         let matrix = k.symbolic().to_owned().map_err(symbolic_error)?;
         let params = CholeskySymbolicParams::default;
-        let ordered = factorize_symbolic_cholesky(
+        let amd = factorize_symbolic_cholesky(
             matrix.as_ref(),
             Side::Upper,
             SymmetricOrdering::Amd,
             params(),
         )
         .map_err(symbolic_error)?;
-        self.order = ordered
+        self.order = amd
             .perm()
             .map_or_else(|| (0..dofs).collect(), |p| p.arrays().0.to_vec());
         let mut place = vec![0; dofs];

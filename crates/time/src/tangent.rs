@@ -969,6 +969,23 @@ mod tests {
                 worst <= 1e-6 * scale,
                 "{fibres:?} {element:?} bending {bending}: {worst:e} (scale {scale:e})"
             );
+            // A node's block, read or added to in one go, is its entries.
+            let block = Matrix3::new(1.0, 2.0, 3.0, 2.0, 4.0, 5.0, 3.0, 5.0, 6.0);
+            for i in 0..n / 3 {
+                let before = Matrix3::from_fn(|a, b| k.entry(3 * i + a, 3 * i + b));
+                assert_eq!(k.node_block(i), before, "node {i}");
+                k.add_node_block(i, &block);
+                let after = Matrix3::from_fn(|a, b| k.entry(3 * i + a, 3 * i + b));
+                let held = |a: usize| constrained[3 * i + a];
+                let added = Matrix3::from_fn(|a, b| {
+                    if held(a) || held(b) {
+                        0.0
+                    } else {
+                        block[(a, b)]
+                    }
+                });
+                assert_eq!(after, before + added, "node {i}");
+            }
             eprintln!(
                 "{fibres:?} {element:?} resin only {resin_only} bending {bending}: largest |K − Kᵀ| / max|K| = {:.2e}",
                 skew / scale

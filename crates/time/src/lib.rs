@@ -57,6 +57,7 @@ mod explicit;
 pub mod guard;
 mod implicit;
 mod observer;
+mod ordering;
 mod ply_check;
 pub mod profile;
 pub mod round_off;

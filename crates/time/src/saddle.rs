@@ -50,13 +50,11 @@ use drape_contact::{ImplicitContact, SystemRow};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering, factorize_symbolic_cholesky,
-};
+use faer::sparse::linalg::cholesky::{LdltRef, LltRef, SymbolicCholeskyRaw};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Conj, Par, Side};
 
+use crate::ordering::FactorOrder;
 use crate::tangent::{SparseTangent, add_symmetric_product};
 
 /// Refinement steps at most per solve: the regularisation's bias shrinks
@@ -75,22 +73,13 @@ pub struct SaddleSystem {
     /// K̂'s values at the last factorisation: the refinement's residual
     /// (A's values less the rows' CᵀD⁻¹C would cancel entries 1/D large).
     tangent_values: Vec<f64>,
-    /// A's pattern in the factor's order (lower triangle), and its values:
-    /// assembled there directly, so that faer does not copy A into that
-    /// order at every factorisation (3.4 % of an implicit deep drawing's
-    /// CPU did).
-    factor_matrix: Option<SymbolicSparseColMat<usize>>,
+    /// A's pattern in the factor's order ([`FactorOrder`]), and its values
+    /// there.
+    factor: Option<FactorOrder>,
     values: Vec<f64>,
-    /// Where each entry of K̂'s pattern lies in `values`.
-    to_factor: Vec<usize>,
-    /// The component at each place of the factor's order (faer's
-    /// fill-reducing ordering), and a right-hand side in that order.
-    order: Vec<usize>,
-    ordered: Vec<f64>,
     /// Each node's diagonal block in `values`: entries (0,0), (0,1),
     /// (1,1), (0,2), (1,2), (2,2).
     node_block: Vec<[usize; 6]>,
-    symbolic: Option<SymbolicCholesky<usize>>,
     factor_values: Vec<f64>,
     stack: MemBuffer,
     /// Whether A was factorised by Cholesky (else LDLᵀ).
@@ -170,14 +159,10 @@ impl SaddleSystem {
         Self {
             dofs: 0,
             symbolic_matrix: None,
-            factor_matrix: None,
-            to_factor: Vec::new(),
-            order: Vec::new(),
-            ordered: Vec::new(),
+            factor: None,
             tangent_values: Vec::new(),
             values: Vec::new(),
             node_block: Vec::new(),
-            symbolic: None,
             factor_values: Vec::new(),
             stack: MemBuffer::new(StackReq::EMPTY),
             cholesky: true,
@@ -200,56 +185,24 @@ impl SaddleSystem {
         }
     }
 
-    /// The symbolic analysis of `tangent`'s pattern: faer's fill-reducing
-    /// ordering of it, then A's pattern in that order, analysed as it is.
+    /// The symbolic analysis of `tangent`'s pattern, in the factor's
+    /// order ([`FactorOrder`]).
     fn analyse(&mut self, tangent: &SparseTangent) -> Result<(), SaddleError> {
         let k = tangent.matrix();
         let dofs = k.ncols();
         let started = Instant::now();
         let symbolic_error = |e| SaddleError::Symbolic(format!("{e:?}"));
         let matrix = k.symbolic().to_owned().map_err(symbolic_error)?;
-        let params = CholeskySymbolicParams::default;
-        let amd = factorize_symbolic_cholesky(
-            matrix.as_ref(),
-            Side::Upper,
-            SymmetricOrdering::Amd,
-            params(),
-        )
-        .map_err(symbolic_error)?;
-        self.order = amd
-            .perm()
-            .map_or_else(|| (0..dofs).collect(), |p| p.arrays().0.to_vec());
-        let mut place = vec![0; dofs];
-        for (new, &old) in self.order.iter().enumerate() {
-            place[old] = new;
-        }
-        // K̂'s upper entry (i, j) is A's entry at the places of i and j:
-        // the lower triangle for the numeric factorisation (faer's
-        // supernodal one works on it), the upper one for the analysis
-        // (which, without an ordering of its own, reads A as given).
-        let (ptr, rows) = (matrix.col_ptr(), matrix.row_idx());
-        let entries: Vec<(usize, usize)> = (0..dofs)
-            .flat_map(|j| rows[ptr[j]..ptr[j + 1]].iter().map(move |&i| (i, j)))
-            .map(|(i, j)| {
-                let (a, b) = (place[i], place[j]);
-                (a.max(b), a.min(b))
-            })
-            .collect();
-        let (lower, to_factor) = pattern(dofs, entries.iter().copied());
-        let (upper, _) = pattern(dofs, entries.iter().map(|&(r, c)| (c, r)));
-        let symbolic = factorize_symbolic_cholesky(
-            upper.as_ref(),
-            Side::Upper,
-            SymmetricOrdering::Identity,
-            params(),
-        )
-        .map_err(symbolic_error)?;
+        let factor = FactorOrder::analyse(matrix.as_ref()).map_err(symbolic_error)?;
         self.factor_seconds += started.elapsed().as_secs_f64();
+        let (ptr, rows) = (matrix.col_ptr(), matrix.row_idx());
         let at = |i: usize, j: usize| {
-            to_factor[ptr[j]
-                + rows[ptr[j]..ptr[j + 1]]
-                    .binary_search(&i)
-                    .expect("a node's own block is in the tangent's pattern")]
+            factor.place(
+                ptr[j]
+                    + rows[ptr[j]..ptr[j + 1]]
+                        .binary_search(&i)
+                        .expect("a node's own block is in the tangent's pattern"),
+            )
         };
         self.node_block = (0..dofs / 3)
             .map(|n| {
@@ -264,26 +217,20 @@ impl SaddleSystem {
                 ]
             })
             .collect();
+        let symbolic = factor.symbolic();
         self.stack = MemBuffer::new(StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
         ]));
         self.factor_values = vec![0.0; symbolic.len_val()];
-        self.values = vec![0.0; to_factor.len()];
-        self.tangent_values = vec![0.0; to_factor.len()];
-        for v in [
-            &mut self.z,
-            &mut self.residual,
-            &mut self.product,
-            &mut self.ordered,
-        ] {
+        self.values = vec![0.0; factor.len()];
+        self.tangent_values = vec![0.0; factor.len()];
+        for v in [&mut self.z, &mut self.residual, &mut self.product] {
             *v = vec![0.0; dofs];
         }
-        self.to_factor = to_factor;
-        self.symbolic = Some(symbolic);
+        self.factor = Some(factor);
         self.symbolic_matrix = Some(matrix);
-        self.factor_matrix = Some(lower);
         self.dofs = dofs;
         Ok(())
     }
@@ -318,15 +265,16 @@ impl SaddleSystem {
         contact: &ImplicitContact,
         rows: &[SystemRow],
     ) -> Result<(), SaddleError> {
-        if self.symbolic.is_none() || self.dofs != tangent.dofs() {
+        if self.factor.is_none() || self.dofs != tangent.dofs() {
             self.analyse(tangent)?;
         }
         let started = Instant::now();
         self.factorisations += 1;
         self.tangent_values.copy_from_slice(tangent.matrix().val());
-        for (&k, &v) in self.to_factor.iter().zip(&self.tangent_values) {
-            self.values[k] = v;
-        }
+        let Some(factor) = &self.factor else {
+            unreachable!("analysed above");
+        };
+        factor.scatter(&self.tangent_values, &mut self.values);
         self.free_tools.clear();
         self.free_tools
             .extend((0..contact.tools.len()).filter(|&t| contact.tool_equation(t).is_some()));
@@ -361,10 +309,8 @@ impl SaddleSystem {
                 self.schur[k * tools + k] += cd * cd / d;
             }
         }
-        let (Some(symbolic), Some(matrix)) = (&self.symbolic, &self.factor_matrix) else {
-            unreachable!("analysed above");
-        };
-        let a = SparseColMatRef::new(matrix.as_ref(), &self.values);
+        let symbolic = factor.symbolic();
+        let a = factor.matrix(&self.values);
         // Cholesky, or LDLᵀ where it meets a non-positive pivot. After an
         // indefinite system LDLᵀ comes first: compressed resin stays
         // compressed over the iterations (a fifth of the deep drawings'
@@ -395,7 +341,7 @@ impl SaddleSystem {
             );
             if let Err(LdltError::ZeroPivot { index }) = ldlt {
                 self.factor_seconds += started.elapsed().as_secs_f64();
-                return Err(SaddleError::ZeroPivot(self.order[index]));
+                return Err(SaddleError::ZeroPivot(factor.component(index)));
             }
             extra = self.negative_pivots();
         }
@@ -424,9 +370,10 @@ impl SaddleSystem {
     /// Negative entries of D in the last LDLᵀ of A (faer keeps D on the
     /// factor's diagonal, in both layouts).
     fn negative_pivots(&self) -> usize {
-        let Some(symbolic) = &self.symbolic else {
+        let Some(factor) = &self.factor else {
             return 0;
         };
+        let symbolic = factor.symbolic();
         let values = &self.factor_values;
         match symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(s) => {
@@ -450,31 +397,26 @@ impl SaddleSystem {
 
     /// v ← A⁻¹·v with the factors.
     fn solve_a(&mut self, v: &mut [f64]) {
-        let symbolic = self.symbolic.as_ref().expect("factorised");
-        for (o, &k) in self.ordered.iter_mut().zip(&self.order) {
-            *o = v[k];
-        }
-        let n = v.len();
-        let rhs = MatMut::from_column_major_slice_mut(&mut self.ordered, n, 1);
+        let factor = self.factor.as_mut().expect("factorised");
+        let (values, cholesky) = (&self.factor_values, self.cholesky);
         let stack = MemStack::new(&mut self.stack);
-        if self.cholesky {
-            LltRef::new(symbolic, &self.factor_values).solve_in_place_with_conj(
-                Conj::No,
-                rhs,
-                Par::Seq,
-                stack,
-            );
-        } else {
-            LdltRef::new(symbolic, &self.factor_values).solve_in_place_with_conj(
-                Conj::No,
-                rhs,
-                Par::Seq,
-                stack,
-            );
-        }
-        for (&o, &k) in self.ordered.iter().zip(&self.order) {
-            v[k] = o;
-        }
+        factor.solve_in_place(v, |symbolic, rhs| {
+            if cholesky {
+                LltRef::new(symbolic, values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs,
+                    Par::Seq,
+                    stack,
+                );
+            } else {
+                LdltRef::new(symbolic, values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs,
+                    Par::Seq,
+                    stack,
+                );
+            }
+        });
         self.solves += 1;
     }
 
@@ -625,45 +567,6 @@ impl SaddleSystem {
     }
 }
 
-/// The n × n pattern of the (row, column) `entries` (each once), its row
-/// indices sorted, and each entry's place in it.
-fn pattern(
-    n: usize,
-    entries: impl Iterator<Item = (usize, usize)> + Clone,
-) -> (SymbolicSparseColMat<usize>, Vec<usize>) {
-    let mut col_ptr = vec![0; n + 1];
-    for (_, c) in entries.clone() {
-        col_ptr[c + 1] += 1;
-    }
-    for c in 0..n {
-        col_ptr[c + 1] += col_ptr[c];
-    }
-    let mut fill = col_ptr.clone();
-    let mut row_idx = vec![0; col_ptr[n]];
-    let mut place = Vec::with_capacity(col_ptr[n]);
-    for (r, c) in entries.clone() {
-        row_idx[fill[c]] = r;
-        place.push(fill[c]);
-        fill[c] += 1;
-    }
-    // Sorted within each column, the entries' places following.
-    let mut at = vec![0; col_ptr[n]];
-    for c in 0..n {
-        let range = col_ptr[c]..col_ptr[c + 1];
-        let mut column: Vec<(usize, usize)> = range.clone().map(|k| (row_idx[k], k)).collect();
-        column.sort_unstable();
-        for (k, (r, old)) in range.zip(column) {
-            row_idx[k] = r;
-            at[old] = k;
-        }
-    }
-    let place = place.into_iter().map(|k| at[k]).collect();
-    (
-        SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx),
-        place,
-    )
-}
-
 /// LDLᵀ without pivoting of the symmetric n × n `s` (row-major, both
 /// triangles), in place: L's multipliers below the diagonal, D on it.
 /// Returns the negative pivots, or the index of a zero one. For the free
@@ -712,20 +615,6 @@ fn small_ldlt_solve(s: &[f64], n: usize, x: &mut [f64]) {
 mod tests {
     use super::*;
     use nalgebra::{DMatrix, DVector};
-
-    /// Entries in any order: columns counted, rows sorted within each,
-    /// and each entry told where it went.
-    #[test]
-    fn a_pattern_sorts_its_rows_and_places_each_entry() {
-        let entries = [(2, 0), (0, 0), (2, 2), (1, 1), (0, 2)];
-        let (m, place) = pattern(3, entries.iter().copied());
-        assert_eq!(m.col_ptr(), &[0, 2, 3, 5]);
-        assert_eq!(m.row_idx(), &[0, 2, 1, 0, 2]);
-        for (&(r, c), &k) in entries.iter().zip(&place) {
-            assert_eq!(m.row_idx()[k], r);
-            assert!(m.col_ptr()[c] <= k && k < m.col_ptr()[c + 1]);
-        }
-    }
 
     /// The tools' small LDLᵀ solves as nalgebra's LU does and counts the
     /// negative eigenvalues (Sylvester's law of inertia).

@@ -42,14 +42,13 @@ use drape_model::Model;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymmetricOrdering,
-    factorize_symbolic_cholesky,
-};
+use faer::sparse::linalg::cholesky::{LdltRef, LltRef, SymbolicCholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Conj, Par, Side};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
+
+use crate::ordering::FactorOrder;
 
 /// Elements per assembly task, each with its own element-matrix buffer.
 const CHUNK: usize = 128;
@@ -166,7 +165,10 @@ pub struct SparseTangent {
     truss_scratch: Vec<Vec<DMatrix<f64>>>,
     membrane_scratch: Vec<Vec<DMatrix<f64>>>,
     bending_scratch: Vec<Vec<DMatrix<f64>>>,
-    symbolic: SymbolicCholesky<usize>,
+    /// The pattern in its factor's order ([`FactorOrder`]), and the values
+    /// there at the last factorisation.
+    factor: FactorOrder,
+    ordered_values: Vec<f64>,
     factor_values: Vec<f64>,
     kind: Factorisation,
     stack: MemBuffer,
@@ -410,13 +412,9 @@ impl SparseTangent {
             fill[v as usize] += 1;
         }
         let symbolic_matrix = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let symbolic = factorize_symbolic_cholesky(
-            symbolic_matrix.as_ref(),
-            Side::Upper,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| format!("symbolic factorisation of the tangent: {e:?}"))?;
+        let factor = FactorOrder::analyse(symbolic_matrix.as_ref())
+            .map_err(|e| format!("symbolic factorisation of the tangent: {e:?}"))?;
+        let symbolic = factor.symbolic();
         let stack = MemBuffer::new(StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
@@ -456,7 +454,8 @@ impl SparseTangent {
             springs,
             bending,
             factor_values: vec![0.0; symbolic.len_val()],
-            symbolic,
+            ordered_values: vec![0.0; factor.len()],
+            factor,
             symbolic_matrix,
             stack,
             kind: Factorisation::Cholesky,
@@ -487,9 +486,10 @@ impl SparseTangent {
         SparseColMatRef::new(self.symbolic_matrix.as_ref(), &self.values)
     }
 
-    /// The symbolic factorisation every numeric one reuses.
+    /// The symbolic factorisation every numeric one reuses (of the matrix
+    /// in its factor's order).
     pub fn symbolic(&self) -> &SymbolicCholesky<usize> {
-        &self.symbolic
+        self.factor.symbolic()
     }
 
     /// Assembles K̂ = diag(`mass_factor`·m) + sym(K) at positions `x`, the
@@ -673,12 +673,14 @@ impl SparseTangent {
     pub fn factorise(&mut self) -> Result<Factorisation, FactorError> {
         let started = Instant::now();
         self.factorisations += 1;
-        let matrix = SparseColMatRef::new(self.symbolic_matrix.as_ref(), &self.values);
+        let factor = &self.factor;
+        factor.scatter(&self.values, &mut self.ordered_values);
+        let (symbolic, matrix) = (factor.symbolic(), factor.matrix(&self.ordered_values));
         let stack = MemStack::new(&mut self.stack);
-        let llt = self.symbolic.factorize_numeric_llt(
+        let llt = symbolic.factorize_numeric_llt(
             &mut self.factor_values,
             matrix,
-            Side::Upper,
+            Side::Lower,
             LltRegularization::default(),
             Par::Seq,
             stack,
@@ -692,10 +694,10 @@ impl SparseTangent {
             Err(_) => {
                 self.indefinite += 1;
                 let stack = MemStack::new(&mut self.stack);
-                match self.symbolic.factorize_numeric_ldlt(
+                match symbolic.factorize_numeric_ldlt(
                     &mut self.factor_values,
                     matrix,
-                    Side::Upper,
+                    Side::Lower,
                     LdltRegularization::default(),
                     Par::Seq,
                     stack,
@@ -706,8 +708,9 @@ impl SparseTangent {
                         Ok(self.kind)
                     }
                     Err(faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index }) => {
-                        let dof = self.symbolic.perm().map_or(index, |p| p.arrays().0[index]);
-                        Err(FactorError { dof })
+                        Err(FactorError {
+                            dof: factor.component(index),
+                        })
                     }
                 }
             }
@@ -718,15 +721,22 @@ impl SparseTangent {
 
     /// Solves K̂·z = `rhs` in place with the current factors.
     pub fn solve(&mut self, rhs: &mut [f64]) {
-        let n = self.n;
+        let (values, kind) = (&self.factor_values, self.kind);
         let stack = MemStack::new(&mut self.stack);
-        let rhs = MatMut::from_column_major_slice_mut(rhs, n, 1);
-        match self.kind {
-            Factorisation::Cholesky => LltRef::new(&self.symbolic, &self.factor_values)
-                .solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack),
-            Factorisation::Ldlt => LdltRef::new(&self.symbolic, &self.factor_values)
-                .solve_in_place_with_conj(Conj::No, rhs, Par::Seq, stack),
-        }
+        self.factor.solve_in_place(rhs, |symbolic, rhs| match kind {
+            Factorisation::Cholesky => LltRef::new(symbolic, values).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                Par::Seq,
+                stack,
+            ),
+            Factorisation::Ldlt => LdltRef::new(symbolic, values).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                Par::Seq,
+                stack,
+            ),
+        });
     }
 
     /// y = K̂·x with the assembled values (symmetric, from the upper

@@ -791,7 +791,7 @@ fn hemisphere_frictionless() -> Vec<Check> {
         1,
         "the shipped stack scene's plies changed"
     );
-    let equal = shear_run(
+    let equal_stack = shear_run(
         &text
             .replace(mu_line, "friction = 0")
             .replacen(ply_45, "orientation_deg = 0", 1),
@@ -800,7 +800,7 @@ fn hemisphere_frictionless() -> Vec<Check> {
     let top_equal = alone(&fabric, &top_tail, 120.0 + h0);
     let floor_equal = alone(&fabric, &top_tail, 120.0 + h0 + 1e-3);
     let equal = compare_frames(
-        &equal,
+        &equal_stack,
         [&bottom, &top_equal],
         [&floors[0], &floor_equal],
         h0,

@@ -64,6 +64,7 @@ pub mod round_off;
 pub mod saddle;
 pub mod scaling;
 mod shared;
+mod split;
 pub mod tangent;
 
 pub use energy::Energies;

@@ -13,6 +13,7 @@
 //!
 //! Not here: assembling the values or choosing between Cholesky and LDLᵀ.
 
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
@@ -42,13 +43,27 @@ impl FactorOrder {
     pub(crate) fn analyse(
         upper: SymbolicSparseColMatRef<'_, usize>,
     ) -> Result<Self, faer::sparse::FaerError> {
+        Self::in_order(upper, amd(upper)?, false)
+    }
+
+    /// The symmetric pattern `upper` (its upper triangle) in `order` (the
+    /// component at each place), analysed; `supernodal` forces faer's
+    /// supernodal layout (it takes a simplicial one for small or very
+    /// sparse factors).
+    pub(crate) fn in_order(
+        upper: SymbolicSparseColMatRef<'_, usize>,
+        order: Vec<usize>,
+        supernodal: bool,
+    ) -> Result<Self, faer::sparse::FaerError> {
         let n = upper.ncols();
-        let params = CholeskySymbolicParams::default;
-        let amd =
-            factorize_symbolic_cholesky(upper, Side::Upper, SymmetricOrdering::Amd, params())?;
-        let order = amd
-            .perm()
-            .map_or_else(|| (0..n).collect(), |p| p.arrays().0.to_vec());
+        let params = || CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: if supernodal {
+                SupernodalThreshold::FORCE_SUPERNODAL
+            } else {
+                SupernodalThreshold::AUTO
+            },
+            ..Default::default()
+        };
         let mut place = vec![0; n];
         for (new, &old) in order.iter().enumerate() {
             place[old] = new;
@@ -97,6 +112,15 @@ impl FactorOrder {
         self.to_factor[k]
     }
 
+    /// Each component's place in the factor's order.
+    pub(crate) fn ranks(&self) -> Vec<usize> {
+        let mut rank = vec![0; self.order.len()];
+        for (p, &c) in self.order.iter().enumerate() {
+            rank[c] = p;
+        }
+        rank
+    }
+
     /// The component at place `p` of the factor's order (a pivot's).
     pub(crate) fn component(&self, p: usize) -> usize {
         self.order[p]
@@ -136,9 +160,26 @@ impl FactorOrder {
     }
 }
 
+/// faer's AMD ordering of the symmetric pattern `upper` (its upper
+/// triangle): the component at each place.
+pub(crate) fn amd(
+    upper: SymbolicSparseColMatRef<'_, usize>,
+) -> Result<Vec<usize>, faer::sparse::FaerError> {
+    let n = upper.ncols();
+    let amd = factorize_symbolic_cholesky(
+        upper,
+        Side::Upper,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams::default(),
+    )?;
+    Ok(amd
+        .perm()
+        .map_or_else(|| (0..n).collect(), |p| p.arrays().0.to_vec()))
+}
+
 /// The n × n pattern of the (row, column) `entries` (each once), its row
 /// indices sorted, and each entry's place in it.
-fn pattern(
+pub(crate) fn pattern(
     n: usize,
     entries: impl Iterator<Item = (usize, usize)> + Clone,
 ) -> (SymbolicSparseColMat<usize>, Vec<usize>) {

@@ -22,7 +22,8 @@
 //! node's diagonal block): its symbolic analysis is made once for the run
 //! and every Newton iteration is one numeric Cholesky of it (LDLᵀ where it
 //! is indefinite), plus one solve per force-driven tool for S (a dense
-//! matrix of the tools' size). On the shipped hemisphere (40 × 40,
+//! matrix of the tools' size); from 900 nodes on, in two halves of the
+//! nodes on two threads. On the shipped hemisphere (40 × 40,
 //! implicit) the run's 2 391 factorisations took 29.7 s where the LDLᵀ of
 //! the whole saddle-point system over every candidate's slots took 37.7 s
 //! for 2 380 (the summary's `factor_s`, one machine and day), and the
@@ -55,7 +56,8 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, Par, Side};
 
 use crate::ordering::FactorOrder;
-use crate::tangent::{SparseTangent, add_symmetric_product};
+use crate::split::{SplitCholesky, SplitFailure};
+use crate::tangent::{SparseTangent, add_symmetric_product_columns};
 
 /// Refinement steps at most per solve: the regularisation's bias shrinks
 /// by about [`drape_contact::REGULARISATION`] times the row's share per
@@ -84,6 +86,9 @@ pub struct SaddleSystem {
     stack: MemBuffer,
     /// Whether A was factorised by Cholesky (else LDLᵀ).
     cholesky: bool,
+    /// A's factorisation in two halves on two threads ([`SplitCholesky`]),
+    /// where A is large enough and its nodes cut well; else `factor`'s.
+    split: Option<SplitCholesky>,
     /// Whether the last system was indefinite.
     indefinite: bool,
     /// The force-driven tools, in the system's order.
@@ -104,6 +109,8 @@ pub struct SaddleSystem {
     tool_delta: Vec<f64>,
     row_residual: Vec<f64>,
     product: Vec<f64>,
+    /// The second half of the columns' share of K̂·z.
+    product_half: Vec<f64>,
     /// Numeric factorisations done.
     pub factorisations: u64,
     /// Seconds in numeric factorisations (and analyses).
@@ -166,6 +173,7 @@ impl SaddleSystem {
             factor_values: Vec::new(),
             stack: MemBuffer::new(StackReq::EMPTY),
             cholesky: true,
+            split: None,
             indefinite: false,
             free_tools: Vec::new(),
             coupling: Vec::new(),
@@ -179,6 +187,7 @@ impl SaddleSystem {
             tool_delta: Vec::new(),
             row_residual: Vec::new(),
             product: Vec::new(),
+            product_half: Vec::new(),
             factorisations: 0,
             factor_seconds: 0.0,
             solves: 0,
@@ -217,16 +226,25 @@ impl SaddleSystem {
                 ]
             })
             .collect();
+        self.split = SplitCholesky::new(matrix.as_ref(), |k| factor.place(k), &factor.ranks());
         let symbolic = factor.symbolic();
         self.stack = MemBuffer::new(StackReq::any_of(&[
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
         ]));
-        self.factor_values = vec![0.0; symbolic.len_val()];
+        self.factor_values = match self.split {
+            Some(_) => Vec::new(),
+            None => vec![0.0; symbolic.len_val()],
+        };
         self.values = vec![0.0; factor.len()];
         self.tangent_values = vec![0.0; factor.len()];
-        for v in [&mut self.z, &mut self.residual, &mut self.product] {
+        for v in [
+            &mut self.z,
+            &mut self.residual,
+            &mut self.product,
+            &mut self.product_half,
+        ] {
             *v = vec![0.0; dofs];
         }
         self.factor = Some(factor);
@@ -317,19 +335,32 @@ impl SaddleSystem {
         // systems), and a failed Cholesky costs up to a whole
         // factorisation.
         self.cholesky = !self.indefinite
-            && symbolic
-                .factorize_numeric_llt(
-                    &mut self.factor_values,
-                    a,
-                    Side::Lower,
-                    LltRegularization::default(),
-                    Par::Seq,
-                    MemStack::new(&mut self.stack),
-                    Default::default(),
-                )
-                .is_ok();
+            && if let Some(split) = &mut self.split {
+                split.factorise(&self.values, false).is_ok()
+            } else {
+                symbolic
+                    .factorize_numeric_llt(
+                        &mut self.factor_values,
+                        a,
+                        Side::Lower,
+                        LltRegularization::default(),
+                        Par::Seq,
+                        MemStack::new(&mut self.stack),
+                        Default::default(),
+                    )
+                    .is_ok()
+            };
         let mut extra = 0;
-        if !self.cholesky {
+        if let Some(split) = self.split.as_mut().filter(|_| !self.cholesky) {
+            match split.factorise(&self.values, true) {
+                Ok(negative) => extra = negative,
+                Err(SplitFailure::ZeroPivot(component)) => {
+                    self.factor_seconds += started.elapsed().as_secs_f64();
+                    return Err(SaddleError::ZeroPivot(component));
+                }
+                Err(SplitFailure::NotPositiveDefinite) => unreachable!("LDLᵀ asks no sign"),
+            }
+        } else if !self.cholesky {
             let ldlt = symbolic.factorize_numeric_ldlt(
                 &mut self.factor_values,
                 a,
@@ -397,6 +428,11 @@ impl SaddleSystem {
 
     /// v ← A⁻¹·v with the factors.
     fn solve_a(&mut self, v: &mut [f64]) {
+        if let Some(split) = &mut self.split {
+            split.solve_in_place(v);
+            self.solves += 1;
+            return;
+        }
         let factor = self.factor.as_mut().expect("factorised");
         let (values, cholesky) = (&self.factor_values, self.cholesky);
         let stack = MemStack::new(&mut self.stack);
@@ -559,11 +595,26 @@ impl SaddleSystem {
         left
     }
 
-    /// residual −= K̂·z (K̂ from its upper triangle).
+    /// residual −= K̂·z (K̂ from its upper triangle), the columns in two
+    /// halves of equal entries on two threads: the second half's terms
+    /// summed apart and added last, whatever the thread count.
     fn subtract_tangent_product(&mut self) {
         let matrix = self.symbolic_matrix.as_ref().expect("analysed");
-        let k = SparseColMatRef::new(matrix.as_ref(), &self.tangent_values);
-        add_symmetric_product(k, &self.z, &mut self.residual, -1.0);
+        let (ptr, n) = (matrix.col_ptr(), matrix.ncols());
+        let middle = ptr.partition_point(|&p| p < ptr[n] / 2).min(n);
+        let (first, second) = (
+            SparseColMatRef::new(matrix.as_ref(), &self.tangent_values),
+            &mut self.product_half,
+        );
+        second.fill(0.0);
+        let (z, residual) = (&self.z, &mut self.residual);
+        rayon::join(
+            || add_symmetric_product_columns(first, 0..middle, z, residual, -1.0),
+            || add_symmetric_product_columns(first, middle..n, z, second, -1.0),
+        );
+        for (r, s) in residual.iter_mut().zip(second.iter()) {
+            *r += s;
+        }
     }
 }
 

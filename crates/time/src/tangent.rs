@@ -49,6 +49,7 @@ use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
 
 use crate::ordering::FactorOrder;
+use crate::split::{SplitCholesky, SplitFailure};
 
 /// Elements per assembly task, each with its own element-matrix buffer.
 const CHUNK: usize = 128;
@@ -170,6 +171,12 @@ pub struct SparseTangent {
     factor: FactorOrder,
     ordered_values: Vec<f64>,
     factor_values: Vec<f64>,
+    /// The factorisation in two halves on two threads
+    /// ([`SplitCholesky`]) where the model is large enough and cuts well;
+    /// else faer's of the whole, in `factor_values`. Analysed at the first
+    /// factorisation (the active-set solver factorises its own matrix).
+    split: Option<SplitCholesky>,
+    split_analysed: bool,
     kind: Factorisation,
     stack: MemBuffer,
     /// Seconds spent in numeric factorisations.
@@ -276,8 +283,19 @@ pub(crate) fn add_symmetric_product(
     y: &mut [f64],
     scale: f64,
 ) {
+    add_symmetric_product_columns(k, 0..k.ncols(), x, y, scale);
+}
+
+/// [`add_symmetric_product`]'s terms of the upper triangle's `columns`.
+pub(crate) fn add_symmetric_product_columns(
+    k: SparseColMatRef<'_, usize, f64>,
+    columns: std::ops::Range<usize>,
+    x: &[f64],
+    y: &mut [f64],
+    scale: f64,
+) {
     let (ptr, rows, values) = (k.col_ptr(), k.row_idx(), k.val());
-    for j in 0..k.ncols() {
+    for j in columns {
         let range = ptr[j]..ptr[j + 1];
         for (&i, &v) in rows[range.clone()].iter().zip(&values[range]) {
             let v = scale * v;
@@ -456,6 +474,8 @@ impl SparseTangent {
             factor_values: vec![0.0; symbolic.len_val()],
             ordered_values: vec![0.0; factor.len()],
             factor,
+            split: None,
+            split_analysed: false,
             symbolic_matrix,
             stack,
             kind: Factorisation::Cholesky,
@@ -675,6 +695,30 @@ impl SparseTangent {
         self.factorisations += 1;
         let factor = &self.factor;
         factor.scatter(&self.values, &mut self.ordered_values);
+        if !self.split_analysed {
+            self.split_analysed = true;
+            self.split = SplitCholesky::new(
+                self.symbolic_matrix.as_ref(),
+                |k| factor.place(k),
+                &factor.ranks(),
+            );
+        }
+        if let Some(split) = &mut self.split {
+            let result = if split.factorise(&self.ordered_values, false).is_ok() {
+                self.kind = Factorisation::Cholesky;
+                Ok(self.kind)
+            } else {
+                self.indefinite += 1;
+                self.kind = Factorisation::Ldlt;
+                match split.factorise(&self.ordered_values, true) {
+                    Ok(_) => Ok(self.kind),
+                    Err(SplitFailure::ZeroPivot(dof)) => Err(FactorError { dof }),
+                    Err(SplitFailure::NotPositiveDefinite) => unreachable!("LDLᵀ asks no sign"),
+                }
+            };
+            self.factor_seconds += started.elapsed().as_secs_f64();
+            return result;
+        }
         let (symbolic, matrix) = (factor.symbolic(), factor.matrix(&self.ordered_values));
         let stack = MemStack::new(&mut self.stack);
         let llt = symbolic.factorize_numeric_llt(
@@ -721,6 +765,10 @@ impl SparseTangent {
 
     /// Solves K̂·z = `rhs` in place with the current factors.
     pub fn solve(&mut self, rhs: &mut [f64]) {
+        if let Some(split) = &mut self.split {
+            split.solve_in_place(rhs);
+            return;
+        }
         let (values, kind) = (&self.factor_values, self.kind);
         let stack = MemStack::new(&mut self.stack);
         self.factor.solve_in_place(rhs, |symbolic, rhs| match kind {

@@ -13,12 +13,15 @@
 //!
 //! Not here: assembling the values or choosing between Cholesky and LDLᵀ.
 
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
-use faer::{MatMut, Side};
+use faer::{MatMut, Par, Side};
 
 /// A pattern in its factor's order, with that order's symbolic
 /// factorisation.
@@ -139,6 +142,46 @@ impl FactorOrder {
         SparseColMatRef::new(self.lower.as_ref(), values)
     }
 
+    /// faer's numeric Cholesky (LDLᵀ without pivoting where `ldlt`) of
+    /// `values` (in this order) into `factor`.
+    pub(crate) fn factorise(
+        &self,
+        values: &[f64],
+        factor: &mut [f64],
+        ldlt: bool,
+        stack: &mut MemBuffer,
+    ) -> Result<(), NumericFailure> {
+        let (symbolic, matrix) = (&self.symbolic, self.matrix(values));
+        let stack = MemStack::new(stack);
+        if ldlt {
+            symbolic
+                .factorize_numeric_ldlt(
+                    factor,
+                    matrix,
+                    Side::Lower,
+                    LdltRegularization::default(),
+                    Par::Seq,
+                    stack,
+                    Default::default(),
+                )
+                .map(|_| ())
+                .map_err(|LdltError::ZeroPivot { index }| NumericFailure::ZeroPivot(index))
+        } else {
+            symbolic
+                .factorize_numeric_llt(
+                    factor,
+                    matrix,
+                    Side::Lower,
+                    LltRegularization::default(),
+                    Par::Seq,
+                    stack,
+                    Default::default(),
+                )
+                .map(|_| ())
+                .map_err(|_| NumericFailure::NotPositiveDefinite)
+        }
+    }
+
     /// `solve` (with the symbolic factorisation and the right-hand side in
     /// the factor's order) applied to `v`, in place.
     pub(crate) fn solve_in_place(
@@ -158,6 +201,15 @@ impl FactorOrder {
             v[k] = o;
         }
     }
+}
+
+/// Why a numeric factorisation failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum NumericFailure {
+    /// Cholesky met a pivot that is not positive.
+    NotPositiveDefinite,
+    /// LDLᵀ met a zero pivot at this place of the factor's order.
+    ZeroPivot(usize),
 }
 
 /// faer's AMD ordering of the symmetric pattern `upper` (its upper
@@ -238,9 +290,8 @@ mod tests {
     /// solution of the matrix as it was (checked by its product).
     #[test]
     fn a_solve_in_the_factor_order_solves_the_matrix() {
-        use faer::linalg::cholesky::llt::factor::LltRegularization;
+        use faer::Conj;
         use faer::sparse::linalg::cholesky::LltRef;
-        use faer::{Conj, Par};
         // A 6 × 6 band matrix (a chain with next-but-one couplings),
         // upper triangle by columns.
         let n: usize = 6;
@@ -262,21 +313,12 @@ mod tests {
         let mut ordered = vec![0.0; f.len()];
         f.scatter(&values, &mut ordered);
         let mut factor = vec![0.0; f.symbolic().len_val()];
-        let mut stack = faer::dyn_stack::MemBuffer::new(
+        let mut stack = MemBuffer::new(
             f.symbolic()
                 .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
                 .or(f.symbolic().solve_in_place_scratch::<f64>(1, Par::Seq)),
         );
-        f.symbolic()
-            .factorize_numeric_llt(
-                &mut factor,
-                f.matrix(&ordered),
-                Side::Lower,
-                LltRegularization::default(),
-                Par::Seq,
-                faer::dyn_stack::MemStack::new(&mut stack),
-                Default::default(),
-            )
+        f.factorise(&ordered, &mut factor, false, &mut stack)
             .expect("positive definite");
         let b: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
         let mut x = b.clone();

@@ -49,14 +49,12 @@ use std::time::Instant;
 
 use drape_contact::{ImplicitContact, SystemRow};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
-use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{LdltRef, LltRef, SymbolicCholeskyRaw};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, Par, Side};
+use faer::{Conj, Par};
 
-use crate::ordering::FactorOrder;
-use crate::split::{SplitCholesky, SplitFailure};
+use crate::ordering::{FactorOrder, NumericFailure};
+use crate::split::SplitCholesky;
 use crate::tangent::{SparseTangent, add_symmetric_product_columns};
 
 /// Refinement steps at most per solve: the regularisation's bias shrinks
@@ -327,54 +325,22 @@ impl SaddleSystem {
                 self.schur[k * tools + k] += cd * cd / d;
             }
         }
-        let symbolic = factor.symbolic();
-        let a = factor.matrix(&self.values);
         // Cholesky, or LDLᵀ where it meets a non-positive pivot. After an
         // indefinite system LDLᵀ comes first: compressed resin stays
         // compressed over the iterations (a fifth of the deep drawings'
         // systems), and a failed Cholesky costs up to a whole
         // factorisation.
-        self.cholesky = !self.indefinite
-            && if let Some(split) = &mut self.split {
-                split.factorise(&self.values, false).is_ok()
-            } else {
-                symbolic
-                    .factorize_numeric_llt(
-                        &mut self.factor_values,
-                        a,
-                        Side::Lower,
-                        LltRegularization::default(),
-                        Par::Seq,
-                        MemStack::new(&mut self.stack),
-                        Default::default(),
-                    )
-                    .is_ok()
-            };
+        self.cholesky = !self.indefinite && self.factorise_a(false).is_ok();
         let mut extra = 0;
-        if let Some(split) = self.split.as_mut().filter(|_| !self.cholesky) {
-            match split.factorise(&self.values, true) {
+        if !self.cholesky {
+            match self.factorise_a(true) {
                 Ok(negative) => extra = negative,
-                Err(SplitFailure::ZeroPivot(component)) => {
+                Err(NumericFailure::ZeroPivot(component)) => {
                     self.factor_seconds += started.elapsed().as_secs_f64();
                     return Err(SaddleError::ZeroPivot(component));
                 }
-                Err(SplitFailure::NotPositiveDefinite) => unreachable!("LDLᵀ asks no sign"),
+                Err(NumericFailure::NotPositiveDefinite) => unreachable!("LDLᵀ asks no sign"),
             }
-        } else if !self.cholesky {
-            let ldlt = symbolic.factorize_numeric_ldlt(
-                &mut self.factor_values,
-                a,
-                Side::Lower,
-                LdltRegularization::default(),
-                Par::Seq,
-                MemStack::new(&mut self.stack),
-                Default::default(),
-            );
-            if let Err(LdltError::ZeroPivot { index }) = ldlt {
-                self.factor_seconds += started.elapsed().as_secs_f64();
-                return Err(SaddleError::ZeroPivot(factor.component(index)));
-            }
-            extra = self.negative_pivots();
         }
         // S = k_d + C_dᵀD⁻¹C_d − Bᵀ·A⁻¹·B.
         for k in 0..tools {
@@ -396,6 +362,23 @@ impl SaddleSystem {
             return Err(SaddleError::Indefinite { extra });
         }
         Ok(())
+    }
+
+    /// Factorises A's `values`, in two halves where it is split (Cholesky,
+    /// LDLᵀ where `ldlt`): the negative pivots, or why it failed (a zero
+    /// pivot's component).
+    fn factorise_a(&mut self, ldlt: bool) -> Result<usize, NumericFailure> {
+        if let Some(split) = &mut self.split {
+            return split.factorise(&self.values, ldlt);
+        }
+        let factor = self.factor.as_ref().expect("analysed");
+        factor
+            .factorise(&self.values, &mut self.factor_values, ldlt, &mut self.stack)
+            .map_err(|failure| match failure {
+                NumericFailure::ZeroPivot(p) => NumericFailure::ZeroPivot(factor.component(p)),
+                other => other,
+            })?;
+        Ok(if ldlt { self.negative_pivots() } else { 0 })
     }
 
     /// Negative entries of D in the last LDLᵀ of A (faer keeps D on the

@@ -54,9 +54,9 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
 use faer::sparse::linalg::cholesky::supernodal::{SupernodalLltRef, SymbolicSupernodalCholesky};
-use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
 
-use crate::ordering::{FactorOrder, pattern};
+use crate::ordering::{FactorOrder, NumericFailure, pattern};
 
 /// Fewer nodes than this are factorised whole: the separator's dense work
 /// and two thread hand-overs per solve cost about what a half saves (the
@@ -175,8 +175,9 @@ impl SplitCholesky {
     }
 
     /// Cholesky (LDLᵀ where `ldlt`) of the matrix whose values (at the
-    /// places `new` was given) are `a`; the number of negative pivots.
-    pub(crate) fn factorise(&mut self, a: &[f64], ldlt: bool) -> Result<usize, SplitFailure> {
+    /// places `new` was given) are `a`; the number of negative pivots, or
+    /// why it failed (a zero pivot's component in the matrix's numbering).
+    pub(crate) fn factorise(&mut self, a: &[f64], ldlt: bool) -> Result<usize, NumericFailure> {
         self.ldlt = ldlt;
         let [h1, h2] = &mut self.halves;
         let (r1, r2) = rayon::join(|| h1.factorise(a, ldlt), || h2.factorise(a, ldlt));
@@ -201,7 +202,7 @@ impl SplitCholesky {
                 Default::default(),
             )
             .map(|_| 0)
-            .map_err(|_| SplitFailure::NotPositiveDefinite);
+            .map_err(|_| NumericFailure::NotPositiveDefinite);
         }
         ldlt::factor::cholesky_in_place(
             self.schur.as_mut(),
@@ -210,7 +211,9 @@ impl SplitCholesky {
             stack,
             Default::default(),
         )
-        .map_err(|LdltError::ZeroPivot { index }| SplitFailure::ZeroPivot(self.separator[index]))?;
+        .map_err(|LdltError::ZeroPivot { index }| {
+            NumericFailure::ZeroPivot(self.separator[index])
+        })?;
         Ok(negative + (0..s).filter(|&k| self.schur[(k, k)] < 0.0).count())
     }
 
@@ -248,15 +251,6 @@ impl SplitCholesky {
             v[c] = x;
         }
     }
-}
-
-/// Why a split factorisation failed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum SplitFailure {
-    /// Cholesky met a pivot that is not positive.
-    NotPositiveDefinite,
-    /// LDLᵀ met a zero pivot at this component (A's numbering).
-    ZeroPivot(usize),
 }
 
 /// `cut`'s mark of a separator node.
@@ -405,40 +399,17 @@ impl Half {
 
     /// B_h's Cholesky (LDLᵀ where `ldlt`) from A's values `a`, and
     /// M_hM_hᵀ (M_hD_sM_hᵀ); the negative pivots of the own columns.
-    fn factorise(&mut self, a: &[f64], ldlt: bool) -> Result<usize, SplitFailure> {
+    fn factorise(&mut self, a: &[f64], ldlt: bool) -> Result<usize, NumericFailure> {
         for &(b, p) in &self.from_a {
             self.values[b] = a[p];
         }
         let factor = &self.factor;
-        let (symbolic, matrix) = (factor.symbolic(), factor.matrix(&self.values));
-        let stack = MemStack::new(&mut self.stack);
-        if ldlt {
-            symbolic
-                .factorize_numeric_ldlt(
-                    &mut self.factor_values,
-                    matrix,
-                    Side::Lower,
-                    LdltRegularization::default(),
-                    Par::Seq,
-                    stack,
-                    Default::default(),
-                )
-                .map_err(|LdltError::ZeroPivot { index }| {
-                    SplitFailure::ZeroPivot(self.components[index])
-                })?;
-        } else {
-            symbolic
-                .factorize_numeric_llt(
-                    &mut self.factor_values,
-                    matrix,
-                    Side::Lower,
-                    LltRegularization::default(),
-                    Par::Seq,
-                    stack,
-                    Default::default(),
-                )
-                .map_err(|_| SplitFailure::NotPositiveDefinite)?;
-        }
+        factor
+            .factorise(&self.values, &mut self.factor_values, ldlt, &mut self.stack)
+            .map_err(|failure| match failure {
+                NumericFailure::ZeroPivot(p) => NumericFailure::ZeroPivot(self.components[p]),
+                other => other,
+            })?;
         let own = self.own;
         let symbolic = supernodal(factor).expect("checked when made");
         let llt = SupernodalLltRef::new(symbolic, &self.factor_values);
@@ -730,7 +701,7 @@ mod tests {
         let (_, indefinite) = grid(30, -0.37);
         assert_eq!(
             split.factorise(&indefinite, false),
-            Err(SplitFailure::NotPositiveDefinite)
+            Err(NumericFailure::NotPositiveDefinite)
         );
     }
 
@@ -739,6 +710,7 @@ mod tests {
     /// any order of elimination gives the same count).
     #[test]
     fn the_split_ldlt_solves_an_indefinite_matrix_and_counts_its_inertia() {
+        use faer::Side;
         use faer::sparse::linalg::cholesky::{
             CholeskySymbolicParams, SymmetricOrdering, factorize_symbolic_cholesky,
         };

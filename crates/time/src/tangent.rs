@@ -40,16 +40,14 @@ use std::time::Instant;
 use drape_elements::{ElementError, MembraneTangent};
 use drape_model::Model;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
-use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{LdltRef, LltRef, SymbolicCholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, Par, Side};
+use faer::{Conj, Par};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
 
-use crate::ordering::FactorOrder;
-use crate::split::{SplitCholesky, SplitFailure};
+use crate::ordering::{FactorOrder, NumericFailure};
+use crate::split::SplitCholesky;
 
 /// Elements per assembly task, each with its own element-matrix buffer.
 const CHUNK: usize = 128;
@@ -712,51 +710,29 @@ impl SparseTangent {
                 self.kind = Factorisation::Ldlt;
                 match split.factorise(&self.ordered_values, true) {
                     Ok(_) => Ok(self.kind),
-                    Err(SplitFailure::ZeroPivot(dof)) => Err(FactorError { dof }),
-                    Err(SplitFailure::NotPositiveDefinite) => unreachable!("LDLᵀ asks no sign"),
+                    Err(NumericFailure::ZeroPivot(dof)) => Err(FactorError { dof }),
+                    Err(NumericFailure::NotPositiveDefinite) => unreachable!("LDLᵀ asks no sign"),
                 }
             };
             self.factor_seconds += started.elapsed().as_secs_f64();
             return result;
         }
-        let (symbolic, matrix) = (factor.symbolic(), factor.matrix(&self.ordered_values));
-        let stack = MemStack::new(&mut self.stack);
-        let llt = symbolic.factorize_numeric_llt(
-            &mut self.factor_values,
-            matrix,
-            Side::Lower,
-            LltRegularization::default(),
-            Par::Seq,
-            stack,
-            Default::default(),
-        );
-        let result = match llt {
-            Ok(_) => {
-                self.kind = Factorisation::Cholesky;
-                Ok(self.kind)
-            }
-            Err(_) => {
-                self.indefinite += 1;
-                let stack = MemStack::new(&mut self.stack);
-                match symbolic.factorize_numeric_ldlt(
-                    &mut self.factor_values,
-                    matrix,
-                    Side::Lower,
-                    LdltRegularization::default(),
-                    Par::Seq,
-                    stack,
-                    Default::default(),
-                ) {
-                    Ok(_) => {
-                        self.kind = Factorisation::Ldlt;
-                        Ok(self.kind)
-                    }
-                    Err(faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index }) => {
-                        Err(FactorError {
-                            dof: factor.component(index),
-                        })
-                    }
-                }
+        let (values, factor_values) = (&self.ordered_values, &mut self.factor_values);
+        let result = if factor
+            .factorise(values, factor_values, false, &mut self.stack)
+            .is_ok()
+        {
+            self.kind = Factorisation::Cholesky;
+            Ok(self.kind)
+        } else {
+            self.indefinite += 1;
+            self.kind = Factorisation::Ldlt;
+            match factor.factorise(values, factor_values, true, &mut self.stack) {
+                Ok(()) => Ok(self.kind),
+                Err(NumericFailure::ZeroPivot(p)) => Err(FactorError {
+                    dof: factor.component(p),
+                }),
+                Err(NumericFailure::NotPositiveDefinite) => unreachable!("LDLᵀ asks no sign"),
             }
         };
         self.factor_seconds += started.elapsed().as_secs_f64();

@@ -64,9 +64,13 @@ use crate::ordering::{FactorOrder, NumericFailure, pattern};
 /// whole; at 33 × 33: 7.1 s against 8.3–8.8 s).
 const MIN_NODES: usize = 900;
 
-/// The separator's nodes at most, as a share of all: its dense Cholesky
-/// grows as its size cubed.
+/// The separator's nodes at most, as a share of all and in multiples of
+/// √nodes: a blank's mesh is planar, so a good cut grows as √nodes
+/// (Lipton–Tarjan; 2√nodes on the shipped square blanks, where yarn
+/// bending makes it two grid lines wide). A longer one is a poor cut, whose
+/// dense blocks (cubic in its size) would cost more than the halves save.
 const MAX_SEPARATOR_SHARE: f64 = 0.1;
+const MAX_SEPARATOR_ROOTS: f64 = 3.0;
 
 /// A's Cholesky factor as two halves and their separator.
 pub(crate) struct SplitCholesky {
@@ -317,7 +321,9 @@ fn cut(upper: SymbolicSparseColMatRef<'_, usize>) -> Option<Vec<u8>> {
     let separator = count[k];
     let first: usize = count[..k].iter().sum();
     let second = nodes - first - separator;
-    if separator as f64 > MAX_SEPARATOR_SHARE * nodes as f64 || first.min(second) < nodes / 4 {
+    let most =
+        (MAX_SEPARATOR_SHARE * nodes as f64).min(MAX_SEPARATOR_ROOTS * (nodes as f64).sqrt());
+    if separator as f64 > most || first.min(second) < nodes / 4 {
         return None;
     }
     Some(

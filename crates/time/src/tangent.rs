@@ -700,6 +700,9 @@ impl SparseTangent {
                 |k| factor.place(k),
                 &factor.ranks(),
             );
+            if self.split.is_some() {
+                self.factor_values = Vec::new();
+            }
         }
         if let Some(split) = &mut self.split {
             let result = if split.factorise(&self.ordered_values, false).is_ok() {

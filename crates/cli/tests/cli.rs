@@ -539,6 +539,7 @@ fn an_implicit_run_lists_its_cutbacks() {
         reasons.friction_chatter,
         "{text}"
     );
+    assert_eq!(count("diverged"), reasons.diverged, "{text}");
     for r in &rows {
         let step: u64 = r[0].parse().unwrap();
         let (time, increment): (f64, f64) = (r[1].parse().unwrap(), r[2].parse().unwrap());

@@ -279,6 +279,10 @@ pub struct CutbackReasonsInfo {
     pub contact_indefinite: u64,
     /// The condensed contact solve ran out of iterations.
     pub contact_not_converged: u64,
+    /// Newton diverged (a correction longer than the model and growing);
+    /// absent from summaries written before it was counted.
+    #[serde(default)]
+    pub diverged: u64,
 }
 
 impl From<drape_time::CutbackReasons> for CutbackReasonsInfo {
@@ -291,6 +295,7 @@ impl From<drape_time::CutbackReasons> for CutbackReasonsInfo {
             tangent_failure: r.tangent_failure,
             contact_indefinite: r.contact_indefinite,
             contact_not_converged: r.contact_not_converged,
+            diverged: r.diverged,
         }
     }
 }
@@ -306,6 +311,7 @@ impl CutbackReasonsInfo {
             ("tangent failure", self.tangent_failure),
             ("contact indefinite", self.contact_indefinite),
             ("contact not converged", self.contact_not_converged),
+            ("diverged", self.diverged),
         ]
         .iter()
         .filter(|(_, n)| *n > 0)

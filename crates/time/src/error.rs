@@ -234,6 +234,9 @@ pub struct CutbackReasons {
     pub contact_indefinite: u64,
     /// The condensed contact solve ran out of iterations.
     pub contact_not_converged: u64,
+    /// Newton diverged: a correction longer than the model, and at least
+    /// twice the last one.
+    pub diverged: u64,
 }
 
 impl CutbackReasons {
@@ -246,5 +249,6 @@ impl CutbackReasons {
             + self.tangent_failure
             + self.contact_indefinite
             + self.contact_not_converged
+            + self.diverged
     }
 }

@@ -74,8 +74,8 @@ pub struct CutbackReport<'a> {
     /// The increment that failed (s); the next attempt takes a quarter.
     pub increment: f64,
     /// `friction_chatter`, `newton_limit`, `element_failure`,
-    /// `not_finite`, `tangent_failure`, `contact_indefinite` or
-    /// `contact_not_converged`.
+    /// `not_finite`, `tangent_failure`, `contact_indefinite`,
+    /// `contact_not_converged` or `diverged`.
     pub reason: &'static str,
     /// What failed: residual, node, correction, penetration, friction
     /// states changed…

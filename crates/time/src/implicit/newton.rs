@@ -312,7 +312,56 @@ impl Implicit<'_> {
             alpha = 1.0;
             merit_prev = res;
             step_taken = true;
+            let last = correction;
             correction = self.dx.iter().fold(0.0f64, |m, d| m.max(d.abs()));
+            // A correction longer than the whole model, and at least twice
+            // the last one, is divergence (see `DIVERGED`).
+            if diverging(newton, correction, last, self.size) {
+                return fail(
+                    newton,
+                    &mut self.totals,
+                    Cutback::Diverged,
+                    format!(
+                        "Newton diverged: correction {correction:.3e} mm after {newton} iterations \
+                         ({last:.3e} mm the one before), longer than the model ({:.3e} mm); \
+                         residual {res:.3e} N at node {node} (force scale {scale:.3e} N)",
+                        self.size
+                    ),
+                );
+            }
         }
+    }
+}
+
+/// Whether the `newton`th correction (mm), after `last`, shows Newton
+/// diverging on a model of `size` (its bounding-box diagonal, mm): see
+/// `DIVERGED`.
+fn diverging(newton: usize, correction: f64, last: f64, size: f64) -> bool {
+    newton >= 2 && correction > size && correction > DIVERGED * last
+}
+
+#[cfg(test)]
+mod tests {
+    use super::diverging;
+
+    /// The corrections of a cut attempt of hemisphere-0-90 (mm, from
+    /// `DRAPE_NEWTON_TRACE`) are cut where they pass the model's 495 mm;
+    /// a blank falling far in one increment (a first correction longer
+    /// than the model that then shrinks) and a converging attempt's
+    /// largest corrections are not.
+    #[test]
+    fn only_a_growing_correction_longer_than_the_model_is_divergence() {
+        let size = 495.0;
+        let first_cut = |corrections: &[f64]| {
+            (2..corrections.len()).find(|&k| diverging(k, corrections[k], corrections[k - 1], size))
+        };
+        let diverged = [0.0, 18.0, 69.0, 300.0, 2.1e3, 1.5e4, 1.3e5];
+        assert_eq!(first_cut(&diverged), Some(4));
+        let falling = [0.0, 2.0e3, 40.0, 0.3, 1e-3];
+        assert_eq!(first_cut(&falling), None);
+        let falling_again = [0.0, 600.0, 900.0, 20.0];
+        assert_eq!(first_cut(&falling_again), None);
+        let converging = [0.0, 2.0, 6.6, 1.2, 0.01];
+        assert_eq!(first_cut(&converging), None);
     }
 }

@@ -93,7 +93,8 @@ pub(crate) struct SplitCholesky {
 /// One half: B_h and its factor.
 struct Half {
     /// A's component at each place of B_h's order: the half's own
-    /// components (AMD's order of their block), then the separator's.
+    /// components (in the whole matrix's fill-reducing order), then the
+    /// separator's.
     components: Vec<usize>,
     /// The half's own components (B_h's leading block).
     own: usize,
@@ -111,7 +112,7 @@ struct Half {
     scaled: Mat<f64>,
     /// The pivots of the half's own columns after LDLᵀ.
     pivots: Vec<f64>,
-    /// M_hM_hᵀ (lower triangle).
+    /// M_hM_hᵀ (M_hD_sM_hᵀ after LDLᵀ; lower triangle).
     gram: Mat<f64>,
     /// A right-hand side in B_h's order.
     x: Vec<f64>,

@@ -384,8 +384,10 @@ impl Half {
             .max()
             .unwrap_or(0);
         let f = factor.symbolic();
-        let stack =
-            MemBuffer::new(f.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()));
+        let stack = MemBuffer::new(StackReq::any_of(&[
+            f.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            f.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+        ]));
         let s = separator.len();
         Some(Self {
             own,

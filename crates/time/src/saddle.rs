@@ -225,15 +225,18 @@ impl SaddleSystem {
             })
             .collect();
         self.split = SplitCholesky::new(matrix.as_ref(), |k| factor.place(k), &factor.ranks());
+        // The whole factor's values and workspace only where A is not split.
         let symbolic = factor.symbolic();
-        self.stack = MemBuffer::new(StackReq::any_of(&[
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
-        ]));
-        self.factor_values = match self.split {
-            Some(_) => Vec::new(),
-            None => vec![0.0; symbolic.len_val()],
+        (self.stack, self.factor_values) = match self.split {
+            Some(_) => (MemBuffer::new(StackReq::EMPTY), Vec::new()),
+            None => (
+                MemBuffer::new(StackReq::any_of(&[
+                    symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+                    symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+                    symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+                ])),
+                vec![0.0; symbolic.len_val()],
+            ),
         };
         self.values = vec![0.0; factor.len()];
         self.tangent_values = vec![0.0; factor.len()];

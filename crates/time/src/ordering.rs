@@ -18,10 +18,11 @@ use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat, SymbolicSparseColMatRef};
-use faer::{MatMut, Par, Side};
+use faer::{Conj, MatMut, Par, Side};
 
 /// A pattern in its factor's order, with that order's symbolic
 /// factorisation.
@@ -182,21 +183,36 @@ impl FactorOrder {
         }
     }
 
-    /// `solve` (with the symbolic factorisation and the right-hand side in
-    /// the factor's order) applied to `v`, in place.
-    pub(crate) fn solve_in_place(
+    /// v ← A⁻¹·v with the `factor` [`Self::factorise`] left (LDLᵀ's where
+    /// `ldlt`), in place: v put into the factor's order and back.
+    pub(crate) fn solve(
         &mut self,
         v: &mut [f64],
-        solve: impl FnOnce(&SymbolicCholesky<usize>, MatMut<'_, f64>),
+        factor: &[f64],
+        ldlt: bool,
+        stack: &mut MemBuffer,
     ) {
         for (o, &k) in self.ordered.iter_mut().zip(&self.order) {
             *o = v[k];
         }
         let n = self.ordered.len();
-        solve(
-            &self.symbolic,
-            MatMut::from_column_major_slice_mut(&mut self.ordered, n, 1),
-        );
+        let rhs = MatMut::from_column_major_slice_mut(&mut self.ordered, n, 1);
+        let stack = MemStack::new(stack);
+        if ldlt {
+            LdltRef::new(&self.symbolic, factor).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                Par::Seq,
+                stack,
+            );
+        } else {
+            LltRef::new(&self.symbolic, factor).solve_in_place_with_conj(
+                Conj::No,
+                rhs,
+                Par::Seq,
+                stack,
+            );
+        }
         for (&o, &k) in self.ordered.iter().zip(&self.order) {
             v[k] = o;
         }
@@ -290,8 +306,6 @@ mod tests {
     /// solution of the matrix as it was (checked by its product).
     #[test]
     fn a_solve_in_the_factor_order_solves_the_matrix() {
-        use faer::Conj;
-        use faer::sparse::linalg::cholesky::LltRef;
         // A 6 × 6 band matrix (a chain with next-but-one couplings),
         // upper triangle by columns.
         let n: usize = 6;
@@ -322,14 +336,7 @@ mod tests {
             .expect("positive definite");
         let b: Vec<f64> = (0..n).map(|i| 1.0 + i as f64).collect();
         let mut x = b.clone();
-        f.solve_in_place(&mut x, |symbolic, rhs| {
-            LltRef::new(symbolic, &factor).solve_in_place_with_conj(
-                Conj::No,
-                rhs,
-                Par::Seq,
-                faer::dyn_stack::MemStack::new(&mut stack),
-            );
-        });
+        f.solve(&mut x, &factor, false, &mut stack);
         let mut product = vec![0.0; n];
         let m = SparseColMatRef::new(upper.as_ref(), &values);
         for j in 0..n {

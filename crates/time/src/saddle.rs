@@ -48,10 +48,10 @@
 use std::time::Instant;
 
 use drape_contact::{ImplicitContact, SystemRow};
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::cholesky::{LdltRef, LltRef, SymbolicCholeskyRaw};
+use faer::Par;
+use faer::dyn_stack::{MemBuffer, StackReq};
+use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, Par};
 
 use crate::ordering::{FactorOrder, NumericFailure};
 use crate::split::SplitCholesky;
@@ -420,25 +420,7 @@ impl SaddleSystem {
             return;
         }
         let factor = self.factor.as_mut().expect("factorised");
-        let (values, cholesky) = (&self.factor_values, self.cholesky);
-        let stack = MemStack::new(&mut self.stack);
-        factor.solve_in_place(v, |symbolic, rhs| {
-            if cholesky {
-                LltRef::new(symbolic, values).solve_in_place_with_conj(
-                    Conj::No,
-                    rhs,
-                    Par::Seq,
-                    stack,
-                );
-            } else {
-                LdltRef::new(symbolic, values).solve_in_place_with_conj(
-                    Conj::No,
-                    rhs,
-                    Par::Seq,
-                    stack,
-                );
-            }
-        });
+        factor.solve(v, &self.factor_values, !self.cholesky, &mut self.stack);
         self.solves += 1;
     }
 

@@ -39,10 +39,10 @@ use std::time::Instant;
 
 use drape_elements::{ElementError, MembraneTangent};
 use drape_model::Model;
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::cholesky::{LdltRef, LltRef, SymbolicCholesky};
+use faer::Par;
+use faer::dyn_stack::{MemBuffer, StackReq};
+use faer::sparse::linalg::cholesky::SymbolicCholesky;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, Par};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use rayon::prelude::*;
 
@@ -704,42 +704,41 @@ impl SparseTangent {
                 self.factor_values = Vec::new();
             }
         }
-        if let Some(split) = &mut self.split {
-            let result = if split.factorise(&self.ordered_values, false).is_ok() {
-                self.kind = Factorisation::Cholesky;
-                Ok(self.kind)
-            } else {
-                self.indefinite += 1;
-                self.kind = Factorisation::Ldlt;
-                match split.factorise(&self.ordered_values, true) {
-                    Ok(_) => Ok(self.kind),
-                    Err(NumericFailure::ZeroPivot(dof)) => Err(FactorError { dof }),
-                    Err(NumericFailure::NotPositiveDefinite) => unreachable!("LDLᵀ asks no sign"),
-                }
-            };
-            self.factor_seconds += started.elapsed().as_secs_f64();
-            return result;
-        }
-        let (values, factor_values) = (&self.ordered_values, &mut self.factor_values);
-        let result = if factor
-            .factorise(values, factor_values, false, &mut self.stack)
-            .is_ok()
-        {
+        let result = if self.factorise_values(false).is_ok() {
             self.kind = Factorisation::Cholesky;
             Ok(self.kind)
         } else {
             self.indefinite += 1;
             self.kind = Factorisation::Ldlt;
-            match factor.factorise(values, factor_values, true, &mut self.stack) {
+            match self.factorise_values(true) {
                 Ok(()) => Ok(self.kind),
-                Err(NumericFailure::ZeroPivot(p)) => Err(FactorError {
-                    dof: factor.component(p),
-                }),
+                Err(NumericFailure::ZeroPivot(dof)) => Err(FactorError { dof }),
                 Err(NumericFailure::NotPositiveDefinite) => unreachable!("LDLᵀ asks no sign"),
             }
         };
         self.factor_seconds += started.elapsed().as_secs_f64();
         result
+    }
+
+    /// Factorises the values in the factor's order, in two halves where
+    /// the model is split (Cholesky, LDLᵀ where `ldlt`); a zero pivot is
+    /// named by its component.
+    fn factorise_values(&mut self, ldlt: bool) -> Result<(), NumericFailure> {
+        if let Some(split) = &mut self.split {
+            return split.factorise(&self.ordered_values, ldlt).map(|_| ());
+        }
+        let factor = &self.factor;
+        factor
+            .factorise(
+                &self.ordered_values,
+                &mut self.factor_values,
+                ldlt,
+                &mut self.stack,
+            )
+            .map_err(|failure| match failure {
+                NumericFailure::ZeroPivot(p) => NumericFailure::ZeroPivot(factor.component(p)),
+                other => other,
+            })
     }
 
     /// Solves K̂·z = `rhs` in place with the current factors.
@@ -748,22 +747,9 @@ impl SparseTangent {
             split.solve_in_place(rhs);
             return;
         }
-        let (values, kind) = (&self.factor_values, self.kind);
-        let stack = MemStack::new(&mut self.stack);
-        self.factor.solve_in_place(rhs, |symbolic, rhs| match kind {
-            Factorisation::Cholesky => LltRef::new(symbolic, values).solve_in_place_with_conj(
-                Conj::No,
-                rhs,
-                Par::Seq,
-                stack,
-            ),
-            Factorisation::Ldlt => LdltRef::new(symbolic, values).solve_in_place_with_conj(
-                Conj::No,
-                rhs,
-                Par::Seq,
-                stack,
-            ),
-        });
+        let ldlt = self.kind == Factorisation::Ldlt;
+        self.factor
+            .solve(rhs, &self.factor_values, ldlt, &mut self.stack);
     }
 
     /// y = K̂·x with the assembled values (symmetric, from the upper

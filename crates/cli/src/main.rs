@@ -72,7 +72,7 @@ enum Command {
     },
     /// Write a ready-to-run scene from a template.
     New {
-        /// hemisphere, deep-drawing, picture-frame or bias-extension
+        /// hemisphere, deep-drawing, picture-frame, bias-extension or stack
         /// (without it: the list, and exit code 2 as for any usage error).
         template: Option<String>,
         /// Where to write it (default: <template>.toml).
@@ -293,6 +293,7 @@ fn describe(e: &anyhow::Error) -> String {
 }
 
 fn main() -> ExitCode {
+    quit_on_a_closed_pipe();
     // Before anything is read: a signal must never wait on a blocked read.
     handle_ctrl_c();
     let cli = Cli::parse();
@@ -582,6 +583,7 @@ fn print_summary(s: &Summary, out: &Path) {
         s.max_shear_deg, s.max_shear_at[0], s.max_shear_at[1], s.max_shear_at[2]
     );
     println!("draw-in           {}", draw_in_line(s));
+    print_plies(s);
     let p = &s.peak;
     if p.max_shear_time_s < s.time && p.max_shear_deg > s.max_shear_deg {
         println!(
@@ -692,18 +694,47 @@ fn print_mould(s: &Summary) {
     }
 }
 
+/// Output piped into a reader that stops early (`drape inspect DIR | head`)
+/// ends drape quietly, as it ends `cat` or `grep`: Rust ignores SIGPIPE, so
+/// the next `println!` would panic on the broken pipe instead. A run killed
+/// so keeps what it wrote: every output file is written whole or not at
+/// all.
+fn quit_on_a_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in `main`, before any thread is started,
+    // and SIG_DFL is a valid disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+/// A laminate's plies, one line each, bottom first: what `summary.json`'s
+/// `plies` holds, so that the terminal says which ply shears most, slips
+/// and is pressed (nothing for a single ply).
+fn print_plies(s: &Summary) {
+    if s.plies.len() < 2 {
+        return;
+    }
+    for p in &s.plies {
+        println!(
+            "ply {:<13} max shear {:.2}°, max waviness {:.1}°, draw-in {}; slip on the ply below {:.3} mm, \
+             pressure {:.4} MPa, overlap {:.2e} mm",
+            p.name,
+            p.max_shear_deg,
+            p.max_waviness_deg,
+            draw_in_values(&p.draw_in_mm),
+            p.max_slip_mm,
+            p.max_pressure_mpa,
+            p.max_overlap_mm
+        );
+    }
+}
+
 /// The draw-in values a summary has, `n/a` for those it lacks, and its
 /// note saying why.
 fn draw_in_line(s: &Summary) -> String {
     let d = &s.draw_in_mm;
-    let value = |name: &str, v: f64| {
-        if v.is_finite() {
-            format!("{name} {v:.2} mm")
-        } else {
-            format!("{name} n/a")
-        }
-    };
-    let mut line = [value("DX", d.dx), value("DY", d.dy), value("DD", d.dd)].join(", ");
+    let mut line = draw_in_values(d);
     if ![d.dx, d.dy, d.dd].iter().all(|v| v.is_finite()) {
         line.push_str(&format!(
             " ({})",
@@ -711,6 +742,18 @@ fn draw_in_line(s: &Summary) -> String {
         ));
     }
     line
+}
+
+/// DX, DY and DD, `n/a` for those not measured.
+fn draw_in_values(d: &drape_io::results::DrawInMm) -> String {
+    let value = |name: &str, v: f64| {
+        if v.is_finite() {
+            format!("{name} {v:.2} mm")
+        } else {
+            format!("{name} n/a")
+        }
+    };
+    [value("DX", d.dx), value("DY", d.dy), value("DD", d.dd)].join(", ")
 }
 
 /// E_kin/E_int, or both energies where the internal one is too small for

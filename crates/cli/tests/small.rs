@@ -1,6 +1,7 @@
 //! The small things a new user meets first, end to end: the mould `drape
 //! kinematic` picks and names, the draw-in's reason when it is missing,
-//! integer counts and sane ratios in `drape inspect`, `drape new`'s list,
+//! integer counts, sane ratios and a laminate's plies in `drape inspect`,
+//! a closed pipe, `drape new`'s list,
 //! `output.shear_range_deg` and the waviness picture.
 
 use std::path::Path;
@@ -106,6 +107,7 @@ fn new_without_a_template_lists_them() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("drape new TEMPLATE [PATH]"), "{err}");
+    let help = text(&drape(&["new", "--help"]));
     for name in [
         "hemisphere",
         "deep-drawing",
@@ -114,6 +116,10 @@ fn new_without_a_template_lists_them() {
         "stack",
     ] {
         assert!(err.contains(&format!("\n  {name} ")), "{name}: {err}");
+        assert!(
+            help.contains(name),
+            "`drape new --help` omits {name}: {help}"
+        );
     }
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
     // An unknown name gets the same list.
@@ -157,6 +163,83 @@ fn inspect_prints_energies_for_an_unstrained_blank_and_counts_as_integers() {
         t.contains("draw-in           DX n/a, DY n/a, DD n/a (the blank is a mesh file"),
         "{t}"
     );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A laminate's summary: `drape inspect` prints a line per ply, bottom
+/// first, with what `summary.json`'s `plies` holds.
+#[test]
+fn inspect_prints_each_ply_of_a_laminate() {
+    let dir = temp("inspect-plies");
+    let ply = |name: &str, shear: f64, slip: f64| {
+        format!(
+            r#"{{ "name": "{name}", "max_shear_deg": {shear}, "max_waviness_deg": 12.5,
+                "wrinkle_area_mm2": 0.0, "draw_in_mm": {{ "dx": 6.6, "dy": 6.55, "dd": 4.21 }},
+                "max_slip_mm": {slip}, "max_pressure_mpa": 0.0057, "max_overlap_mm": 1.9e-5 }}"#
+        )
+    };
+    let summary = format!(
+        r#"{{
+  "status": "completed",
+  "scene": "s.toml",
+  "time": 0.3,
+  "max_shear_deg": 6.23,
+  "max_shear_at": [0.0, 0.0, 0.0],
+  "draw_in_mm": {{ "dx": 6.6, "dy": 6.55, "dd": 4.21 }},
+  "max_fibre_tension_n": null,
+  "area_above_locking_mm2": 0.0,
+  "energy": {{ "balance_error": 1e-6, "kinetic_to_internal": 0.01, "kinetic_mj": 1.0, "internal_mj": 100.0 }},
+  "run": {{ "wall_s": 3.0, "steps": 15003, "threads": 2, "solver": "explicit" }},
+  "plies": [{}, {}]
+}}"#,
+        ply("p0", 6.23, 0.0),
+        ply("p45", 1.94, 2.212)
+    );
+    std::fs::write(dir.join("summary.json"), summary).unwrap();
+    let o = drape(&["inspect", dir.to_str().unwrap()]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    let bottom = t.find("ply p0            max shear 6.23°").expect(&t);
+    let top = t.find("ply p45           max shear 1.94°").expect(&t);
+    assert!(bottom < top, "bottom ply first: {t}");
+    assert!(
+        t.contains("draw-in DX 6.60 mm, DY 6.55 mm, DD 4.21 mm; slip on the ply below 2.212 mm"),
+        "{t}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Output into a pipe nobody reads (`drape inspect DIR | head` once head
+/// has what it wants) ends drape by SIGPIPE, as it ends `cat`, not by a
+/// panic on the broken pipe.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_drape_without_a_panic() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = temp("closed-pipe");
+    std::fs::write(
+        dir.join("summary.json"),
+        r#"{ "status": "completed", "scene": "s.toml", "time": 0.1, "max_shear_deg": 0.0,
+            "max_shear_at": [0.0, 0.0, 0.0], "draw_in_mm": { "dx": 1.0, "dy": 1.0, "dd": 1.0 },
+            "max_fibre_tension_n": null, "area_above_locking_mm2": 0.0,
+            "energy": { "balance_error": 1e-6, "kinetic_to_internal": 0.01, "kinetic_mj": 1.0, "internal_mj": 100.0 },
+            "run": { "wall_s": 3.0, "steps": 10, "threads": 2, "solver": "explicit" } }"#,
+    )
+    .unwrap();
+    // The reading end is closed before drape starts: its first line meets
+    // a broken pipe.
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_drape"))
+        .args(["inspect", dir.to_str().unwrap()])
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    const SIGPIPE: i32 = 13;
+    assert_eq!(o.status.signal(), Some(SIGPIPE), "{:?}: {err}", o.status);
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -230,9 +230,7 @@ pub(crate) enum NumericFailure {
 
 /// faer's AMD ordering of the symmetric pattern `upper` (its upper
 /// triangle): the component at each place.
-fn amd(
-    upper: SymbolicSparseColMatRef<'_, usize>,
-) -> Result<Vec<usize>, faer::sparse::FaerError> {
+fn amd(upper: SymbolicSparseColMatRef<'_, usize>) -> Result<Vec<usize>, faer::sparse::FaerError> {
     let n = upper.ncols();
     let amd = factorize_symbolic_cholesky(
         upper,

@@ -7,9 +7,13 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use drape_io::finite::or_empty;
-use drape_io::results::{Summary, SweepAxis, SweepRun, write_sweep_picture};
+use drape_io::results::{PlySummary, Summary, SweepAxis, SweepRun, write_sweep_picture};
 
 use crate::parse_sets;
+
+/// The columns of each ply of a laminate, after the tools' forces, each
+/// named `<ply>_<column>`.
+const PLY_COLUMNS: [&str; 3] = ["max_shear_deg", "max_waviness_deg", "max_slip_mm"];
 
 /// A swept key and its values, in the order given.
 pub type Axis = (String, Vec<String>);
@@ -90,6 +94,15 @@ pub fn write(
         .find_map(|r| r.as_ref().ok())
         .map(|s| s.tools.iter().map(|t| t.name.replace(',', ";")).collect())
         .unwrap_or_default();
+    // A laminate's plies (from two on), by the same first summary: what
+    // a sweep of the ply–ply friction is for, each ply's shear, wrinkle
+    // indicator and slip on the ply below.
+    let plies: Vec<String> = reports
+        .iter()
+        .find_map(|r| r.as_ref().ok())
+        .filter(|s| s.plies.len() > 1)
+        .map(|s| s.plies.iter().map(|p| p.name.replace(',', ";")).collect())
+        .unwrap_or_default();
     let (last, measures) = drape::sweep_check::MEASURE_COLUMNS
         .split_last()
         .expect("columns");
@@ -99,6 +112,11 @@ pub fn write(
     }
     for tool in &tools {
         table.push_str(&format!(",{tool}_max_force_n"));
+    }
+    for ply in &plies {
+        for column in PLY_COLUMNS {
+            table.push_str(&format!(",{ply}_{column}"));
+        }
     }
     table.push(',');
     table.push_str(last);
@@ -130,8 +148,21 @@ pub fn write(
                         format!(",{}", cell(force, 1))
                     })
                     .collect();
+                let ply_cells: String = plies
+                    .iter()
+                    .map(|name| {
+                        let ply = s.plies.iter().find(|p| p.name.replace(',', ";") == *name);
+                        let value = |f: fn(&PlySummary) -> f64| ply.map_or(f64::NAN, f);
+                        format!(
+                            ",{},{},{}",
+                            cell(value(|p| p.max_shear_deg), 4),
+                            cell(value(|p| p.max_waviness_deg), 4),
+                            cell(value(|p| p.max_slip_mm), 4)
+                        )
+                    })
+                    .collect();
                 table.push_str(&format!(
-                    ",{},{},{},{},{},{},{balance},{},{},{},{}{forces},{}\n",
+                    ",{},{},{},{},{},{},{balance},{},{},{},{}{forces}{ply_cells},{}\n",
                     s.status,
                     cell(s.max_shear_deg, 4),
                     cell(s.draw_in_mm.dx, 4),
@@ -150,7 +181,7 @@ pub fn write(
                 table.push_str(&format!(
                     ",error: {}{}\n",
                     e.replace([',', '\n'], ";"),
-                    ",".repeat(measures.len() + tools.len())
+                    ",".repeat(measures.len() + tools.len() + plies.len() * PLY_COLUMNS.len())
                 ));
             }
         }

@@ -3,8 +3,8 @@
 //! column in the table), and `drape export --onto` carries every ply onto
 //! a structural mesh; a one-ply run writes no per-ply picture. Its shear
 //! profiles are each ply's own (`profiles.csv` with a `ply` column,
-//! `profiles_<ply>.png`), and `drape compare` of two laminates compares
-//! them ply by ply, by name.
+//! `profiles_<ply>.png`), `drape compare` of two laminates compares
+//! them ply by ply, by name, and a sweep's table has each ply's columns.
 
 use std::path::Path;
 
@@ -62,6 +62,81 @@ fn warp_angle(row: &[&str], header: &[&str]) -> f64 {
         row[col("warp_y")].parse().unwrap(),
     );
     y.atan2(x).to_degrees().rem_euclid(180.0)
+}
+
+/// A sweep of the ply–ply friction tabulates each ply of a laminate: its
+/// largest shear, waviness and slip on the ply below, as its run's
+/// `summary.json` has them; a one-ply sweep has no ply columns.
+#[test]
+fn a_sweep_of_a_stack_has_each_plys_columns() {
+    let dir = temp("stack-sweep");
+    let out = dir.join("sweep");
+    let scene_path = scene(&dir, 2, true);
+    let o = drape(&[
+        "sweep",
+        &scene_path,
+        "--set",
+        "stack.friction=0,0.5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let table = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = table.lines().map(|l| l.split(',').collect()).collect();
+    let header = &rows[0];
+    assert_eq!(
+        header.last(),
+        Some(&"max_fibre_tension_n_per_mm"),
+        "{table}"
+    );
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("no column {name}: {table}"))
+    };
+    for (run, row) in rows[1..].iter().enumerate() {
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join(format!("run_{run:03}/summary.json"))).unwrap(),
+        )
+        .unwrap();
+        let plies = summary["plies"].as_array().unwrap();
+        assert_eq!(plies.len(), 2);
+        for ply in plies {
+            let name = ply["name"].as_str().unwrap();
+            for key in ["max_shear_deg", "max_waviness_deg", "max_slip_mm"] {
+                let value = ply[key].as_f64().unwrap();
+                assert_eq!(
+                    row[col(&format!("{name}_{key}"))],
+                    format!("{value:.4}"),
+                    "run {run}, {name}: {table}"
+                );
+            }
+        }
+    }
+    let slip = |run: usize| {
+        rows[run + 1][col("p45_max_slip_mm")]
+            .parse::<f64>()
+            .unwrap()
+    };
+    assert!(
+        slip(0) > 0.0,
+        "the top ply slides on the bottom one: {table}"
+    );
+    // One ply: no ply columns.
+    let one = dir.join("one");
+    let o = drape(&[
+        "sweep",
+        &scene(&dir, 1, false),
+        "--set",
+        "tools.0.friction=0.1",
+        "--out",
+        one.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let table = std::fs::read_to_string(one.join("sweep.csv")).unwrap();
+    assert!(!table.contains("p0_"), "{table}");
+    std::fs::remove_dir_all(dir).unwrap();
 }
 
 #[test]

@@ -15,7 +15,7 @@ use drape_io::results::{
     DrawInMm, EnergySummary, FrameData, MapPanel, Peaks, ResultsDir, ResultsError, RunInfo,
     Summary, ToolMeshes, write_flat_maps,
 };
-use drape_io::scene::Scene;
+use drape_io::scene::{KinematicSetup, Scene};
 use drape_model::measures::{ProfileLine, profile_elements};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
@@ -59,6 +59,9 @@ pub struct KinematicReport {
     pub stats: NetStats,
     /// Index of the mould among the scene's tools.
     pub mould: usize,
+    /// The laminate's ply the net is of (index into the model's plies;
+    /// None for one ply).
+    pub ply: Option<usize>,
 }
 
 /// Drapes `scene`'s blank on its mould as a pin-jointed net (the scene's
@@ -126,7 +129,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
     if stats.draped_cells == 0 {
         // Nothing to write but why: every other file would describe a net
         // that is not there (an empty frame, a NaN thickness).
-        let summary = undraped_summary(scene, &stats, tool, &setup.mould_reason, wall_s);
+        let summary = undraped_summary(scene, &stats, tool, &setup, wall_s);
         dir.write_summary(&summary)?;
         return Ok(KinematicReport {
             summary,
@@ -134,6 +137,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             results,
             stats,
             mould: setup.mould,
+            ply: setup.ply,
         });
     }
     if scene.spec.output.vtu {
@@ -234,6 +238,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
             implicit: None,
             mould: Some(tool.name.clone()),
             mould_reason: Some(setup.mould_reason.clone()),
+            ply: ply_name(scene, &setup),
         },
         // A net that stops short is a result, not a failure: the engineer
         // reads where it could not go.
@@ -256,6 +261,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         results,
         stats,
         mould: setup.mould,
+        ply: setup.ply,
     })
 }
 
@@ -265,7 +271,7 @@ fn undraped_summary(
     scene: &Scene,
     stats: &NetStats,
     tool: &drape_contact::Tool,
-    mould_reason: &str,
+    setup: &KinematicSetup,
     wall_s: f64,
 ) -> Summary {
     Summary {
@@ -291,10 +297,16 @@ fn undraped_summary(
             solver: "kinematic".to_owned(),
             implicit: None,
             mould: Some(tool.name.clone()),
-            mould_reason: Some(mould_reason.to_owned()),
+            mould_reason: Some(setup.mould_reason.clone()),
+            ply: ply_name(scene, setup),
         },
         ..Summary::default()
     }
+}
+
+/// The name of the laminate's ply the net is of (None for one ply).
+fn ply_name(scene: &Scene, setup: &KinematicSetup) -> Option<String> {
+    setup.ply.map(|p| scene.model.plies[p].name.clone())
 }
 
 /// Why a net's draw-in lacks a value: the net reads it at the flat
@@ -383,6 +395,9 @@ pub struct Comparison {
     pub on_mould: Vec<bool>,
     /// Reference centroids.
     pub centroid0: Vec<Vector3<f64>>,
+    /// The elements compared: every one, or a laminate's ply's (the
+    /// others' values are NaN).
+    pub elements: std::ops::Range<usize>,
 }
 
 fn differences(indices: impl Iterator<Item = usize>, c: &Comparison) -> ProfileDifference {
@@ -424,16 +439,40 @@ pub fn compare(scene: &Scene, kinematic: &KinematicReport, mechanical: &RunRepor
     let displacement = tool
         .prescribed_displacement(mechanical.state.time)
         .unwrap_or(0.0);
-    let offset = model.contact_offset;
+    // A laminate's net is of one ply: only that ply's elements are
+    // compared. A node lies on the mould within half a thickness of its
+    // contact position: a ply's own thickness over the plies below it
+    // (and, as those plies' flat faces sag inside the mould's curve, down
+    // to the mould itself).
+    let (elements, reach) = match kinematic.ply {
+        Some(p) => {
+            let ply = &model.plies[p];
+            let below: f64 = model.plies[..p].iter().map(|q| q.thickness).sum();
+            (ply.elements.clone(), below + ply.thickness)
+        }
+        None => (0..fields.shear.len(), 2.0 * model.contact_offset),
+    };
     let touching: Vec<bool> = mechanical
         .state
         .x
         .iter()
-        .map(|x| (tool.project(x, displacement).gap - offset).abs() <= offset)
+        .map(|x| (0.0..=reach).contains(&tool.project(x, displacement).gap))
         .collect();
     let mut c = Comparison {
         centroid0: fields.centroid0.clone(),
-        mechanical_deg: fields.shear.iter().map(|g| g.to_degrees()).collect(),
+        mechanical_deg: fields
+            .shear
+            .iter()
+            .enumerate()
+            .map(|(e, g)| {
+                if elements.contains(&e) {
+                    g.to_degrees()
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect(),
+        elements: elements.clone(),
         ..Comparison::default()
     };
     for batch in &model.membranes {
@@ -445,29 +484,34 @@ pub fn compare(scene: &Scene, kinematic: &KinematicReport, mechanical: &RunRepor
     c.kinematic_deg = fields
         .centroid0
         .iter()
-        .map(|p| kinematic.net.shear_at(p).map_or(f64::NAN, f64::to_degrees))
+        .enumerate()
+        .map(|(e, p)| match elements.contains(&e) {
+            true => kinematic.net.shear_at(p).map_or(f64::NAN, f64::to_degrees),
+            false => f64::NAN,
+        })
         .collect();
     let s = &mut c.summary;
     s.scene = scene.file.display().to_string();
     s.mechanical_status = mechanical.summary.status.clone();
-    s.mechanical_max_shear_deg = mechanical.measures.max_shear_deg;
+    s.mechanical_max_shear_deg = match kinematic.ply {
+        Some(p) => mechanical
+            .summary
+            .plies
+            .get(p)
+            .map_or(f64::NAN, |ply| ply.max_shear_deg),
+        None => mechanical.measures.max_shear_deg,
+    };
     s.kinematic_max_shear_deg = kinematic.results.measures.max_shear_deg;
-    s.elements = c.mechanical_deg.len();
+    s.elements = elements.len();
     s.compared = c.kinematic_deg.iter().filter(|v| v.is_finite()).count();
-    s.on_mould = (0..s.elements)
+    s.on_mould = elements
+        .clone()
         .filter(|&e| c.kinematic_deg[e].is_finite() && c.on_mould[e])
         .count();
-    let all = differences(0..c.mechanical_deg.len(), &c);
-    let (diagonal, median) = match &model.blank {
+    let all = differences(elements.clone(), &c);
+    let (diagonal, median) = match profile_frame(model, kinematic.ply) {
         Some(info) => {
-            let line = |l| {
-                differences(
-                    profile_elements(&info.frame, &c.centroid0, l, 0.5 * info.cell_size)
-                        .into_iter()
-                        .map(|(e, _)| e),
-                    &c,
-                )
-            };
+            let line = |l| differences(profile(info, &c, l).into_iter().map(|(e, _)| e), &c);
             (line(ProfileLine::Diagonal), line(ProfileLine::MedianX))
         }
         None => Default::default(),
@@ -476,6 +520,27 @@ pub fn compare(scene: &Scene, kinematic: &KinematicReport, mechanical: &RunRepor
     c.summary.diagonal = diagonal;
     c.summary.median = median;
     c
+}
+
+/// The blank whose diagonal and median a comparison's profiles follow:
+/// the laminate's ply the net is of, or the one blank.
+fn profile_frame(
+    model: &drape_model::Model,
+    ply: Option<usize>,
+) -> Option<&drape_model::BlankInfo> {
+    match ply {
+        Some(p) => model.plies[p].blank.as_ref(),
+        None => model.blank.as_ref(),
+    }
+}
+
+/// The compared elements on `line` of `info`'s blank, with their
+/// distance along it.
+fn profile(info: &drape_model::BlankInfo, c: &Comparison, line: ProfileLine) -> Vec<(usize, f64)> {
+    profile_elements(&info.frame, &c.centroid0, line, 0.5 * info.cell_size)
+        .into_iter()
+        .filter(|(e, _)| c.elements.contains(e))
+        .collect()
 }
 
 /// What a comparison leaves.
@@ -557,7 +622,7 @@ pub fn compare_scene(
 
     let mut csv =
         String::from("element,x0_mm,y0_mm,mechanical_deg,kinematic_deg,difference_deg,on_mould\n");
-    for e in 0..c.mechanical_deg.len() {
+    for e in c.elements.clone() {
         let _ = writeln!(
             csv,
             "{e},{},{},{},{},{},{}",
@@ -574,14 +639,12 @@ pub fn compare_scene(
 
     let mut profiles =
         String::from("line,distance_mm,mechanical_deg,kinematic_deg,difference_deg,on_mould\n");
-    if let Some(info) = &scene.model.blank {
+    if let Some(info) = profile_frame(&scene.model, kinematic.ply) {
         for (name, line) in [
             ("diagonal", ProfileLine::Diagonal),
             ("median", ProfileLine::MedianX),
         ] {
-            for (e, distance) in
-                profile_elements(&info.frame, &c.centroid0, line, 0.5 * info.cell_size)
-            {
+            for (e, distance) in profile(info, &c, line) {
                 let _ = writeln!(
                     profiles,
                     "{name},{},{},{},{},{}",

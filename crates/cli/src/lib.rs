@@ -830,6 +830,7 @@ pub fn run_in(
             .to_owned(),
             mould: None,
             mould_reason: None,
+            ply: None,
             implicit: implicit_totals.map(|t: drape_time::ImplicitTotals| ImplicitRunInfo {
                 newton_iterations: t.newton_iterations,
                 wasted_iterations: t.wasted_iterations,

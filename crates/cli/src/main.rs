@@ -681,8 +681,15 @@ fn forming_run_note(summary: &drape_io::results::Summary) -> String {
 }
 
 /// The tool a kinematic drape was draped on, why, and how to choose
-/// another (nothing for a forming run).
+/// another; the laminate's ply it is of, likewise (nothing for a forming
+/// run).
 fn print_mould(s: &Summary) {
+    if let Some(ply) = &s.run.ply {
+        println!(
+            "ply               `{ply}`: each ply of a stack drapes as a net of its own \
+             (another: --set kinematic.ply=NAME)"
+        );
+    }
     if let Some(mould) = &s.run.mould {
         println!(
             "mould             `{mould}`: {} (another: --set kinematic.mould=NAME)",

@@ -4,7 +4,8 @@
 //! a structural mesh; a one-ply run writes no per-ply picture. Its shear
 //! profiles are each ply's own (`profiles.csv` with a `ply` column,
 //! `profiles_<ply>.png`), `drape compare` of two laminates compares
-//! them ply by ply, by name, and a sweep's table has each ply's columns.
+//! them ply by ply, by name, a sweep's table has each ply's columns, and
+//! `drape compare SCENE` compares one ply with its own kinematic net.
 
 use std::path::Path;
 
@@ -136,6 +137,51 @@ fn a_sweep_of_a_stack_has_each_plys_columns() {
     assert!(o.status.success(), "{}", text(&o));
     let table = std::fs::read_to_string(one.join("sweep.csv")).unwrap();
     assert!(!table.contains("p0_"), "{table}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `drape compare SCENE` of a laminate drapes one ply's net (the bottom
+/// one unless `kinematic.ply` names another, at that ply's orientation)
+/// and compares it with that ply's elements only: the two plies' counts
+/// add up to the run's elements, and the summary names the ply.
+#[test]
+fn a_laminate_compares_one_ply_with_its_own_net() {
+    let dir = temp("stack-compare");
+    let scene_path = scene(&dir, 2, true);
+    let compared = |ply: Option<&str>| {
+        let out = dir.join(format!("compare-{}", ply.unwrap_or("default")));
+        let mut args = vec!["compare", &scene_path, "--out", out.to_str().unwrap()];
+        let set = ply.map(|p| format!("kinematic.ply={p}"));
+        if let Some(set) = &set {
+            args.extend(["--set", set]);
+        }
+        let o = drape(&args);
+        assert!(o.status.success(), "{}", text(&o));
+        let json = |path: &Path| -> serde_json::Value {
+            serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+        };
+        let comparison = json(&out.join("comparison.json"));
+        let net = json(&out.join("kinematic/summary.json"));
+        let run = json(&out.join("mechanical/summary.json"));
+        let rows = std::fs::read_to_string(out.join("comparison.csv"))
+            .unwrap()
+            .lines()
+            .count()
+            - 1;
+        let elements = comparison["elements"].as_u64().unwrap() as usize;
+        assert_eq!(rows, elements, "a row per compared ply's element");
+        (
+            elements,
+            net["run"]["ply"].as_str().unwrap().to_owned(),
+            run["setup"]["membrane_elements"].as_u64().unwrap() as usize,
+        )
+    };
+    let (bottom, name, all) = compared(None);
+    assert_eq!(name, "p0");
+    assert_eq!(bottom, 36, "the bottom ply's 6 × 6 cells");
+    let (top, name, _) = compared(Some("p45"));
+    assert_eq!(name, "p45");
+    assert_eq!(bottom + top, all);
     std::fs::remove_dir_all(dir).unwrap();
 }
 

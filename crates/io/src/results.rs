@@ -198,6 +198,10 @@ pub struct RunInfo {
     /// Why that tool: named by `kinematic.mould`, or the default's rule.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub mould_reason: Option<String>,
+    /// The ply of a laminate a kinematic drape is of (`kinematic.ply`;
+    /// absent for one ply and for a forming run).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub ply: Option<String>,
 }
 
 /// The implicit driver's contact solver in `summary.json`

@@ -46,6 +46,9 @@ pub struct KinematicSpec {
     /// The weft generator, likewise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub weft_generator: Option<Vec<[f64; 3]>>,
+    /// The ply of a `[stack]` the net is of (default: the bottom ply).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ply: Option<String>,
 }
 
 /// A kinematic drape ready to run.
@@ -62,6 +65,10 @@ pub struct KinematicSetup {
     pub mould_displacement: f64,
     /// The net.
     pub net: NetSpec,
+    /// The ply of a laminate the net is of (index into the model's
+    /// `plies`; None for one ply): its orientation, blank and element
+    /// size are the net's, and `drape compare` compares its elements only.
+    pub ply: Option<usize>,
 }
 
 /// The default mould and why it is the one.
@@ -174,7 +181,44 @@ pub(super) fn setup(
     };
     let mould = choice.mould;
     let tool = &model.tools[mould];
-    let Some(blank) = &model.blank else {
+    // A laminate's plies each drape as a net of their own (a net knows no
+    // thickness or neighbour): one ply at a time, by name.
+    let ply = match (&k.ply, model.plies.len()) {
+        (name, n) if n > 1 => {
+            let name = name.clone().unwrap_or_else(|| model.plies[0].name.clone());
+            let found = model.plies.iter().position(|p| p.name == name);
+            Some(found.ok_or_else(|| {
+                let names: Vec<&str> = model.plies.iter().map(|p| p.name.as_str()).collect();
+                at.error(
+                    "kinematic.ply",
+                    format!("no ply `{name}`: expected one of {}", names.join(", ")),
+                )
+            })?)
+        }
+        (Some(name), _) => {
+            return Err(at.error(
+                "kinematic.ply",
+                format!("`{name}`: the scene is one ply, so there is no ply to choose"),
+            ));
+        }
+        (None, _) => None,
+    };
+    let (blank, orientation_deg, membranes) = match ply {
+        Some(p) => {
+            let ply = &model.plies[p];
+            (
+                &ply.blank,
+                ply.orientation_deg,
+                &model.membranes[ply.membranes.clone()],
+            )
+        }
+        None => (
+            &model.blank,
+            spec.fabric.orientation_deg,
+            &model.membranes[..],
+        ),
+    };
+    let Some(blank) = blank else {
         return Err(at.error(
             "fabric.blank",
             "a kinematic drape needs a rectangular blank (width and height), not a mesh file",
@@ -208,8 +252,7 @@ pub(super) fn setup(
         Some(s) => positive(at, "kinematic.spacing", s)?,
         None => {
             // One cell of the blank's mesh: a quad, or two triangles.
-            let cells: f64 = model
-                .membranes
+            let cells: f64 = membranes
                 .iter()
                 .map(|b| match b.shape() {
                     drape_elements::MembraneShape::Quad => b.len() as f64,
@@ -259,12 +302,13 @@ pub(super) fn setup(
         net: NetSpec {
             outline: frame,
             seed,
-            orientation_deg: spec.fabric.orientation_deg,
+            orientation_deg,
             spacing: [spacing, spacing],
             direction,
             warp_curve,
             weft_curve,
         },
+        ply,
     })
 }
 
@@ -305,6 +349,60 @@ geometry = { kind = "plane", point = [0, 0, -100], normal = [0, 0, 1] }
         assert_eq!(k.net.orientation_deg, 30.0);
         assert_eq!(k.net.outline.center.z, 3.0);
         assert!(k.net.warp_curve.is_none());
+    }
+
+    /// A laminate drapes one ply at a time: the bottom one by default,
+    /// with that ply's orientation, blank and element size (not the
+    /// stack's, whose elements are every ply's).
+    #[test]
+    fn a_stack_drapes_the_ply_named_with_its_own_orientation_and_cells() {
+        let stack = SCENE.replacen(
+            "\n[[tools]]",
+            "\n[stack]\n[[stack.ply]]\nname = \"bottom\"\n[[stack.ply]]\nname = \"top\"\n\
+             orientation_deg = -45\nblank = { width = 60, height = 40, cells = [3, 2] }\n\n[[tools]]",
+            1,
+        );
+        let parse = |extra: &str| {
+            Scene::parse(&format!("{stack}{extra}"), "s.toml".as_ref(), &[])
+                .unwrap()
+                .kinematic
+        };
+        let k = parse("").unwrap();
+        assert_eq!(k.ply, Some(0));
+        assert_eq!(k.net.orientation_deg, 30.0);
+        assert_eq!(k.net.spacing, [10.0, 10.0]);
+        assert_eq!(k.net.outline.width, 120.0);
+        let k = parse("\n[kinematic]\nply = \"top\"\n").unwrap();
+        assert_eq!(k.ply, Some(1));
+        assert_eq!(k.net.orientation_deg, -45.0);
+        assert_eq!(k.net.outline.width, 60.0);
+        // A −45° ply of 3 × 2 cells on 60 × 40 mm: its own elements set
+        // the spacing.
+        let scene = Scene::parse(&stack, "s.toml".as_ref(), &[]).unwrap();
+        let top = &scene.model.plies[1];
+        let elements = (top.elements.end - top.elements.start) as f64;
+        assert!(
+            (k.net.spacing[0] - (60.0 * 40.0 / elements).sqrt()).abs() < 1e-12,
+            "{:?} for {elements} elements",
+            k.net.spacing
+        );
+        // A table given is the scene's: its errors refuse the scene.
+        let refused = |text: String| Scene::parse(&text, "s.toml".as_ref(), &[]).unwrap_err();
+        let e = refused(format!("{stack}\n[kinematic]\nply = \"middle\"\n"));
+        assert_eq!(e.field, "kinematic.ply");
+        assert!(e.message.contains("expected one of bottom, top"), "{e}");
+        // One ply: nothing to choose.
+        let e = refused(format!("{SCENE}\n[kinematic]\nply = \"top\"\n"));
+        assert_eq!(e.field, "kinematic.ply");
+        assert!(e.message.contains("the scene is one ply"), "{e}");
+        assert_eq!(
+            Scene::parse(SCENE, "s.toml".as_ref(), &[])
+                .unwrap()
+                .kinematic
+                .unwrap()
+                .ply,
+            None
+        );
     }
 
     #[test]

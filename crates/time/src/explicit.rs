@@ -545,6 +545,10 @@ impl<'m> Explicit<'m> {
         let end = self.settings.end_time;
         let damping = self.settings.damping;
         shared::check_state(model, state)?;
+        if state.step == 0 && self.resume.is_none() {
+            // Said in `warnings` by the start-up checks.
+            guard::settle_on_tools(model, &mut state.x, &self.constraints.free());
+        }
         shared::external_forces(model, state.time, &mut self.f_ext);
         self.pressure
             .add_into(model, &state.x, state.time, &mut self.f_ext);

@@ -669,13 +669,124 @@ fn node_list(nodes: &[usize]) -> String {
     }
 }
 
+/// How far from a tool each node's mid-surface must start: the contact's
+/// offset for a single ply or a stack's bottom ply, and for each ply above
+/// that the plies below it stacked on top (their half thicknesses, as the
+/// ply contact holds them), so that lifting a ply off a tool lifts the
+/// plies on it alike.
+fn start_clearance(model: &Model) -> impl Fn(usize) -> f64 + Sync + '_ {
+    let mut clearance = Vec::with_capacity(model.plies.len());
+    for (p, ply) in model.plies.iter().enumerate() {
+        clearance.push(match p {
+            0 => model.contact_offset,
+            _ => clearance[p - 1] + 0.5 * (model.plies[p - 1].thickness + ply.thickness),
+        });
+    }
+    move |node: usize| {
+        model
+            .plies
+            .iter()
+            .position(|ply| ply.nodes.contains(&(node as u32)))
+            .map_or(model.contact_offset, |p| clearance[p])
+    }
+}
+
+/// The nodes a blank at `x` has closer to a tool (at its start position)
+/// than they must start ([`start_clearance`]), less a hundredth of the
+/// offset of round-off; those behind a tool's surface are the start-up
+/// check's error, not these.
+fn too_close(model: &Model, tool: &drape_contact::Tool, x: &[Vector3<f64>]) -> Vec<usize> {
+    let slack = 0.01 * model.contact_offset;
+    let clearance = start_clearance(model);
+    let u0 = tool.prescribed_displacement(0.0).unwrap_or(0.0);
+    (0..x.len())
+        .into_par_iter()
+        .filter(|&i| {
+            let gap = tool.project(&x[i], u0).gap;
+            gap >= -slack && gap < clearance(i) - slack
+        })
+        .collect()
+}
+
+/// Translates a blank at `x` that starts closer to a tool than it must
+/// ([`start_clearance`]) away from it, before the first step: by the
+/// largest shortfall along that tool's normal there, again (up to
+/// [`SETTLE_TRIES`] times) while a node is still short, so that every node
+/// starts at its distance. A rigid move: the blank keeps its shape and
+/// starts stress-free, and a stack keeps its plies apart. Left to the
+/// first step, the contact would stop those nodes as a velocity, d/Δt
+/// (0.1 mm in a 2e-5 s step: 5 m/s), a kinetic energy from nowhere that
+/// the energy guard stopped the run on (a hemisphere whose pole touched
+/// the blank stopped at t = 0.01 s). Nothing moves, and None is returned,
+/// where a node is held by a boundary condition (`free` false) or the
+/// moves would not clear every tool; else the translation (mm).
+pub fn settle_on_tools(
+    model: &Model,
+    x: &mut [Vector3<f64>],
+    free: &[bool],
+) -> Option<Vector3<f64>> {
+    let clearance = start_clearance(model);
+    let shortfall = |x: &[Vector3<f64>]| {
+        let mut worst = (0.0f64, Vector3::zeros());
+        for tool in &model.tools {
+            let u0 = tool.prescribed_displacement(0.0).unwrap_or(0.0);
+            for i in too_close(model, tool, x) {
+                let p = tool.project(&x[i], u0);
+                let by = clearance(i) - p.gap;
+                if by > worst.0 {
+                    worst = (by, p.normal);
+                }
+            }
+        }
+        worst
+    };
+    if shortfall(x).0 == 0.0 || !free.iter().all(|&f| f) {
+        return None;
+    }
+    let start = x.to_vec();
+    let mut shift = Vector3::zeros();
+    for tries in 0..=SETTLE_TRIES {
+        let (by, normal) = shortfall(x);
+        if by == 0.0 {
+            // Still no node inside a tool either.
+            if check_tools_inside(model, x).is_none() {
+                return Some(shift);
+            }
+            break;
+        }
+        if tries == SETTLE_TRIES {
+            break;
+        }
+        for xi in x.iter_mut() {
+            *xi += normal * by;
+        }
+        shift += normal * by;
+    }
+    x.copy_from_slice(&start);
+    None
+}
+
+/// Translations [`settle_on_tools`] tries before it gives up.
+const SETTLE_TRIES: usize = 4;
+
+/// The first tool that a node of `x` starts behind (its mid-surface past
+/// the tool's surface by more than round-off), if any.
+fn check_tools_inside(model: &Model, x: &[Vector3<f64>]) -> Option<usize> {
+    let slack = 0.01 * model.contact_offset;
+    model.tools.iter().position(|tool| {
+        let u0 = tool.prescribed_displacement(0.0).unwrap_or(0.0);
+        x.par_iter().any(|p| tool.project(p, u0).gap < -slack)
+    })
+}
+
 /// The start-up checks of a model's tools against its blank at positions
 /// `x`, for a run at step `dt`: an error for a blank that starts inside a
 /// tool (its mid-surface behind the tool's surface) and for a force-driven
 /// tool that its force alone would carry through the fabric's thickness in
 /// one step; the warnings for nodes closer to a tool than the fabric's half
-/// thickness (the first step pushes them out) and for a force-driven tool
-/// with no node ahead of it. Messages name the tool and the nodes.
+/// thickness (what [`settle_on_tools`] will do about them) and for a
+/// force-driven tool with no node ahead of it. Messages name the tool and
+/// the nodes.
 pub fn check_tools_at_start(
     model: &Model,
     x: &[Vector3<f64>],
@@ -699,16 +810,46 @@ pub fn check_tools_at_start(
                 node_list(&inside)
             ));
         }
-        let close: Vec<usize> = (0..x.len()).filter(|&i| gaps[i] < offset - slack).collect();
+        let clearance = start_clearance(model);
+        let close = too_close(model, tool, x);
         if !close.is_empty() {
-            let depth = close.iter().map(|&i| offset - gaps[i]).fold(0.0, f64::max);
+            let depth = close
+                .iter()
+                .map(|&i| clearance(i) - gaps[i])
+                .fold(0.0, f64::max);
+            let mut settled = x.to_vec();
+            let free = crate::shared::Constraints::new(model).free();
+            let what = match settle_on_tools(model, &mut settled, &free) {
+                Some(shift) => format!(
+                    "the run moves the blank {:.4} mm along ({:.3}, {:.3}, {:.3}) before its first \
+                     step, as a whole (it starts stress-free, off where the scene put it)",
+                    shift.norm(),
+                    shift.x / shift.norm(),
+                    shift.y / shift.norm(),
+                    shift.z / shift.norm()
+                ),
+                None => format!(
+                    "the first step pushes {} out, as a velocity that may stop the run on its \
+                     energy balance (the blank is not moved {}): start it farther from the tool",
+                    if close.len() == 1 { "it" } else { "them" },
+                    if free.iter().all(|&f| f) {
+                        "because no translation clears every tool"
+                    } else {
+                        "because boundary conditions hold nodes of it"
+                    }
+                ),
+            };
             warnings.push(format!(
-                "{} of the blank start{} closer to tool `{}` than the fabric's half thickness {offset} mm \
-                 (by up to {depth:.4} mm): the first step pushes {} out",
+                "{} of the blank start{} closer to tool `{}` than the fabric's half thickness {offset} mm{} \
+                 (by up to {depth:.4} mm): {what}",
                 node_list(&close),
                 if close.len() == 1 { "s" } else { "" },
                 tool.name,
-                if close.len() == 1 { "it" } else { "them" },
+                if model.plies.is_empty() {
+                    ""
+                } else {
+                    " (in a stack: than the plies below them and their own half thickness)"
+                },
             ));
         }
         if let ToolMotion::Force {

@@ -69,6 +69,14 @@ impl Constraints {
         }
     }
 
+    /// Per node, whether no component is constrained.
+    pub fn free(&self) -> Vec<bool> {
+        self.constrained
+            .iter()
+            .map(|c| !c.iter().any(|&b| b))
+            .collect()
+    }
+
     /// The prescribed displacement of `c` at `t`, None for a velocity
     /// condition.
     pub fn displacement(model: &Model, c: &Constraint, t: f64) -> Option<f64> {

@@ -95,11 +95,19 @@ pub enum ContactStatus {
     Slip = 2,
 }
 
+/// Node `i`'s offset from the tools: its own where the nodes have theirs
+/// (see [`ExplicitContact::set_node_offsets`]), else the uniform one.
+#[inline]
+fn offset_at(node_offset: &[f64], uniform: f64, i: usize) -> f64 {
+    node_offset.get(i).copied().unwrap_or(uniform)
+}
+
 /// Settings of the contact pass.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactSettings {
     /// Distance of the fabric's mid-surface from a tool at contact: half the
-    /// thickness (mm).
+    /// thickness (mm); in a laminate of plies of different thicknesses the
+    /// largest, each node's own given by [`ExplicitContact::set_node_offsets`].
     pub offset: f64,
     /// Margin of the broad phase: the candidate lists are rebuilt once a node
     /// or a tool has moved half of it (mm).
@@ -293,6 +301,10 @@ pub struct ContactStep {
 pub struct ExplicitContact {
     /// The tools.
     pub tools: Vec<Tool>,
+    /// Each node's offset where they differ (a laminate of plies of
+    /// different thicknesses: each ply's half thickness); empty: every
+    /// node at `settings.offset` ([`Self::set_node_offsets`]).
+    node_offset: Vec<f64>,
     /// Their displacement and velocity.
     pub tool_state: Vec<ToolState>,
     /// The settings.
@@ -376,6 +388,7 @@ impl ExplicitContact {
         Self {
             tool_state: vec![ToolState::default(); n_tools],
             tools,
+            node_offset: Vec::new(),
             settings,
             force: vec![Vector3::zeros(); node_count],
             status: vec![ContactStatus::Open; node_count],
@@ -413,6 +426,22 @@ impl ExplicitContact {
             tool_friction: Vec::new(),
             tool_old: Vec::new(),
         }
+    }
+
+    /// Each node's own offset from the tools (its ply's half thickness),
+    /// for a laminate whose plies differ in thickness; `settings.offset`
+    /// must be the largest (the broad phase's reach). Without, every node
+    /// keeps `settings.offset`: with one offset for all, a thin ply under
+    /// a thick one was held the thick ply's half thickness off the tool.
+    pub fn set_node_offsets(&mut self, offsets: Vec<f64>) {
+        assert!(
+            offsets.len() == self.force.len()
+                && offsets
+                    .iter()
+                    .all(|&o| o > 0.0 && o <= self.settings.offset),
+            "a positive offset per node, none above settings.offset"
+        );
+        self.node_offset = offsets;
     }
 
     /// The shifts of position the ply pass made at the last step (see
@@ -713,6 +742,7 @@ impl ExplicitContact {
                     continue;
                 }
                 let (gap, normal) = (out.gap, out.normal);
+                let offset = offset_at(&self.node_offset, self.settings.offset, i as usize);
                 let gap = gap - offset;
                 if gap < 0.0 {
                     let node_travel = v[i as usize].norm() * dt;
@@ -745,7 +775,7 @@ impl ExplicitContact {
                         mu: 0.0,
                     });
                 } else {
-                    if gap <= touch {
+                    if gap <= TOUCHING * offset {
                         self.status[i as usize] = ContactStatus::Stick;
                         self.tool_of[i as usize] = t as u32;
                         self.touched.push(i);
@@ -902,7 +932,7 @@ impl ExplicitContact {
                     -c.normal.dot(direction) * c.mu / (m_tool * tool_mass_factor);
             }
         }
-        let (offset, tol) = (self.settings.offset, self.settings.tolerance);
+        let tol = self.settings.tolerance;
         let mut added = std::mem::take(&mut s.added);
         added.clear();
         for (t, tool) in self.tools.iter().enumerate() {
@@ -934,6 +964,7 @@ impl ExplicitContact {
                 } else {
                     x[iu]
                 };
+                let offset = offset_at(&self.node_offset, self.settings.offset, iu);
                 if tool
                     .project_from(&corrected, u + tool_shift[t], &mut hint)
                     .gap

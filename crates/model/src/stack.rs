@@ -83,6 +83,19 @@ pub struct PlyModel {
 }
 
 impl Model {
+    /// Half the thickness of each node's ply, node by node (for the
+    /// tools' contact of a laminate whose plies differ in thickness);
+    /// `contact_offset` for a node of no ply.
+    pub fn ply_half_thickness_per_node(&self) -> Vec<f64> {
+        let mut half = vec![self.contact_offset; self.x0.len()];
+        for ply in &self.plies {
+            for node in ply.nodes.clone() {
+                half[node as usize] = 0.5 * ply.thickness;
+            }
+        }
+        half
+    }
+
     /// Stacks `plies` (bottom to top) into one model: each ply raised from
     /// the one below by half of each one's thickness along the bottom ply's
     /// normal (+z for a rectangle: the side its elements face), its nodes

@@ -96,7 +96,8 @@ pub struct Penetration {
 /// The deepest node of `x` inside a tool beyond `tolerance`, with the tools
 /// at `displacements` along their axes (one per tool), or `None`.
 ///
-/// The depth is `offset − gap` (the ply's surface behind the tool's). On
+/// The depth is `offset(i) − gap` for node i, `offset` its half thickness
+/// (the ply's surface behind the tool's). On
 /// an open tool (a profile or a mesh) the gap's sign flips behind the rim
 /// without the node going through anything, so a depth counts only where
 /// the node is nearer the surface than the rim
@@ -106,7 +107,7 @@ pub struct Penetration {
 pub fn deepest_penetration(
     tools: &[Tool],
     displacements: &[f64],
-    offset: f64,
+    offset: impl Fn(usize) -> f64 + Sync,
     x: &[Vector3<f64>],
     tolerance: f64,
 ) -> Option<Penetration> {
@@ -119,7 +120,7 @@ pub fn deepest_penetration(
             .with_min_len(512)
             .map(|(i, p)| {
                 let gap = tool.project(p, u).gap;
-                let depth = offset - gap;
+                let depth = offset(i) - gap;
                 // A NaN position is the non-finite checks' business.
                 let counted = depth > tolerance && gap.abs() < tool.rim_clearance(p, u);
                 if counted {
@@ -167,10 +168,12 @@ pub(crate) fn check_at_end(
         return Ok(());
     }
     let tolerance = penetration_tolerance(model);
+    // A laminate's plies each sit at their own half thickness.
+    let half = model.ply_half_thickness_per_node();
     match deepest_penetration(
         &model.tools,
         displacements,
-        model.contact_offset,
+        |i| half[i],
         &state.x,
         tolerance,
     ) {
@@ -231,14 +234,14 @@ mod tests {
             .iter()
             .map(|&z| Vector3::new(0.0, 0.0, z))
             .collect();
-        let found = deepest_penetration(&tools, &[0.0], offset, &x, 0.02).unwrap();
+        let found = deepest_penetration(&tools, &[0.0], |_| offset, &x, 0.02).unwrap();
         // Nodes 1 (depth 0.05), 2 and 3 (0.4) are beyond; node 4 (0.01) is not.
         assert_eq!(found.count, 3);
         // Ties go to the lowest node.
         assert_eq!(found.node, 2);
         assert!((found.depth - 0.4).abs() < 1e-15);
         assert_eq!(found.tool, "table");
-        assert!(deepest_penetration(&tools, &[0.0], offset, &x, 0.5).is_none());
+        assert!(deepest_penetration(&tools, &[0.0], |_| offset, &x, 0.5).is_none());
     }
 
     #[test]
@@ -252,8 +255,10 @@ mod tests {
         let x = vec![Vector3::new(0.0, 0.0, 0.5)];
         // At u = 0 the node is 0.4 mm clear; the table moved up 1 mm has
         // it 0.6 mm inside.
-        assert!(deepest_penetration(std::slice::from_ref(&tool), &[0.0], 0.1, &x, 1e-3).is_none());
-        let found = deepest_penetration(&[tool], &[1.0], 0.1, &x, 1e-3).unwrap();
+        assert!(
+            deepest_penetration(std::slice::from_ref(&tool), &[0.0], |_| 0.1, &x, 1e-3).is_none()
+        );
+        let found = deepest_penetration(&[tool], &[1.0], |_| 0.1, &x, 1e-3).unwrap();
         assert!((found.depth - 0.6).abs() < 1e-12);
     }
 }

@@ -670,15 +670,14 @@ fn node_list(nodes: &[usize]) -> String {
 }
 
 /// How far from a tool each node's mid-surface must start: the contact's
-/// offset for a single ply or a stack's bottom ply, and for each ply above
-/// that the plies below it stacked on top (their half thicknesses, as the
-/// ply contact holds them), so that lifting a ply off a tool lifts the
-/// plies on it alike.
+/// offset, its half thickness, for a single ply or a stack's bottom ply,
+/// and for each ply above that the plies below it stacked on top (their
+/// half thicknesses, as the ply contact holds them).
 fn start_clearance(model: &Model) -> impl Fn(usize) -> f64 + Sync + '_ {
     let mut clearance = Vec::with_capacity(model.plies.len());
     for (p, ply) in model.plies.iter().enumerate() {
         clearance.push(match p {
-            0 => model.contact_offset,
+            0 => 0.5 * ply.thickness,
             _ => clearance[p - 1] + 0.5 * (model.plies[p - 1].thickness + ply.thickness),
         });
     }

@@ -3,7 +3,9 @@
 //! end, where the step's motion did not bring it, is put back out on its
 //! side by a shift of position, with no change of velocity. The contact's
 //! work along a shift is what moving the node against its forces took,
-//! not its constraint force over it, so the balance stays closed.
+//! not its constraint force over it, so the balance stays closed. And
+//! plies of different thicknesses rest on a tool each at its own half
+//! thickness.
 
 use drape_model::{BoundaryCondition, Model};
 use drape_time::{Energies, Explicit, ExplicitSettings, Frame, Observer};
@@ -63,5 +65,56 @@ fn a_ply_come_in_through_a_free_end_keeps_the_energy_balance() {
         balance.0 < 1e-2,
         "balance error {:.3e} of the largest energy ({shifted} shifts)",
         balance.0
+    );
+}
+
+/// A thin ply (0.2 mm) under a thick one (the glass's 0.57 mm) on a floor
+/// under gravity: each rests at its own half thickness, the bottom ply's
+/// mid-surface 0.1 mm over the floor and the top one's 0.2 + 0.285 mm.
+/// With one offset for every node (the thicker ply's half, as before) the
+/// thin ply was held 0.285 mm off the floor and the run's end check read
+/// it 0.185 mm deep in the floor.
+#[test]
+fn plies_of_different_thicknesses_each_rest_on_a_tool_at_their_own_half_thickness() {
+    use drape_contact::{Surface, Tool, ToolMotion};
+    let (thin, thick) = (0.2, glass().thickness);
+    let mut bottom = glass_ply("thin", Vector3::new(0.0, 0.0, 0.5 * thin), 2);
+    bottom.thickness = thin;
+    let top = glass_ply("thick", Vector3::new(0.0, 0.0, 0.5 * thin), 2);
+    let mut model = Model::stack(vec![bottom, top]).expect("stack");
+    model.tools.push(Tool {
+        name: "floor".into(),
+        surface: Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
+        motion: ToolMotion::Fixed,
+        friction: 0.0,
+    });
+    model.gravity = Vector3::new(0.0, 0.0, -9810.0);
+    let settings = ExplicitSettings {
+        end_time: 0.01,
+        frames: 2,
+        ..ExplicitSettings::default()
+    };
+    let mut driver = Explicit::new(&model, settings).expect("driver");
+    assert!(driver.warnings().is_empty(), "{:?}", driver.warnings());
+    let mut state = model.initial_state();
+    driver.run(&mut state, &mut Balance(0.0)).expect("run");
+    let heights = |p: usize| {
+        let nodes = model.plies[p].nodes.clone();
+        let z = nodes.map(|i| state.x[i as usize].z);
+        z.fold((f64::INFINITY, 0.0f64), |(lo, hi), z| {
+            (lo.min(z), hi.max(z))
+        })
+    };
+    let (lo, hi) = heights(0);
+    assert!(
+        (lo - 0.5 * thin).abs() < 1e-9 && (hi - 0.5 * thin).abs() < 1e-9,
+        "the thin ply's mid-surface at {lo}…{hi} mm"
+    );
+    // The top ply on it, within its rows' give (a few µm here).
+    let (lo, hi) = heights(1);
+    let on = thin + 0.5 * thick;
+    assert!(
+        (lo - on).abs() < 1e-3 && (hi - on).abs() < 1e-3,
+        "the thick ply's mid-surface at {lo}…{hi} mm, {on} expected"
     );
 }

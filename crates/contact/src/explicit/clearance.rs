@@ -50,10 +50,10 @@ impl ExplicitContact {
                 *n = (p.gap, p.normal);
             }
         }
-        let offset = self.settings.offset;
         for (&i, p) in projections() {
             let (gap, normal) = nearest[i as usize];
             if p.normal.dot(&normal) < 0.0 {
+                let offset = super::offset_at(&self.node_offset, self.settings.offset, i as usize);
                 let c = &mut out[i as usize];
                 *c = c.min((gap + p.gap - 2.0 * offset).max(0.0));
             }

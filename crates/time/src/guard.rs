@@ -707,10 +707,11 @@ fn too_close(model: &Model, tool: &drape_contact::Tool, x: &[Vector3<f64>]) -> V
         .collect()
 }
 
-/// Translates a blank at `x` that starts closer to a tool than it must
-/// ([`start_clearance`]) away from it, before the first step: by the
-/// largest shortfall along that tool's normal there, again (up to
-/// [`SETTLE_TRIES`] times) while a node is still short, so that every node
+/// Translates a blank at `x` that starts closer to a tool than it must (its
+/// half thickness; in a stack, the plies below it and its own half
+/// thickness) away from it, before the first step: by the largest
+/// shortfall along that tool's normal there, again (up to four times)
+/// while a node is still short, so that every node
 /// starts at its distance. A rigid move: the blank keeps its shape and
 /// starts stress-free, and a stack keeps its plies apart. Left to the
 /// first step, the contact would stop those nodes as a velocity, d/Δt

@@ -89,17 +89,14 @@ pub fn write(
     // the tools of the first run that has a summary (every point is the
     // same scene), before the last column, which the table's reader
     // checks to tell a whole header from a cut one.
-    let tools: Vec<String> = reports
-        .iter()
-        .find_map(|r| r.as_ref().ok())
+    let first = reports.iter().find_map(|r| r.as_ref().ok());
+    let tools: Vec<String> = first
         .map(|s| s.tools.iter().map(|t| t.name.replace(',', ";")).collect())
         .unwrap_or_default();
     // A laminate's plies (from two on), by the same first summary: what
     // a sweep of the ply–ply friction is for, each ply's shear, wrinkle
     // indicator and slip on the ply below.
-    let plies: Vec<String> = reports
-        .iter()
-        .find_map(|r| r.as_ref().ok())
+    let plies: Vec<String> = first
         .filter(|s| s.plies.len() > 1)
         .map(|s| s.plies.iter().map(|p| p.name.replace(',', ";")).collect())
         .unwrap_or_default();

@@ -183,13 +183,7 @@ impl<'m> Explicit<'m> {
                     settings.contact_margin,
                 ));
                 // Each ply on a tool at its own half thickness.
-                if model
-                    .plies
-                    .iter()
-                    .any(|p| 0.5 * p.thickness != model.contact_offset)
-                {
-                    c.set_node_offsets(model.ply_half_thickness_per_node());
-                }
+                c.set_node_offsets(model.ply_half_thickness_per_node());
             }
             c
         });

@@ -669,40 +669,43 @@ fn node_list(nodes: &[usize]) -> String {
     }
 }
 
-/// How far from a tool each node's mid-surface must start: the contact's
-/// offset, its half thickness, for a single ply or a stack's bottom ply,
-/// and for each ply above that the plies below it stacked on top (their
-/// half thicknesses, as the ply contact holds them).
-fn start_clearance(model: &Model) -> impl Fn(usize) -> f64 + Sync + '_ {
-    let mut clearance = Vec::with_capacity(model.plies.len());
+/// How far from a tool each node's mid-surface must start, node by node:
+/// its half thickness for a single ply or a stack's bottom ply, and for
+/// each ply above that the plies below it stacked on top (their half
+/// thicknesses, as the ply contact holds them).
+fn start_clearance(model: &Model) -> Vec<f64> {
+    let mut clearance = vec![model.contact_offset; model.node_count()];
+    let mut below = 0.0;
     for (p, ply) in model.plies.iter().enumerate() {
-        clearance.push(match p {
+        let at = match p {
             0 => 0.5 * ply.thickness,
-            _ => clearance[p - 1] + 0.5 * (model.plies[p - 1].thickness + ply.thickness),
-        });
+            _ => below + 0.5 * (model.plies[p - 1].thickness + ply.thickness),
+        };
+        for node in ply.nodes.clone() {
+            clearance[node as usize] = at;
+        }
+        below = at;
     }
-    move |node: usize| {
-        model
-            .plies
-            .iter()
-            .position(|ply| ply.nodes.contains(&(node as u32)))
-            .map_or(model.contact_offset, |p| clearance[p])
-    }
+    clearance
 }
 
-/// The nodes a blank at `x` has closer to a tool (at its start position)
-/// than they must start ([`start_clearance`]), less a hundredth of the
-/// offset of round-off; those behind a tool's surface are the start-up
-/// check's error, not these.
-fn too_close(model: &Model, tool: &drape_contact::Tool, x: &[Vector3<f64>]) -> Vec<usize> {
+/// The nodes a blank at `x` has closer to `tool` (at its start position)
+/// than `clearance` says they must start, less a hundredth of the offset
+/// of round-off; those behind a tool's surface are the start-up check's
+/// error, not these.
+fn too_close(
+    model: &Model,
+    tool: &drape_contact::Tool,
+    x: &[Vector3<f64>],
+    clearance: &[f64],
+) -> Vec<usize> {
     let slack = 0.01 * model.contact_offset;
-    let clearance = start_clearance(model);
     let u0 = tool.prescribed_displacement(0.0).unwrap_or(0.0);
     (0..x.len())
         .into_par_iter()
         .filter(|&i| {
             let gap = tool.project(&x[i], u0).gap;
-            gap >= -slack && gap < clearance(i) - slack
+            gap >= -slack && gap < clearance[i] - slack
         })
         .collect()
 }
@@ -730,9 +733,9 @@ pub fn settle_on_tools(
         let mut worst = (0.0f64, Vector3::zeros());
         for tool in &model.tools {
             let u0 = tool.prescribed_displacement(0.0).unwrap_or(0.0);
-            for i in too_close(model, tool, x) {
+            for i in too_close(model, tool, x, &clearance) {
                 let p = tool.project(&x[i], u0);
-                let by = clearance(i) - p.gap;
+                let by = clearance[i] - p.gap;
                 if by > worst.0 {
                     worst = (by, p.normal);
                 }
@@ -796,6 +799,10 @@ pub fn check_tools_at_start(
     // Round-off of a blank built on a tool's surface is not an overlap.
     let slack = 0.01 * offset;
     let mut warnings = Vec::new();
+    let clearance = start_clearance(model);
+    // What `settle_on_tools` will do, found once for every tool's warning.
+    let free = crate::shared::Constraints::new(model).free();
+    let settled = std::cell::OnceCell::new();
     for tool in &model.tools {
         let u0 = tool.prescribed_displacement(0.0).unwrap_or(0.0);
         let gaps: Vec<f64> = x.par_iter().map(|p| tool.project(p, u0).gap).collect();
@@ -810,16 +817,14 @@ pub fn check_tools_at_start(
                 node_list(&inside)
             ));
         }
-        let clearance = start_clearance(model);
-        let close = too_close(model, tool, x);
+        let close = too_close(model, tool, x, &clearance);
         if !close.is_empty() {
             let depth = close
                 .iter()
-                .map(|&i| clearance(i) - gaps[i])
+                .map(|&i| clearance[i] - gaps[i])
                 .fold(0.0, f64::max);
-            let mut settled = x.to_vec();
-            let free = crate::shared::Constraints::new(model).free();
-            let what = match settle_on_tools(model, &mut settled, &free) {
+            let shift = *settled.get_or_init(|| settle_on_tools(model, &mut x.to_vec(), &free));
+            let what = match shift {
                 Some(shift) => format!(
                     "the run moves the blank {:.4} mm along ({:.3}, {:.3}, {:.3}) before its first \
                      step, as a whole (it starts stress-free, off where the scene put it)",

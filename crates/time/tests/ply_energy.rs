@@ -8,7 +8,7 @@
 //! thickness.
 
 use drape_model::{BoundaryCondition, Model};
-use drape_time::{Energies, Explicit, ExplicitSettings, Frame, Observer};
+use drape_time::{Energies, Explicit, ExplicitSettings, Frame, NoObserver, Observer};
 use nalgebra::Vector3;
 
 mod common;
@@ -97,7 +97,7 @@ fn plies_of_different_thicknesses_each_rest_on_a_tool_at_their_own_half_thicknes
     let mut driver = Explicit::new(&model, settings).expect("driver");
     assert!(driver.warnings().is_empty(), "{:?}", driver.warnings());
     let mut state = model.initial_state();
-    driver.run(&mut state, &mut Balance(0.0)).expect("run");
+    driver.run(&mut state, &mut NoObserver).expect("run");
     let heights = |p: usize| {
         let nodes = model.plies[p].nodes.clone();
         let z = nodes.map(|i| state.x[i as usize].z);

@@ -752,7 +752,7 @@ pub fn settle_on_tools(
         let (by, normal) = shortfall(x);
         if by == 0.0 {
             // Still no node inside a tool either.
-            if check_tools_inside(model, x).is_none() {
+            if !starts_inside_a_tool(model, x) {
                 return Some(shift);
             }
             break;
@@ -772,11 +772,11 @@ pub fn settle_on_tools(
 /// Translations [`settle_on_tools`] tries before it gives up.
 const SETTLE_TRIES: usize = 4;
 
-/// The first tool that a node of `x` starts behind (its mid-surface past
-/// the tool's surface by more than round-off), if any.
-fn check_tools_inside(model: &Model, x: &[Vector3<f64>]) -> Option<usize> {
+/// Whether a node of `x` starts behind a tool (its mid-surface past the
+/// tool's surface by more than round-off).
+fn starts_inside_a_tool(model: &Model, x: &[Vector3<f64>]) -> bool {
     let slack = 0.01 * model.contact_offset;
-    model.tools.iter().position(|tool| {
+    model.tools.iter().any(|tool| {
         let u0 = tool.prescribed_displacement(0.0).unwrap_or(0.0);
         x.par_iter().any(|p| tool.project(p, u0).gap < -slack)
     })

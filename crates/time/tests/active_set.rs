@@ -577,3 +577,64 @@ fn an_active_set_run_is_bit_identical_on_one_and_two_threads() {
     };
     assert_eq!(bits(&one), bits(&two));
 }
+
+/// A strip pinched between a floor and a force-driven holder (F = 200 N,
+/// about 4.2 N a node) with one interior node pulled up by 10 N: the
+/// holder must press that node by more than its share of the clamp, or
+/// the floor's row there would pull (λ < 0). With every pinched node
+/// given the same share, the floor row of the lifted node came out
+/// negative, left the active set, came back pressed at the next
+/// iteration, and so on (the hemisphere-ring's failure, from t ≈ 0.41 s).
+/// The run must complete without a cutback, with the holder carrying F.
+#[test]
+fn a_node_lifted_inside_a_pinch_takes_more_than_its_share() {
+    let h = glass().thickness;
+    let force = 200.0;
+    let mut model = blank_model([60.0, 20.0], [12, 4], 0.0);
+    model
+        .tools
+        .push(plane("floor", -0.5 * h, true, 0.2, ToolMotion::Fixed));
+    model.tools.push(plane(
+        "holder",
+        0.5 * h,
+        false,
+        0.2,
+        ToolMotion::Force {
+            direction: -Vector3::z(),
+            force,
+            amplitude: Amplitude::Ramp { duration: 0.01 },
+            mass: 1e-3,
+        },
+    ));
+    // An interior node: row 2 of 5, column 6 of 13.
+    let lifted = 2 * 13 + 6;
+    model.loads.push(drape_model::NodalLoad {
+        nodes: vec![lifted],
+        force: Vector3::new(0.0, 0.0, 10.0),
+        amplitude: drape_model::Amplitude::Ramp { duration: 0.01 },
+    });
+    let mut impulse = Vec::new();
+    let mut observer = Frames(|fr: &Frame<'_>| {
+        impulse.push((fr.state.time, fr.contact.unwrap().tool_state[1].impulse));
+    });
+    let settings = ImplicitSettings {
+        end_time: 0.03,
+        frames: 3,
+        contact_solver: ContactSolver::ActiveSet,
+        ..ImplicitSettings::default()
+    };
+    let mut driver = Implicit::new(&model, settings).unwrap();
+    let mut state = model.initial_state();
+    let summary = driver.run(&mut state, &mut observer).unwrap();
+    assert!(!summary.stopped);
+    let totals = summary.implicit.unwrap();
+    assert_eq!(totals.cutbacks, 0, "{totals:?}");
+    let [.., (t0, i0), (t1, i1)] = impulse[..] else {
+        panic!("{} frames", impulse.len());
+    };
+    let mean = (i1 - i0) / (t1 - t0);
+    assert!(
+        (mean - force).abs() < 1e-6 * force,
+        "the holder carried {mean} N"
+    );
+}

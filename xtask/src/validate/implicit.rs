@@ -159,6 +159,11 @@ pub const CASES: &[Case] = &[
         quick: false,
         run: hemisphere_agreement_active_set,
     },
+    Case {
+        name: "implicit/ring-clamp",
+        quick: true,
+        run: ring_clamp,
+    },
 ];
 
 fn incline() -> Vec<Check> {
@@ -424,6 +429,80 @@ fn hemisphere_agreement_active_set() -> Vec<Check> {
 fn hemisphere_shipped() -> Vec<Check> {
     let mut checks = agreement("hemisphere-0-90", &[CONDENSED], Gate::Reported);
     checks.extend(agreement("hemisphere-45", &[CONDENSED], Gate::Reported));
+    checks
+}
+
+/// The shipped hemisphere-ring (the blank clamped at its rim between a
+/// die ring and a force-driven holder ring, both with rounded inner
+/// edges) at 20 × 20 cells, run by the implicit driver with each contact
+/// solver: both must reach the end of the stroke with the energy balance
+/// closed to 1e-6 of the largest energy. Until 2026-11-30 the active set
+/// did not (stopped at t = 0.55 s at this mesh, t ≈ 0.49 s as shipped):
+/// the clamp's sharing pulled on the die under nodes the fabric lifts,
+/// and the two rings' normals, leaning alike where the flat faces meet
+/// the rounds, made their rows nearly dependent (multipliers of −5·10⁴ N
+/// on a 45 N clamp); see `drape_contact`'s `active_set` module. The two
+/// runs' forming is reported, not checked: the free flaps of this blank
+/// are not determined to a tolerance (at the physical mass the explicit
+/// and implicit drivers' draw-ins differ by 16 mm there).
+fn ring_clamp() -> Vec<Check> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives inside the workspace");
+    let out = super::target_dir(root).join("validation");
+    let mut checks = Vec::new();
+    let mut table = "**hemisphere-ring, 20 × 20 cells, implicit** (reported, not checked)\n\n\
+         | contact_solver | increments | cutbacks | factorisations | wall s | max shear (°) | DX (mm) | DY (mm) | DD (mm) |\n\
+         |---|---|---|---|---|---|---|---|---|\n"
+        .to_owned();
+    for name in ["active_set", "condensed"] {
+        let overrides = [
+            ("fabric.blank.cells", "[20, 20]"),
+            ("simulation.solver", "implicit"),
+            ("simulation.contact_solver", name),
+        ]
+        .map(|(k, v)| (k.to_owned(), v.to_owned()));
+        let scene = Scene::from_file(&root.join("scenes/hemisphere-ring.toml"), &overrides)
+            .expect("the scene loads");
+        let report = drape::run_scene(&scene, &out.join(format!("ring-clamp-{name}")), &mut |_| {
+            drape::RunControl::Continue
+        })
+        .expect("the run writes its results");
+        let summary = &report.summary;
+        if summary.status != "completed" {
+            eprintln!("ring-clamp, {name}: {:?}", summary.reason);
+        }
+        checks.push(Check::abs(
+            format!("{name}: the run reached the end of the stroke (s)"),
+            scene.spec.simulation.end_time,
+            if summary.status == "completed" {
+                summary.time
+            } else {
+                f64::NAN
+            },
+            0.0,
+        ));
+        checks.push(Check::abs(
+            format!("{name}: energy balance error (of the largest energy)"),
+            0.0,
+            summary.energy.balance_error,
+            1e-6,
+        ));
+        let d = report.measures.draw_in.unwrap_or_default();
+        let t = summary.run.implicit.as_ref();
+        table += &format!(
+            "| {name} | {} | {} | {} | {:.1} | {:.2} | {:.2} | {:.2} | {:.2} |\n",
+            summary.run.steps,
+            t.map_or(0, |t| t.cutbacks),
+            t.map_or(0, |t| t.factorisations),
+            summary.run.wall_s,
+            report.measures.max_shear_deg,
+            d.dx,
+            d.dy,
+            d.dd
+        );
+    }
+    super::note(table);
     checks
 }
 

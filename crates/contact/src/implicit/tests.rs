@@ -675,3 +675,55 @@ fn the_condensed_solve_equals_the_direct_saddle_point_solve() {
         }
     }
 }
+
+/// A node between two planes whose normals lean the same way by θ
+/// (a floor's (θ, 0, 1) and a roof's (θ, 0, −1), 1 + cos = 2θ²): within
+/// [`PINCH`] of opposite the two pairs' normals come out exactly opposite,
+/// along n₁ − n₂, and are marked squared where they were not within
+/// [`FLAT`]; a wedge of 0.01 rad is left as it is.
+#[test]
+fn a_pinch_whose_normals_lean_alike_is_squared() {
+    let pinch = |theta: f64| {
+        let face = |z: f64, up: f64| Tool {
+            name: format!("face{z}"),
+            surface: Surface::plane(
+                Vector3::new(0.0, 0.0, z),
+                Vector3::new(theta, 0.0, up).normalize(),
+            )
+            .unwrap(),
+            motion: ToolMotion::Fixed,
+            friction: 0.0,
+        };
+        let settings = ImplicitContactSettings {
+            offset: OFFSET,
+            margin: 0.5,
+            ..ImplicitContactSettings::default()
+        };
+        let tools = vec![face(-OFFSET, 1.0), face(OFFSET, -1.0)];
+        let mut contact = ImplicitContact::new(tools, 1, settings);
+        let x = vec![Vector3::new(0.3, 0.0, 0.0)];
+        contact.begin(&x, &[true], TRAPEZOIDAL_STEP);
+        contact.linearise(&x, &x);
+        assert_eq!(contact.pairs.len(), 2, "θ = {theta}");
+        let (a, b) = (&contact.pairs[0], &contact.pairs[1]);
+        assert_eq!(a.squared, b.squared, "θ = {theta}");
+        (a.normal, b.normal, a.squared)
+    };
+    // Flat (2θ² = 0, 2e-10 < FLAT) and leaning (3.2e-7 < PINCH).
+    for (theta, marked) in [(0.0, false), (1e-5, false), (4e-4, true)] {
+        let (a, b, squared) = pinch(theta);
+        assert_eq!((a, b), (Vector3::z(), -Vector3::z()), "θ = {theta}");
+        assert_eq!(squared, marked, "θ = {theta}");
+    }
+    // A wedge: 2e-4 > PINCH.
+    let (a, b, squared) = pinch(0.01);
+    assert!(
+        (a - Vector3::new(0.01, 0.0, 1.0).normalize()).norm() < 1e-15,
+        "{a}"
+    );
+    assert!(
+        (b - Vector3::new(0.01, 0.0, -1.0).normalize()).norm() < 1e-15,
+        "{b}"
+    );
+    assert!(!squared);
+}

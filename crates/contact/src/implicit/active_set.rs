@@ -275,7 +275,7 @@ impl ImplicitContact {
     /// squared pairs included) the rows are not dependent, or the node
     /// has more room than the flat faces' clamp, and the system's share
     /// stands.
-    fn share_clamp(&mut self) {
+    pub(super) fn share_clamp(&mut self) {
         let pairs = &mut self.pairs;
         for (h, holder) in self.tools.iter().enumerate() {
             if !holder.is_force_driven() {
@@ -322,9 +322,10 @@ impl ImplicitContact {
                     continue;
                 }
                 // The pressure p of the shares max(w·p, least) that add up
-                // to the clamp. Each pass binds the nodes whose least share
-                // is above w·p, which lowers p, so the bound set only grows
-                // and the passes end (two or three in practice).
+                // to the clamp. From the plain share, which is not below
+                // it, each pass binds the nodes whose least share is above
+                // w·p and solves for p with them bound: p falls, the bound
+                // set only grows, and a pass that binds no new node has p.
                 let mut pressure = clamp / total;
                 loop {
                     let (mut bound, mut free) = (0.0, 0.0);

@@ -727,3 +727,96 @@ fn a_pinch_whose_normals_lean_alike_is_squared() {
     );
     assert!(!squared);
 }
+
+proptest::proptest! {
+    /// The clamp's sharing moves multipliers only along the pinched
+    /// nodes' null space: each node's net force λ_d − λ_h and the holder's
+    /// total Σλ_h are kept (to round-off); where some share keeps every
+    /// row pressed no multiplier is left negative; and the shares are
+    /// max(w·p, λ_h − λ_d) for one pressure p (the nodes above their
+    /// least share all at w·p).
+    #[test]
+    fn the_clamp_sharing_keeps_each_node_s_net_force_and_the_clamp(
+        nets in proptest::collection::vec(-20.0f64..20.0, 2..12),
+        masses in proptest::collection::vec(0.5f64..2.0, 12),
+        clamp in 1.0f64..100.0,
+    ) {
+        let n = nets.len();
+        let holder = plane(
+            "holder",
+            OFFSET,
+            false,
+            0.1,
+            ToolMotion::Force {
+                direction: -Vector3::z(),
+                force: clamp,
+                amplitude: Amplitude::Constant,
+                mass: 1.0,
+            },
+        );
+        let die = plane("die", -OFFSET, true, 0.1, ToolMotion::Fixed);
+        let settings = ImplicitContactSettings {
+            offset: OFFSET,
+            margin: 0.5,
+            ..ImplicitContactSettings::default()
+        };
+        let mut contact = ImplicitContact::new(vec![die, holder], n, settings);
+        contact.set_mass(&masses[..n]);
+        let x: Vec<_> = (0..n).map(|i| Vector3::new(i as f64, 0.0, 0.0)).collect();
+        contact.begin(&x, &vec![true; n], TRAPEZOIDAL_STEP);
+        contact.linearise(&x, &x);
+        proptest::prop_assert_eq!(contact.pairs.len(), 2 * n);
+        // The system's own split: the clamp on the holder in proportion
+        // to the node index, the die rows from each node's net force.
+        let weights: f64 = (1..=n).map(|i| i as f64).sum();
+        for i in 0..n {
+            let h = clamp * (i + 1) as f64 / weights;
+            contact.pairs[n + i].multiplier = h;
+            contact.pairs[i].multiplier = h + nets[i];
+            for k in [i, n + i] {
+                contact.pairs[k].active = true;
+                contact.pairs[k].lambda = contact.pairs[k].multiplier.max(0.0);
+            }
+        }
+        let before: Vec<f64> = contact.pairs.iter().map(|p| p.multiplier).collect();
+        contact.share_clamp();
+        let after: Vec<f64> = contact.pairs.iter().map(|p| p.multiplier).collect();
+        let tol = 1e-12 * (clamp + 20.0);
+        let mut total = 0.0;
+        for i in 0..n {
+            let net = after[i] - after[n + i];
+            proptest::prop_assert!((net - nets[i]).abs() <= tol, "node {i}: {net} against {}", nets[i]);
+            total += after[n + i];
+        }
+        proptest::prop_assert!((total - clamp).abs() <= tol, "clamp {total} against {clamp}");
+        let least: Vec<f64> = nets.iter().map(|&d| (-d).max(0.0)).collect();
+        if least.iter().sum::<f64>() <= clamp {
+            proptest::prop_assert!(after.iter().all(|&l| l >= -tol), "{after:?}");
+            // One pressure for the nodes above their least share.
+            let pressures: Vec<f64> = (0..n)
+                .filter(|&i| after[n + i] > least[i] + tol)
+                .map(|i| after[n + i] / masses[i])
+                .collect();
+            for p in &pressures {
+                proptest::prop_assert!((p - pressures[0]).abs() <= 1e-9 * pressures[0], "{pressures:?}");
+            }
+            for i in 0..n {
+                proptest::prop_assert!(
+                    after[n + i] >= least[i] - tol,
+                    "node {i}: share {} under its least {}",
+                    after[n + i],
+                    least[i]
+                );
+                if after[n + i] > least[i] + tol {
+                    // At w·p, which is not below its least share.
+                    proptest::prop_assert!(pressures[0] * masses[i] >= least[i] - tol);
+                } else if !pressures.is_empty() {
+                    // Bound: w·p is not above its least share.
+                    proptest::prop_assert!(pressures[0] * masses[i] <= least[i] + tol);
+                }
+            }
+        } else {
+            proptest::prop_assert_eq!(&after, &before);
+        }
+    }
+}

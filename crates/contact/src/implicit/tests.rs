@@ -769,10 +769,10 @@ proptest::proptest! {
         // The system's own split: the clamp on the holder in proportion
         // to the node index, the die rows from each node's net force.
         let weights: f64 = (1..=n).map(|i| i as f64).sum();
-        for i in 0..n {
+        for (i, net) in nets.iter().enumerate() {
             let h = clamp * (i + 1) as f64 / weights;
             contact.pairs[n + i].multiplier = h;
-            contact.pairs[i].multiplier = h + nets[i];
+            contact.pairs[i].multiplier = h + net;
             for k in [i, n + i] {
                 contact.pairs[k].active = true;
                 contact.pairs[k].lambda = contact.pairs[k].multiplier.max(0.0);

@@ -206,6 +206,10 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "the shipped hemisphere-ring at 20 × 20 by the implicit driver with each contact solver: both complete; forming reported",
             "the run's health: completion and energy balance",
         ),
+        "implicit/holder-force-doubled" => (
+            "the ±45 deep drawing at 20 × 20 under twice its holder force by the implicit driver with each contact solver: both complete; forming reported",
+            "the run's health: completion and energy balance",
+        ),
         "implicit/hemisphere-shipped" => (
             "the shipped mass-scaled hemispheres by both drivers: same added mass, both complete; differences reported",
             "the explicit run (reported, not checked)",

@@ -312,6 +312,13 @@ struct Pair {
 }
 
 impl Pair {
+    /// The node's slip from its anchor at position `x` with its tool at
+    /// `tool` along `axis`, tangential to the pair's normal (mm).
+    fn tangential_slip(&self, x: Vector3<f64>, tool: f64, axis: Vector3<f64>) -> Vector3<f64> {
+        let s = x - self.anchor - axis * (tool - self.anchor_tool);
+        s - self.normal * self.normal.dot(&s)
+    }
+
     /// k_t of the pair's regularised stick: fixed at its first use in the
     /// increment, from the friction limit μ·λ_N it has then (see
     /// [`stick_stiffness`]), so the spring is linear over the increment.
@@ -347,8 +354,7 @@ impl Pair {
         mass: &[f64],
         inc: Option<Increment>,
     ) -> Vector3<f64> {
-        let s = x - self.anchor - axis * (tool - self.anchor_tool);
-        let slip = s - self.normal * self.normal.dot(&s);
+        let slip = self.tangential_slip(x, tool, axis);
         let f_n = self.force_n - self.normal * self.normal.dot(&self.force_n);
         f_n - slip * self.stick_spring(mu, elastic_slip, mass, inc)
     }
@@ -947,8 +953,7 @@ impl ImplicitContact {
                         Friction::Slip => pair.slip_direction * (mu * c.lambda),
                     };
                 }
-                let s = x[iu] - pair.anchor - axis * (d - pair.anchor_tool);
-                pair.slip = s - p.normal * p.normal.dot(&s);
+                pair.slip = pair.tangential_slip(x[iu], d, axis);
                 next.push(pair);
             }
         }
@@ -1005,11 +1010,12 @@ impl ImplicitContact {
                     for (m, normal) in [(k, n), (j, -n)] {
                         let pair = &mut pairs[m];
                         let axis = self.tools[pair.tool as usize].motion.direction();
-                        let s = x[pair.node as usize]
-                            - pair.anchor
-                            - axis * (self.trial[pair.tool as usize] - pair.anchor_tool);
                         pair.normal = normal;
-                        pair.slip = s - normal * normal.dot(&s);
+                        pair.slip = pair.tangential_slip(
+                            x[pair.node as usize],
+                            self.trial[pair.tool as usize],
+                            axis,
+                        );
                         pair.squared = squared;
                     }
                 }
@@ -1467,8 +1473,7 @@ impl ImplicitContact {
                 }
                 Friction::Slip => {
                     let axis = tool.motion.direction();
-                    let s = x[i] - pair.anchor - axis * (here.1 - pair.anchor_tool);
-                    let slip = s - pair.normal * pair.normal.dot(&s);
+                    let slip = pair.tangential_slip(x[i], here.1, axis);
                     // Along its friction force by more than the solve's
                     // accuracy: the slip has reversed, the node sticks
                     // (unless it has switched MAX_FLIPS times already in

@@ -232,8 +232,17 @@ struct Step<'a> {
 /// or over the committed ones).
 enum PointHistory<'a> {
     Committed(&'a [f64]),
-    Next { from: &'a [f64], to: &'a mut [f64] },
+    Next {
+        from: &'a [f64],
+        to: &'a mut [f64],
+    },
     InPlace(&'a mut [f64]),
+    /// The committed values and the new ones the forces already wrote at
+    /// the same positions: τ̄ is read, not updated again.
+    Evaluated {
+        from: &'a [f64],
+        next: &'a [f64],
+    },
 }
 
 impl PointHistory<'_> {
@@ -241,7 +250,7 @@ impl PointHistory<'_> {
     #[inline]
     fn committed(&self) -> &[f64] {
         match self {
-            Self::Committed(h) | Self::Next { from: h, .. } => h,
+            Self::Committed(h) | Self::Next { from: h, .. } | Self::Evaluated { from: h, .. } => h,
             Self::InPlace(h) => h,
         }
     }
@@ -581,21 +590,22 @@ impl MembraneBatch {
         let polar = polar_decomposition(&f)?;
         let h_in = history.committed();
         let u_n = sym_from(&h_in[0..3]);
-        let d_eps = rotated_strain_increment(&u_n, &polar.u);
         let tau_n = sym_from(&h_in[3..6]);
+        let d_eps = || rotated_strain_increment(&u_n, &polar.u);
         // Updating in place, U and τ̄ of step n are read above before
         // anything is written, and the resin updates its own history where
         // it lies: both ways give the same bits.
         let tau = match history {
             PointHistory::Committed(h) => {
                 m.resin
-                    .stress_after(&tau_n, &h[KINEMATIC_HISTORY..], &d_eps, step.dt)
+                    .stress_after(&tau_n, &h[KINEMATIC_HISTORY..], &d_eps(), step.dt)
             }
             PointHistory::Next { from, to } => {
                 to[KINEMATIC_HISTORY..].copy_from_slice(&from[KINEMATIC_HISTORY..]);
-                self.update_point(to, &polar.u, tau_n, &d_eps, step)
+                self.update_point(to, &polar.u, tau_n, &d_eps(), step)
             }
-            PointHistory::InPlace(h) => self.update_point(h, &polar.u, tau_n, &d_eps, step),
+            PointHistory::InPlace(h) => self.update_point(h, &polar.u, tau_n, &d_eps(), step),
+            PointHistory::Evaluated { next, .. } => sym_from(&next[3..6]),
         };
         let fibres = if self.section.embedded_fibres {
             [
@@ -934,6 +944,42 @@ impl MembraneBatch {
         kind: MembraneTangent,
         k_out: &mut DMatrix<f64>,
     ) -> Result<(), ElementError> {
+        self.tangent(e, x, h_in, None, dt, kind, k_out)
+    }
+
+    /// [`Self::element_tangent_with`] at positions `x` where the forces have
+    /// already been evaluated from `h_in` over `dt` into the new history
+    /// `h_next` (one element's worth of each; the batch's forces write it):
+    /// the resin's stress τ̄ is read from `h_next` instead of being updated
+    /// a second time, which is most of a point's response (the
+    /// viscoelastic update's exponentials). The same matrix bit for bit,
+    /// since the forces made the same update; an `h_next` from other
+    /// positions gives a tangent that is not theirs.
+    #[allow(clippy::too_many_arguments)]
+    pub fn element_tangent_after_forces(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_next: &[f64],
+        dt: f64,
+        kind: MembraneTangent,
+        k_out: &mut DMatrix<f64>,
+    ) -> Result<(), ElementError> {
+        self.tangent(e, x, h_in, Some(h_next), dt, kind, k_out)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn tangent(
+        &self,
+        e: usize,
+        x: &[Vector3<f64>],
+        h_in: &[f64],
+        h_next: Option<&[f64]>,
+        dt: f64,
+        kind: MembraneTangent,
+        k_out: &mut DMatrix<f64>,
+    ) -> Result<(), ElementError> {
         let nn = self.shape.nodes();
         let m = &self.section.material;
         let (h_m, t_f) = (m.resin_thickness(), m.family_thickness());
@@ -944,15 +990,17 @@ impl MembraneBatch {
         let d = 3 * nn;
         let mut k = [0.0; 9 * MAX_NODES * MAX_NODES];
         for p in 0..self.shape.points() {
-            let h = &h_in[p * self.stride..(p + 1) * self.stride];
+            let range = p * self.stride..(p + 1) * self.stride;
+            let h = &h_in[range.clone()];
+            let history = match h_next {
+                Some(next) => PointHistory::Evaluated {
+                    from: h,
+                    next: &next[range],
+                },
+                None => PointHistory::Committed(h),
+            };
             let r = self
-                .point_response(
-                    e,
-                    p,
-                    &xe[..nn],
-                    PointHistory::Committed(h),
-                    Step { dt, prony: &[] },
-                )
+                .point_response(e, p, &xe[..nn], history, Step { dt, prony: &[] })
                 .map_err(|cause| ElementError {
                     element: e,
                     point: p,

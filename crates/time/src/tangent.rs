@@ -524,6 +524,23 @@ impl SparseTangent {
         mass: &[f64],
         mass_factor: f64,
     ) -> Result<(), (String, ElementError)> {
+        self.assemble_from(model, x, history, None, dt, mass, mass_factor)
+    }
+
+    /// [`Self::assemble`], the membranes' stress read from `evaluated` where
+    /// the forces at `x` have already advanced `history` into it
+    /// ([`drape_elements::MembraneBatch::element_tangent_after_forces`]).
+    #[allow(clippy::too_many_arguments)]
+    fn assemble_from(
+        &mut self,
+        model: &Model,
+        x: &[Vector3<f64>],
+        history: &[Vec<f64>],
+        evaluated: Option<&[Vec<f64>]>,
+        dt: f64,
+        mass: &[f64],
+        mass_factor: f64,
+    ) -> Result<(), (String, ElementError)> {
         for (i, b) in model.trusses.iter().enumerate() {
             let slots = batch_slots(&mut self.slots, &self.trusses[i], b.len());
             assemble_batch(slots, &mut self.truss_scratch[i], |e, k| {
@@ -539,8 +556,18 @@ impl SparseTangent {
                 _ if self.kept < 1.0 => MembraneTangent::CompressionScaled(self.kept),
                 _ => MembraneTangent::Exact,
             };
-            assemble_batch(slots, &mut self.membrane_scratch[i], |e, k| {
-                b.element_tangent_with(e, x, &b.element_history(h, e), dt, kind, k)
+            let next = evaluated.map(|h| &h[i]);
+            assemble_batch(slots, &mut self.membrane_scratch[i], |e, k| match next {
+                Some(next) => b.element_tangent_after_forces(
+                    e,
+                    x,
+                    &b.element_history(h, e),
+                    &b.element_history(next, e),
+                    dt,
+                    kind,
+                    k,
+                ),
+                None => b.element_tangent_with(e, x, &b.element_history(h, e), dt, kind, k),
             })
             .map_err(|e| (format!("membrane batch {i} ({:?})", b.shape()), e))?;
         }
@@ -606,6 +633,9 @@ impl SparseTangent {
     /// reached (counted in [`Self::compression_scaled`]); the next call of the
     /// same attempt starts where this one stopped. `extra` adds to every
     /// assembly before it is factorised (the contact pass's stick springs).
+    /// `evaluated`: the membranes' new history the forces at `x` wrote from
+    /// `history` (the Newton loop's residual), whose stress the assembly
+    /// then reads instead of updating it again; None to update it here.
     /// Returns the factorisation and the seconds spent assembling.
     #[allow(clippy::too_many_arguments)]
     pub fn assemble_and_factorise(
@@ -613,6 +643,7 @@ impl SparseTangent {
         model: &Model,
         x: &[Vector3<f64>],
         history: &[Vec<f64>],
+        evaluated: Option<&[Vec<f64>]>,
         dt: f64,
         mass: &[f64],
         mass_factor: f64,
@@ -623,6 +654,7 @@ impl SparseTangent {
             model,
             x,
             history,
+            evaluated,
             dt,
             mass,
             mass_factor,
@@ -646,6 +678,7 @@ impl SparseTangent {
         model: &Model,
         x: &[Vector3<f64>],
         history: &[Vec<f64>],
+        evaluated: Option<&[Vec<f64>]>,
         dt: f64,
         mass: &[f64],
         mass_factor: f64,
@@ -662,7 +695,7 @@ impl SparseTangent {
                 l => COMPRESSION_KEPT[l - 1],
             };
             let started = Instant::now();
-            let assembled = self.assemble(model, x, history, dt, mass, mass_factor);
+            let assembled = self.assemble_from(model, x, history, evaluated, dt, mass, mass_factor);
             self.kept = 1.0;
             assembled.map_err(|(batch, e)| TangentError::Element(batch, e))?;
             extra(self);
@@ -1150,9 +1183,18 @@ mod tests {
         let n = 3 * model.node_count();
         let mut k = SparseTangent::new(&model, vec![false; n]).unwrap();
         let call = |k: &mut SparseTangent| {
-            k.assemble_and_factorise(&model, &x, &history, dt, &model.mass, factor, &mut |_| {})
-                .unwrap()
-                .0
+            k.assemble_and_factorise(
+                &model,
+                &x,
+                &history,
+                None,
+                dt,
+                &model.mass,
+                factor,
+                &mut |_| {},
+            )
+            .unwrap()
+            .0
         };
         // The exact tangent is indefinite...
         assert_eq!(call(&mut k), Factorisation::Ldlt);
@@ -1193,7 +1235,16 @@ mod tests {
             let mut k = SparseTangent::new(&model, vec![false; n]).unwrap();
             k.membrane_tangent = choice;
             let (kind, _) = k
-                .assemble_and_factorise(&model, &x, &history, dt, &model.mass, factor, &mut |_| {})
+                .assemble_and_factorise(
+                    &model,
+                    &x,
+                    &history,
+                    None,
+                    dt,
+                    &model.mass,
+                    factor,
+                    &mut |_| {},
+                )
                 .unwrap();
             assert_eq!((kind, k.compression_scaled), (Factorisation::Cholesky, 0));
             values.push(k.values);

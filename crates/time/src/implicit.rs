@@ -622,6 +622,7 @@ impl<'m> Implicit<'m> {
                     // accepts.
                     tolerance: 1e-3 * settings.gap_tolerance,
                     elastic_slip: settings.elastic_slip,
+                    square_friction_leans: settings.contact_solver == ContactSolver::ActiveSet,
                     ..ImplicitContactSettings::default()
                 },
             );

@@ -109,6 +109,7 @@ fn problem_with(friction: f64, elastic_slip: f64, holder: bool, cells: [usize; 2
             tolerance: 1e-13,
             max_iterations: 20_000,
             elastic_slip,
+            square_friction_leans: false,
         },
     );
     contact.set_mass(&model.mass);

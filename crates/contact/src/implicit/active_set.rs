@@ -64,10 +64,12 @@
 //! and did not complete. A node the fabric lifts off the die harder than
 //! its share presses it takes more than its share, so that no row pulls
 //! (see `share_clamp`). Where the two tools' normals at a node lean alike
-//! by up to 1.4e-3 rad (a holder's rounded edge over a die's fillet) they
-//! are made exactly opposite (`ImplicitContact::square_pinches`): left
-//! leaning, the two rows carried tangential forces through the lean, with
-//! multipliers of −5·10⁴ N on a 45 N clamp. A force-driven holder is
+//! by up to 1.4e-3 rad (a holder's rounded edge over a die's fillet), or
+//! with friction by less than sin θ = μ₁ + μ₂, they are made exactly
+//! opposite (`ImplicitContact::square_pinches`): left leaning, the two
+//! rows carried tangential forces through the lean, with multipliers of
+//! −5·10⁴ N on a 45 N clamp, and with the slip forces one iteration
+//! behind, the holder's whole clamp moved onto its edge's nodes. A force-driven holder is
 //! one more unknown (its displacement along its axis, its inertia on the
 //! diagonal), coupled to every row of its pairs.
 //!

@@ -137,6 +137,7 @@ fn compare(
         tolerance: 1e-13,
         max_iterations: 1000,
         elastic_slip,
+        square_friction_leans: false,
     };
     let mut contact = ImplicitContact::new(tools.clone(), nodes, settings);
     contact.set_springs_in_tangent(springs);
@@ -363,6 +364,7 @@ fn pressed_on_floor(
         tolerance: 1e-13,
         max_iterations: 100,
         elastic_slip,
+        square_friction_leans: false,
     };
     let mut contact = ImplicitContact::new(vec![floor], 1, settings);
     let carried = vec![CarriedPair {
@@ -559,6 +561,7 @@ fn pinched(force: f64, seed: u64) -> (Result<SolveStats, SolveError>, Vec<f64>, 
         tolerance: 1e-13,
         max_iterations: 1000,
         elastic_slip: 0.0,
+        square_friction_leans: false,
     };
     let mut contact = ImplicitContact::new(tools.clone(), nodes, settings);
     let inc = TRAPEZOIDAL_STEP;
@@ -680,10 +683,14 @@ fn the_condensed_solve_equals_the_direct_saddle_point_solve() {
 /// (a floor's (θ, 0, 1) and a roof's (θ, 0, −1), 1 + cos = 2θ²): within
 /// [`PINCH`] of opposite the two pairs' normals come out exactly opposite,
 /// along n₁ − n₂, and are marked squared where they were not within
-/// [`FLAT`]; a wedge of 0.01 rad is left as it is.
+/// [`FLAT`]; a frictionless wedge of 0.01 rad is left as it is. With
+/// friction μ on both faces a wedge is squared while its lean from opposite
+/// (2θ) is inside their friction, sin 2θ < 2μ: θ = 0.01 and 0.09 at
+/// μ = 0.1 (sin 2θ = 0.18), not θ = 0.12 (0.24); only for the active-set
+/// solver ([`ImplicitContactSettings::square_friction_leans`]).
 #[test]
 fn a_pinch_whose_normals_lean_alike_is_squared() {
-    let pinch = |theta: f64| {
+    let pinch_with = |theta: f64, friction: f64, square_friction_leans: bool| {
         let face = |z: f64, up: f64| Tool {
             name: format!("face{z}"),
             surface: Surface::plane(
@@ -692,11 +699,12 @@ fn a_pinch_whose_normals_lean_alike_is_squared() {
             )
             .unwrap(),
             motion: ToolMotion::Fixed,
-            friction: 0.0,
+            friction,
         };
         let settings = ImplicitContactSettings {
             offset: OFFSET,
             margin: 0.5,
+            square_friction_leans,
             ..ImplicitContactSettings::default()
         };
         let tools = vec![face(-OFFSET, 1.0), face(OFFSET, -1.0)];
@@ -709,6 +717,7 @@ fn a_pinch_whose_normals_lean_alike_is_squared() {
         assert_eq!(a.squared, b.squared, "θ = {theta}");
         (a.normal, b.normal, a.squared)
     };
+    let pinch = |theta: f64| pinch_with(theta, 0.0, true);
     // Flat (2θ² = 0, 2e-10 < FLAT) and leaning (3.2e-7 < PINCH).
     for (theta, marked) in [(0.0, false), (1e-5, false), (4e-4, true)] {
         let (a, b, squared) = pinch(theta);
@@ -724,6 +733,31 @@ fn a_pinch_whose_normals_lean_alike_is_squared() {
     assert!(
         (b - Vector3::new(0.01, 0.0, -1.0).normalize()).norm() < 1e-15,
         "{b}"
+    );
+    assert!(!squared);
+    // With friction: inside the two faces' friction (sin 2θ < 0.2),
+    // squared and marked; outside it, left.
+    for theta in [0.01, 0.09] {
+        let (a, b, squared) = pinch_with(theta, 0.1, true);
+        assert!((a - Vector3::z()).norm() < 1e-15, "θ = {theta}: {a}");
+        assert!((b + Vector3::z()).norm() < 1e-15, "θ = {theta}: {b}");
+        assert!(squared, "θ = {theta}");
+    }
+    let (a, b, squared) = pinch_with(0.12, 0.1, true);
+    assert!(
+        (a - Vector3::new(0.12, 0.0, 1.0).normalize()).norm() < 1e-15,
+        "{a}"
+    );
+    assert!(
+        (b - Vector3::new(0.12, 0.0, -1.0).normalize()).norm() < 1e-15,
+        "{b}"
+    );
+    assert!(!squared);
+    // The condensed solver's pass leaves the lean.
+    let (a, _, squared) = pinch_with(0.01, 0.1, false);
+    assert!(
+        (a - Vector3::new(0.01, 0.0, 1.0).normalize()).norm() < 1e-15,
+        "{a}"
     );
     assert!(!squared);
 }

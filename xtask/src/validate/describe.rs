@@ -204,11 +204,11 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
         ),
         "implicit/ring-clamp" => (
             "the shipped hemisphere-ring at 20 × 20 by the implicit driver with each contact solver: both complete; forming reported",
-            "the run's health: completion and energy balance",
+            "the run's health: completion, energy balance, at rest at the end",
         ),
         "implicit/holder-force-doubled" => (
             "the ±45 deep drawing at 20 × 20 under twice its holder force by the implicit driver with each contact solver: both complete; forming reported",
-            "the run's health: completion and energy balance",
+            "the run's health: completion, energy balance, at rest at the end",
         ),
         "implicit/hemisphere-shipped" => (
             "the shipped mass-scaled hemispheres by both drivers: same added mass, both complete; differences reported",

@@ -237,7 +237,7 @@ pub struct ImplicitContactSettings {
     pub elastic_slip: f64,
     /// Whether a node pinched between two tools whose normals lean inside
     /// their friction (sin θ < μ₁ + μ₂) has them made opposite (see
-    /// [`ImplicitContact::square_pinches`]): the active-set solver's
+    /// `ImplicitContact::square_pinches`): the active-set solver's
     /// Newton iteration, whose slip forces lag behind λ_N, needs it; the
     /// condensed solve (the reference) converges on the lean.
     pub square_friction_leans: bool,

@@ -69,9 +69,9 @@
 //! opposite (`ImplicitContact::square_pinches`): left leaning, the two
 //! rows carried tangential forces through the lean, with multipliers of
 //! −5·10⁴ N on a 45 N clamp, and with the slip forces one iteration
-//! behind, the holder's whole clamp moved onto its edge's nodes. A force-driven holder is
-//! one more unknown (its displacement along its axis, its inertia on the
-//! diagonal), coupled to every row of its pairs.
+//! behind, the holder's whole clamp moved onto its edge's nodes. A
+//! force-driven holder is one more unknown (its displacement along its
+//! axis, its inertia on the diagonal), coupled to every row of its pairs.
 //!
 //! **The pattern** is fixed per set of candidates (nodes inside a tool's
 //! grown box at the start of an increment): [`SLOTS_PER_PAIR`] slots per

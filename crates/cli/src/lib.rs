@@ -816,6 +816,12 @@ pub fn run_in(
             kinetic_to_internal: kinetic_share(energy.kinetic, internal, floor).unwrap_or(f64::NAN),
             kinetic_mj: Some(energy.kinetic),
             internal_mj: Some(internal),
+            newton_residual_work: (solver == Solver::Implicit).then(|| {
+                drape_time::guard::relative_residual_work(
+                    &energy,
+                    drape_time::guard::energy_floor(model),
+                )
+            }),
         },
         setup,
         run: RunInfo {

@@ -164,8 +164,14 @@ pub(super) fn print_summary(s: &Summary, out: &Path) {
         "wrinkle indicator max waviness {:.1}°, area above 5° {:.0} mm²",
         s.max_waviness_deg, s.wrinkle_area_mm2
     );
+    // An implicit run's balance error is the work of the residual its
+    // Newton iterations accept; said beside it, a gap between the two is a
+    // work term the balance misses.
+    let residual = s.energy.newton_residual_work.map_or(String::new(), |w| {
+        format!(" (Newton residual's work {:.2e})", w.abs())
+    });
     println!(
-        "energy            balance error {:.2e}, {}",
+        "energy            balance error {:.2e}{residual}, {}",
         s.energy.balance_error,
         kinetic_share_text(&s.energy)
     );

@@ -175,6 +175,13 @@ pub struct EnergySummary {
     /// The internal energy at the end (mJ, N·mm).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub internal_mj: Option<f64>,
+    /// The implicit driver's Newton residual work over the same scale as
+    /// `balance_error`, with its sign: the out-of-balance force each
+    /// increment was accepted with (within the Newton tolerance) times the
+    /// increment's motion, summed. The balance error is this to round-off
+    /// when every force's work is accounted for. Absent for explicit runs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub newton_residual_work: Option<f64>,
 }
 
 /// Run statistics.

@@ -374,6 +374,7 @@ fn writes_a_complete_results_directory() {
         numerical_dissipation: 0.0625,
         confinement_work: 0.03125,
         balance_error: -1e-9,
+        residual_work: 0.0,
     };
     let rows: Vec<EnergyRow> = (0..3)
         .map(|k| EnergyRow {

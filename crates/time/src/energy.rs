@@ -39,6 +39,15 @@ pub struct Energies {
     /// kinetic + internal + damping + numerical − external − boundary −
     /// contact − initial kinetic.
     pub balance_error: f64,
+    /// The work of the out-of-balance force each implicit increment is
+    /// accepted with, Σ r·Δx over the free components (r = inertia −
+    /// forces, within the Newton tolerance): with every force's work
+    /// accounted for, the implicit driver's balance error is exactly this,
+    /// so what the Newton tolerance and the increments' length leave is
+    /// told from a work term the balance misses. Zero for central
+    /// differences, whose balance error is the integrator's own.
+    #[serde(default)]
+    pub residual_work: f64,
 }
 
 impl Energies {

@@ -298,6 +298,13 @@ pub fn relative_balance_error(energy: &Energies, floor: f64) -> f64 {
     energy.balance_error.abs() / energy_scale(energy).max(floor)
 }
 
+/// The implicit driver's Newton residual work
+/// ([`Energies::residual_work`]) over the scale of
+/// [`relative_balance_error`], with its sign.
+pub fn relative_residual_work(energy: &Energies, floor: f64) -> f64 {
+    energy.residual_work / energy_scale(energy).max(floor)
+}
+
 fn energy_scale(e: &Energies) -> f64 {
     [
         e.kinetic,

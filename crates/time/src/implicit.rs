@@ -58,7 +58,10 @@
 //! **Energy.** Works by the trapezoidal rule over each increment; what the
 //! integrator removes, D = Δx·M·ā − ΔE_kin − ½·Δx·(F_{n+1} − Fₙ), is
 //! reported as numerical dissipation, so the balance error is the
-//! equilibrium residual's work (checked like the explicit one).
+//! equilibrium residual's work. That work is also summed on its own
+//! ([`Energies::residual_work`]): the two agree to round-off where every
+//! force's work is in the balance, which is what an implicit balance can
+//! check; its size is the Newton tolerance's and the increments'.
 //!
 //! **Contact solvers** (`contact_solver`, see [`ContactSolver`]): the
 //! paper's condensed multiplier solve on the factorised K̂ (the reference),
@@ -1287,7 +1290,7 @@ impl<'m> Implicit<'m> {
         );
         let (f_slip, f_con) = (&self.f_slip, &self.f_con);
         let fixed = &self.fixed;
-        let [w_int, w_ext, w_damp, w_c, w_bc, ke_n, d_num] = chunked_sums(n, |i| {
+        let [w_int, w_ext, w_damp, w_c, w_bc, ke_n, d_num, w_res] = chunked_sums(n, |i| {
             let m = self.mass[i];
             let dx = x[i] - x_n[i];
             let f_c = f_slip[i] + f_con[i];
@@ -1295,10 +1298,13 @@ impl<'m> Implicit<'m> {
             let force = f_ext[i] - f_int[i] - damp + f_c;
             let force_n = f_ext_n[i] - f_int_n[i] - damp_n + f_c_n[i];
             let inertia = inc.inertia(a_n[i], a[i]) * m;
-            let mut w_bc = 0.0;
+            let (mut w_bc, mut w_res) = (0.0, 0.0);
             for k in 0..3 {
+                let work = (inertia[k] - force[k]) * dx[k];
                 if fixed[3 * i + k] {
-                    w_bc += (inertia[k] - force[k]) * dx[k];
+                    w_bc += work;
+                } else {
+                    w_res += work;
                 }
             }
             [
@@ -1309,6 +1315,7 @@ impl<'m> Implicit<'m> {
                 w_bc,
                 0.5 * m * v_n[i].norm_squared(),
                 inertia.dot(&dx) - 0.5 * (force - force_n).dot(&dx),
+                w_res,
             ]
         });
         energy.internal_work += w_int;
@@ -1316,6 +1323,7 @@ impl<'m> Implicit<'m> {
         energy.damping += w_damp;
         energy.contact_work += w_c;
         energy.boundary_work += w_bc;
+        energy.residual_work += w_res;
         let counts = match &mut self.contact {
             Some(contact) => {
                 let counts = contact.commit(&self.x, &state.x);

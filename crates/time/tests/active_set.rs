@@ -444,9 +444,10 @@ fn newton_converges_quadratically_once_the_active_set_has_settled() {
 /// between stick and slip in turn, and the active-set run stopped at
 /// t = 0.012 s (increment 2e-10 s, 11 friction-chatter cutbacks) where
 /// the condensed one completes in 39 increments. Both solvers must
-/// complete, with no friction-chatter cutback, and carry the pull (the
+/// complete, with no friction-chatter cutback, carry the pull (the
 /// boundary's work over the second half of the run over the distance
-/// drawn) to 1e-6.
+/// drawn) to 1e-6, and close the energy balance up to the Newton
+/// residual's work (to 1e-13 of the largest energy).
 #[test]
 fn a_strip_drawn_through_a_pinch_settles() {
     let h = glass().thickness;
@@ -483,8 +484,14 @@ fn a_strip_drawn_through_a_pinch_settles() {
         let mut work = Vec::new();
         let mut reaction = Vec::new();
         let mut impulse = Vec::new();
+        let mut unexplained: f64 = 0.0;
         let mut observer = Frames(|fr: &Frame<'_>| {
             work.push(fr.energy.boundary_work);
+            let e = fr.energy;
+            let scale = [e.kinetic, e.internal_work, e.boundary_work, e.contact_work]
+                .into_iter()
+                .fold(0.0_f64, |m, w| m.max(w.abs()));
+            unexplained = unexplained.max((e.balance_error - e.residual_work).abs() / scale);
             let tools = fr.contact.unwrap().tool_state;
             impulse.push((fr.state.time, [tools[0].impulse, tools[1].impulse]));
             reaction.push(
@@ -507,6 +514,13 @@ fn a_strip_drawn_through_a_pinch_settles() {
         assert!(!summary.stopped, "{solver:?} stopped");
         let totals = summary.implicit.unwrap();
         assert_eq!(totals.cutback_reasons.friction_chatter, 0, "{solver:?}");
+        // Every force's work is in the balance (the pull's, the pinch's
+        // friction, the holder's, the inertia's): what is left is the
+        // work of the residual each increment was accepted with.
+        assert!(
+            unexplained < 1e-13,
+            "{solver:?}: balance error beyond the Newton residual's work {unexplained:e}"
+        );
         let [.., before, last] = work[..] else {
             panic!("{solver:?}: {} frames", work.len());
         };

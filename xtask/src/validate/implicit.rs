@@ -448,7 +448,7 @@ fn hemisphere_shipped() -> Vec<Check> {
 /// die ring and a force-driven holder ring, both with rounded inner
 /// edges) at 20 × 20 cells, run by the implicit driver with each contact
 /// solver: both must reach the end of the stroke with the energy balance
-/// closed to 1e-6 of the largest energy. Until 2026-11-30 the active set
+/// closed up to the Newton residual's work. Until 2026-11-30 the active set
 /// did not (stopped at t = 0.55 s at this mesh, t ≈ 0.49 s as shipped):
 /// the clamp's sharing pulled on the die under nodes the fabric lifts,
 /// and the two rings' normals, leaning alike where the flat faces meet
@@ -485,7 +485,8 @@ fn holder_force_doubled() -> Vec<Check> {
 
 /// Runs the shipped scene `name` with `overrides` by the implicit driver
 /// with each contact solver: checks that each reaches its end time with
-/// the energy balance closed to 1e-6 and at rest (kinetic energy within
+/// the energy balance closed up to the Newton residual's work and at rest
+/// (kinetic energy within
 /// [`drape::QUASI_STATIC_KINETIC_SHARE`] of the internal), and reports the
 /// two runs' counts and forming side by side.
 fn both_contact_solvers(name: &str, overrides: &[(&str, &str)], tag: &str) -> Vec<Check> {
@@ -497,8 +498,8 @@ fn both_contact_solvers(name: &str, overrides: &[(&str, &str)], tag: &str) -> Ve
     let settings: Vec<String> = overrides.iter().map(|(k, v)| format!("{k}={v}")).collect();
     let mut table = format!(
         "**{name}, {}, implicit** (reported, not checked)\n\n\
-         | contact_solver | increments | cutbacks | factorisations | wall s | max shear (°) | DX (mm) | DY (mm) | DD (mm) |\n\
-         |---|---|---|---|---|---|---|---|---|\n",
+         | contact_solver | increments | cutbacks | factorisations | wall s | balance error | max shear (°) | DX (mm) | DY (mm) | DD (mm) |\n\
+         |---|---|---|---|---|---|---|---|---|---|\n",
         settings.join(" ")
     );
     for solver in ["active_set", "condensed"] {
@@ -530,11 +531,22 @@ fn both_contact_solvers(name: &str, overrides: &[(&str, &str)], tag: &str) -> Ve
             },
             0.0,
         ));
+        // The balance error of an implicit run is the work of the residual
+        // its increments are accepted with (within the Newton tolerance),
+        // and grows with the increments' length: this case's 0.87e-6 came
+        // out at 1.13e-6 with the punch's μ at 0.1001 instead of 0.1. What
+        // the balance can tell is a force whose work it misses: beyond
+        // that residual work the error must be round-off (1e-15 measured
+        // on this case, the ring and three shipped scenes).
+        let residual = summary.energy.newton_residual_work.unwrap_or(f64::NAN);
         checks.push(Check::abs(
-            format!("{solver}: energy balance error (of the largest energy)"),
+            format!(
+                "{solver}: energy balance error beyond the Newton residual's work \
+                 (of the largest energy)"
+            ),
             0.0,
-            summary.energy.balance_error,
-            1e-6,
+            summary.energy.balance_error - residual.abs(),
+            1e-12,
         ));
         // A run can close its balance and still end wrong: a path of the
         // condensed solve on the ring (2026-11-30) threw the blank off the
@@ -550,11 +562,12 @@ fn both_contact_solvers(name: &str, overrides: &[(&str, &str)], tag: &str) -> Ve
         let d = report.measures.draw_in.unwrap_or_default();
         let t = summary.run.implicit.as_ref();
         table += &format!(
-            "| {solver} | {} | {} | {} | {:.1} | {:.2} | {:.2} | {:.2} | {:.2} |\n",
+            "| {solver} | {} | {} | {} | {:.1} | {:.2e} | {:.2} | {:.2} | {:.2} | {:.2} |\n",
             summary.run.steps,
             t.map_or(0, |t| t.cutbacks),
             t.map_or(0, |t| t.factorisations),
             summary.run.wall_s,
+            summary.energy.balance_error,
             report.measures.max_shear_deg,
             d.dx,
             d.dy,

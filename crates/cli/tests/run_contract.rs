@@ -101,6 +101,34 @@ fn runs_of_no_step_or_of_for_ever_are_refused_before_they_start() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// Masses that overflow under a force-driven tool: the tool's check of
+/// its travel in one step saw a step of inf s and blamed the holder's
+/// force (`cargo xtask stress`, edge numbers on the shipped ring); the
+/// refusal names the mass-scaling key, as without such a tool.
+#[test]
+fn overflowing_masses_under_a_force_driven_holder_name_the_mass_scaling() {
+    let dir = temp("ring-overflow");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/hemisphere-ring.toml");
+    let out = dir.join("out");
+    let o = within_a_minute(&[
+        "run".into(),
+        scene.display().to_string(),
+        "--set".into(),
+        "simulation.mass_scaling_dt=1e300".into(),
+        "--out".into(),
+        out.display().to_string(),
+    ]);
+    let said = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{said}");
+    assert!(
+        said.contains("simulation.mass_scaling_dt")
+            && said.contains("not a number a run can integrate with"),
+        "{said}"
+    );
+    assert!(!out.exists());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 /// A stopped run of DRAPED in `out` with a checkpoint, through the library.
 fn stopped(dir: &Path, out: &Path) {
     use drape::{RunControl, RunOptions, run_scene_with};

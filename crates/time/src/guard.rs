@@ -872,7 +872,10 @@ pub fn check_tools_at_start(
         } = &tool.motion
         {
             let travel = force.abs() * peak_value(amplitude) / mass * dt * dt;
-            if travel > 2.0 * offset {
+            // A step that is not a number (mass scaling to an overflowing
+            // mass) cannot be judged here: the caller's check of the
+            // masses and the step refuses it, naming its setting.
+            if dt.is_finite() && travel > 2.0 * offset {
                 return Err(format!(
                     "force-driven tool `{}` would travel {travel:.3e} mm in one step under its force alone \
                      ({force:e} N on {mass:e} t, Δt = {dt:.3e} s): more than the fabric's thickness {} mm, so \

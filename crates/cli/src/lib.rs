@@ -809,19 +809,12 @@ pub fn run_in(
         wrinkle_area_mm2: measures.wrinkle_area,
         fold,
         energy: EnergySummary {
-            balance_error: drape_time::guard::relative_balance_error(
-                &energy,
-                drape_time::guard::energy_floor(model),
-            ),
+            balance_error: drape_time::guard::relative_balance_error(&energy, floor),
             kinetic_to_internal: kinetic_share(energy.kinetic, internal, floor).unwrap_or(f64::NAN),
             kinetic_mj: Some(energy.kinetic),
             internal_mj: Some(internal),
-            newton_residual_work: (solver == Solver::Implicit).then(|| {
-                drape_time::guard::relative_residual_work(
-                    &energy,
-                    drape_time::guard::energy_floor(model),
-                )
-            }),
+            newton_residual_work: (solver == Solver::Implicit)
+                .then(|| drape_time::guard::relative_residual_work(&energy, floor)),
         },
         setup,
         run: RunInfo {

@@ -282,6 +282,21 @@ impl Model {
         out
     }
 
+    /// The direction up the stack: the bottom ply's mean normal
+    /// ([`Self::mean_normal`]; +z for drape's own rectangles). The plies
+    /// are laid on each other along it, and their faces are wound to it.
+    pub fn stack_up(&self) -> Vector3<f64> {
+        let Some(first) = self.plies.first() else {
+            return self.mean_normal();
+        };
+        let part = Model {
+            x0: self.x0.clone(),
+            membranes: self.membranes[first.membranes.clone()].to_vec(),
+            ..Model::default()
+        };
+        part.mean_normal()
+    }
+
     /// The plies as the contact sees them (triangles wound up the stack,
     /// half thicknesses) and their interfaces; empty for fewer than two
     /// plies.
@@ -289,15 +304,7 @@ impl Model {
         if self.plies.len() < 2 {
             return (Vec::new(), Vec::new());
         }
-        let up = {
-            let first = &self.plies[0];
-            let part = Model {
-                x0: self.x0.clone(),
-                membranes: self.membranes[first.membranes.clone()].to_vec(),
-                ..Model::default()
-            };
-            part.mean_normal()
-        };
+        let up = self.stack_up();
         let mut layers = Vec::new();
         for ply in &self.plies {
             let mut faces = Vec::new();

@@ -677,49 +677,76 @@ fn node_list(nodes: &[usize]) -> String {
 }
 
 /// How far from a tool each node's mid-surface must start, node by node:
-/// its half thickness for a single ply or a stack's bottom ply, and for
-/// each ply above that the plies below it stacked on top (their half
-/// thicknesses, as the ply contact holds them).
-fn start_clearance(model: &Model) -> Vec<f64> {
-    let mut clearance = vec![model.contact_offset; model.node_count()];
-    let mut below = 0.0;
-    for (p, ply) in model.plies.iter().enumerate() {
-        let at = match p {
-            0 => 0.5 * ply.thickness,
-            _ => below + 0.5 * (model.plies[p - 1].thickness + ply.thickness),
-        };
-        for node in ply.nodes.clone() {
-            clearance[node as usize] = at;
+/// its half thickness for a single ply, and in a stack its own half
+/// thickness plus the plies between it and the tool: those below it for a
+/// tool under the stack (a mould, a die, a punch from below), those above
+/// it for a tool over the stack (a blank holder, a punch from above). A
+/// tool is under the stack where its outward normal at the node's closest
+/// point leans up the stack ([`Model::stack_up`]).
+struct StartClearance {
+    /// Per node: (clearance from a tool below, from a tool above), mm.
+    clearance: Vec<(f64, f64)>,
+    up: Vector3<f64>,
+}
+
+impl StartClearance {
+    fn of(model: &Model) -> Self {
+        let offset = model.contact_offset;
+        let mut clearance = vec![(offset, offset); model.node_count()];
+        let total: f64 = model.plies.iter().map(|p| p.thickness).sum();
+        let mut below = 0.0;
+        for ply in &model.plies {
+            let half = 0.5 * ply.thickness;
+            let above = total - below - ply.thickness;
+            for node in ply.nodes.clone() {
+                clearance[node as usize] = (below + half, above + half);
+            }
+            below += ply.thickness;
         }
-        below = at;
+        Self {
+            clearance,
+            up: model.stack_up(),
+        }
     }
-    clearance
+
+    /// Node `i`'s clearance from a tool whose outward normal there is
+    /// `normal`.
+    fn from(&self, i: usize, normal: &Vector3<f64>) -> f64 {
+        let (below, above) = self.clearance[i];
+        if normal.dot(&self.up) < 0.0 {
+            above
+        } else {
+            below
+        }
+    }
 }
 
 /// The nodes a blank at `x` has closer to `tool` (at its start position)
 /// than `clearance` says they must start, less a hundredth of the offset
-/// of round-off; those behind a tool's surface are the start-up check's
-/// error, not these.
+/// of round-off, each with its shortfall (mm) and the tool's outward normal
+/// there; those behind a tool's surface are the start-up check's error,
+/// not these.
 fn too_close(
     model: &Model,
     tool: &drape_contact::Tool,
     x: &[Vector3<f64>],
-    clearance: &[f64],
-) -> Vec<usize> {
+    clearance: &StartClearance,
+) -> Vec<(usize, f64, Vector3<f64>)> {
     let slack = 0.01 * model.contact_offset;
     let u0 = tool.prescribed_displacement(0.0).unwrap_or(0.0);
     (0..x.len())
         .into_par_iter()
-        .filter(|&i| {
-            let gap = tool.project(&x[i], u0).gap;
-            gap >= -slack && gap < clearance[i] - slack
+        .filter_map(|i| {
+            let p = tool.project(&x[i], u0);
+            let short = clearance.from(i, &p.normal) - p.gap;
+            (p.gap >= -slack && short > slack).then_some((i, short, p.normal))
         })
         .collect()
 }
 
 /// Translates a blank at `x` that starts closer to a tool than it must (its
-/// half thickness; in a stack, the plies below it and its own half
-/// thickness) away from it, before the first step: by the largest
+/// half thickness; in a stack, the plies between it and the tool and its
+/// own half thickness) away from it, before the first step: by the largest
 /// shortfall along that tool's normal there, again (up to four times)
 /// while a node is still short, so that every node
 /// starts at its distance. A rigid move: the blank keeps its shape and
@@ -735,16 +762,13 @@ pub fn settle_on_tools(
     x: &mut [Vector3<f64>],
     free: &[bool],
 ) -> Option<Vector3<f64>> {
-    let clearance = start_clearance(model);
+    let clearance = StartClearance::of(model);
     let shortfall = |x: &[Vector3<f64>]| {
         let mut worst = (0.0f64, Vector3::zeros());
         for tool in &model.tools {
-            let u0 = tool.prescribed_displacement(0.0).unwrap_or(0.0);
-            for i in too_close(model, tool, x, &clearance) {
-                let p = tool.project(&x[i], u0);
-                let by = clearance[i] - p.gap;
+            for (_, by, normal) in too_close(model, tool, x, &clearance) {
                 if by > worst.0 {
-                    worst = (by, p.normal);
+                    worst = (by, normal);
                 }
             }
         }
@@ -806,7 +830,7 @@ pub fn check_tools_at_start(
     // Round-off of a blank built on a tool's surface is not an overlap.
     let slack = 0.01 * offset;
     let mut warnings = Vec::new();
-    let clearance = start_clearance(model);
+    let clearance = StartClearance::of(model);
     // What `settle_on_tools` will do, found once for every tool's warning.
     let free = crate::shared::Constraints::new(model).free();
     let settled = std::cell::OnceCell::new();
@@ -826,10 +850,8 @@ pub fn check_tools_at_start(
         }
         let close = too_close(model, tool, x, &clearance);
         if !close.is_empty() {
-            let depth = close
-                .iter()
-                .map(|&i| clearance[i] - gaps[i])
-                .fold(0.0, f64::max);
+            let depth = close.iter().map(|c| c.1).fold(0.0, f64::max);
+            let close: Vec<usize> = close.iter().map(|c| c.0).collect();
             let shift = *settled.get_or_init(|| settle_on_tools(model, &mut x.to_vec(), &free));
             let what = match shift {
                 Some(shift) => format!(
@@ -860,7 +882,7 @@ pub fn check_tools_at_start(
                 if model.plies.is_empty() {
                     ""
                 } else {
-                    " (in a stack: than the plies below them and their own half thickness)"
+                    " (in a stack: than the plies between them and the tool and their own half thickness)"
                 },
             ));
         }

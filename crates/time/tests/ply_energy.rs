@@ -5,7 +5,8 @@
 //! work along a shift is what moving the node against its forces took,
 //! not its constraint force over it, so the balance stays closed. And
 //! plies of different thicknesses rest on a tool each at its own half
-//! thickness.
+//! thickness, and start far enough from one over the stack when the plies
+//! above them and their own half thickness fit.
 
 use drape_model::{BoundaryCondition, Model};
 use drape_time::{Energies, Explicit, ExplicitSettings, Frame, NoObserver, Observer};
@@ -116,5 +117,67 @@ fn plies_of_different_thicknesses_each_rest_on_a_tool_at_their_own_half_thicknes
     assert!(
         (lo - on).abs() < 1e-3 && (hi - on).abs() < 1e-3,
         "the thick ply's mid-surface at {lo}…{hi} mm, {on} expected"
+    );
+}
+
+/// A thin ply (0.2 mm) under a thick one (0.57 mm) on a floor, and a lid
+/// over them 10 µm clear of the top ply: no warning. The start-up check
+/// measured every tool from the bottom of the stack, so it held the top
+/// ply to 0.2 + 0.285 mm from the lid, warned of 824 nodes of a two-ply
+/// deep drawing "closer to tool `holder` than …" under a holder 15 µm
+/// clear of it, and would have moved a blank under a lid alone away from
+/// it by the plies below. A lid 50 µm lower (40 µm too close to the top
+/// ply) is warned of, and with no floor the blank is moved down by those
+/// 40 µm.
+#[test]
+fn a_tool_over_the_stack_is_measured_from_the_top_ply() {
+    use drape_contact::{Surface, Tool, ToolMotion};
+    let (thin, thick) = (0.2, glass().thickness);
+    let stack = |floor: bool, lid: f64| {
+        let mut bottom = glass_ply("thin", Vector3::new(0.0, 0.0, 0.5 * thin), 2);
+        bottom.thickness = thin;
+        let top = glass_ply("thick", Vector3::new(0.0, 0.0, 0.5 * thin), 2);
+        let mut model = Model::stack(vec![bottom, top]).expect("stack");
+        if floor {
+            model.tools.push(Tool {
+                name: "floor".into(),
+                surface: Surface::plane(Vector3::zeros(), Vector3::z()).unwrap(),
+                motion: ToolMotion::Fixed,
+                friction: 0.0,
+            });
+        }
+        model.tools.push(Tool {
+            name: "lid".into(),
+            surface: Surface::plane(Vector3::new(0.0, 0.0, lid), -Vector3::z()).unwrap(),
+            motion: ToolMotion::Fixed,
+            friction: 0.0,
+        });
+        model
+    };
+    let settings = ExplicitSettings {
+        end_time: 1e-3,
+        frames: 1,
+        ..ExplicitSettings::default()
+    };
+    let warnings = |model: &Model| {
+        Explicit::new(model, settings.clone())
+            .expect("driver")
+            .warnings()
+            .join("\n")
+    };
+    let top = thin + thick;
+    let clear = stack(true, top + 0.01);
+    assert_eq!(warnings(&clear), "");
+    let close = warnings(&stack(true, top - 0.04));
+    assert!(
+        close.contains("of the blank start closer to tool `lid`")
+            && close.contains("(by up to 0.0400 mm)")
+            && close.contains("no translation clears every tool"),
+        "{close}"
+    );
+    let lid_alone = warnings(&stack(false, top - 0.04));
+    assert!(
+        lid_alone.contains("the run moves the blank 0.0400 mm along (0.000, 0.000, -1.000)"),
+        "{lid_alone}"
     );
 }

@@ -29,9 +29,8 @@
 //!   boundary condition, a load, a spring or gravity can bring it. A force-driven tool that
 //!   travels further than the reach missed the blank or broke through it.
 //! - **Energy balance**: |balance error| above
-//!   [`GuardSettings::max_energy_error`] (5 %) of the largest energy term
-//!   at any check so far, or of [`energy_floor`] when all terms are below
-//!   it. A sound run's
+//!   [`GuardSettings::max_energy_error`] (5 %) of the largest energy term,
+//!   or of [`energy_floor`] when all terms are below it. A sound run's
 //!   error stays bounded, at 1e-9…1e-5 in quasi-static runs but up to a
 //!   few per cent early in a violent one (the measured energy of central
 //!   differences oscillates with the energy in the highest modes).
@@ -84,8 +83,7 @@ pub struct GuardSettings {
     /// A node faster than this many times the scene's speed is unstable.
     pub speed_factor: f64,
     /// Stop when |energy balance error| exceeds this fraction of the
-    /// largest energy term so far (or of the [`energy_floor`]), checked at
-    /// frames.
+    /// largest energy term (or of the [`energy_floor`]), checked at frames.
     pub max_energy_error: Option<f64>,
     /// For a scene declared quasi-static: stop when E_kin exceeds this many
     /// times the internal work (checked at frames).
@@ -192,7 +190,7 @@ pub enum Instability {
     /// The energy balance error grows exponentially.
     #[error(
         "the energy balance error grows exponentially: ×{:.3e} over the last {GROWTH_CHECKS} checks \
-         (×{:.2e}, ×{:.2e}, ×{:.2e}), now {relative:.3e} of the largest energy so far",
+         (×{:.2e}, ×{:.2e}, ×{:.2e}), now {relative:.3e} of the largest energy",
         growth.iter().product::<f64>(), growth[0], growth[1], growth[2]
     )]
     EnergyGrowth {
@@ -203,14 +201,14 @@ pub enum Instability {
     },
     /// Energy appears from nowhere.
     #[error(
-        "energy balance error {relative:.3e} exceeds {bound:.3e} of the largest energy so far ({scale:.3e} mJ)"
+        "energy balance error {relative:.3e} exceeds {bound:.3e} of the largest energy ({scale:.3e} mJ)"
     )]
     EnergyBalance {
         /// |error| over the scale.
         relative: f64,
         /// The bound.
         bound: f64,
-        /// The largest energy term so far, or the floor (mJ).
+        /// The largest energy term, or the floor (mJ).
         scale: f64,
     },
     /// A scene declared quasi-static is dominated by inertia.
@@ -339,9 +337,6 @@ pub struct Guard {
     /// The reach (mm).
     reach: f64,
     floor: f64,
-    /// The largest energy term at any energy check so far (mJ): the scale
-    /// of the balance error (see [`Guard::energy`]).
-    largest_energy: f64,
     /// The relative balance errors at the last energy checks, oldest
     /// first.
     previous_errors: [f64; GROWTH_CHECKS],
@@ -454,7 +449,6 @@ impl Guard {
             end_time: t,
             reach: static_reach,
             floor: energy_floor(model),
-            largest_energy: 0.0,
             previous_errors: [f64::NAN; GROWTH_CHECKS],
             settings,
             last_good: State {
@@ -584,25 +578,8 @@ impl Guard {
 
     /// Checks the energy balance `energy` at time `time` (and remembers
     /// its error, for the growth check).
-    ///
-    /// The error is measured against the largest energy term of any check
-    /// so far, not only this one's: what an impact puts in play stays the
-    /// scale of the error its integration leaves after the impact is over.
-    /// Two plies deep drawn under a 10 kg blank holder that lands on them
-    /// from 15 µm ring between the holder and the die for about 0.3 ms:
-    /// their kinetic energy rises to 17 mJ and falls back to 3e-5 mJ, the
-    /// contact's net work with it, and a check in that window read the
-    /// central differences' transient error of 8.5e-3 mJ against 2.1e-2 mJ
-    /// as 0.40 and stopped the run, whose error is back to 6e-9 mJ a few
-    /// steps later. An instability still grows its error faster than any
-    /// energy so far. (A check on the very step of an impact still reads
-    /// the transient, about a tenth of the energy then in play: the step's
-    /// full-step velocity takes the impact's contact force for the next
-    /// step's. Frames at every step of that landing stop it there.)
     pub fn energy(&mut self, energy: &Energies, time: f64) -> Result<(), Instability> {
-        self.largest_energy = self.largest_energy.max(energy_scale(energy));
-        let scale = self.largest_energy.max(self.floor);
-        let relative = energy.balance_error.abs() / scale;
+        let relative = relative_balance_error(energy, self.floor);
         let error = relative;
         let previous = self.previous_errors;
         self.previous_errors.rotate_left(1);
@@ -632,7 +609,7 @@ impl Guard {
                 return Err(Instability::EnergyBalance {
                     relative,
                     bound,
-                    scale,
+                    scale: energy_scale(energy).max(self.floor),
                 });
             }
         }

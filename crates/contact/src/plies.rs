@@ -634,6 +634,26 @@ impl PlyContact {
         self.searches.iter().map(|s| s.cand.len()).sum()
     }
 
+    /// Starts a solve's record of what its updates move ([`SKIP`]): the
+    /// drift of the rows' nodes and of the `other` nodes the solve moves
+    /// (the tools' supports or friction) at zero, each row's at zero.
+    fn begin_sweeps(&mut self, other: impl Iterator<Item = u32>) {
+        let rows = self.constraints.len();
+        for record in [&mut self.row_seen, &mut self.row_last] {
+            record.clear();
+            record.resize(rows, 0.0);
+        }
+        let drift = &mut self.drift;
+        for c in &self.constraints {
+            for i in std::iter::once(c.slave).chain(c.masters) {
+                drift[i as usize] = 0.0;
+            }
+        }
+        for i in other {
+            drift[i as usize] = 0.0;
+        }
+    }
+
     /// Rebuilds the candidate lists once a node has moved half the margin.
     fn refresh(&mut self, x: &[Vector3<f64>]) {
         let half = 0.5 * self.margin;
@@ -932,22 +952,9 @@ impl PlyContact {
                 .map(|s| s.offset)
                 .fold(f64::INFINITY, f64::min);
         let mut window = f64::INFINITY;
+        self.begin_sweeps(supports.iter().map(|s| s.node));
         let dx = &mut self.dx;
-        let rows = self.constraints.len();
         let (drift, seen, last) = (&mut self.drift, &mut self.row_seen, &mut self.row_last);
-        seen.clear();
-        seen.resize(rows, 0.0);
-        last.clear();
-        last.resize(rows, 0.0);
-        for c in &self.constraints {
-            drift[c.slave as usize] = 0.0;
-            for &j in &c.masters {
-                drift[j as usize] = 0.0;
-            }
-        }
-        for s in supports.iter() {
-            drift[s.node as usize] = 0.0;
-        }
         let skip = SKIP * tolerance;
         for sweep in 1..=self.max_sweeps {
             let mut worst: f64 = 0.0;
@@ -1179,21 +1186,8 @@ impl PlyContact {
         // an update).
         self.v_before.clear();
         self.v_before.extend_from_slice(v);
-        let rows = self.constraints.len();
+        self.begin_sweeps(tools.iter().map(|t| t.node));
         let (drift, seen, last) = (&mut self.drift, &mut self.row_seen, &mut self.row_last);
-        seen.clear();
-        seen.resize(rows, 0.0);
-        last.clear();
-        last.resize(rows, 0.0);
-        for c in &self.constraints {
-            drift[c.slave as usize] = 0.0;
-            for &j in &c.masters {
-                drift[j as usize] = 0.0;
-            }
-        }
-        for t in tools.iter() {
-            drift[t.node as usize] = 0.0;
-        }
         let skip = SKIP * FRICTION_TOLERANCE * largest;
         // Every row is updated at the first sweep and at the first after ω
         // changes (the bound below holds for two updates at one ω).

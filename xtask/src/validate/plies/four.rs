@@ -234,7 +234,7 @@ pub fn hemisphere_four() -> Vec<Check> {
     let t = &four.totals;
     let per = |n: u64| n as f64 / t.steps.max(1) as f64;
     note(format!(
-        "Four-ply [0/45/90/−45] hemisphere ({}), 2 threads, a shared and loaded machine: \
+        "Four-ply [0/45/90/−45] hemisphere ({}), 2 threads, {} (load average {} at the end): \
          {:.1} s wall / {:.1} s CPU against {:.1} s / {:.1} s for its bottom ply alone: \
          {:.2}× wall, {:.2}× CPU. Ply–ply contact {:.1} % of the four-ply step \
          ({:.0} µs of {:.0} µs). Ply pass: {} steps with contact, {:.0} constraints, \
@@ -246,6 +246,15 @@ pub fn hemisphere_four() -> Vec<Check> {
         } else {
             "24 × 24 cells, whole stroke"
         },
+        // The ratio depends on the build: the release build speeds the
+        // elements' kernels up far more than the ply contact (2026-11-30:
+        // 26× in release, 13.3× in this dev-profile build).
+        if cfg!(debug_assertions) {
+            "the xtask's dev-profile build (opt-level 2; a release build's ratio is higher)"
+        } else {
+            "a release build"
+        },
+        crate::work_precision::load_average(),
         four.wall,
         four.cpu,
         one.wall,

@@ -1050,12 +1050,17 @@ impl<'m> Explicit<'m> {
         }
     }
 
-    /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`, the
-    /// contact force of n+1 that of [`Self::next_contact_force`] (as in the
-    /// work's half increment).
-    fn full_step_velocity(&self, state: &State, i: usize, h: f64) -> Vector3<f64> {
+    /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`, with
+    /// `contact` the contact force of n+1 ([`Self::next_contact_force`], as
+    /// in the work's half increment).
+    fn full_step_velocity(
+        &self,
+        state: &State,
+        i: usize,
+        h: f64,
+        contact: Vector3<f64>,
+    ) -> Vector3<f64> {
         let mut v = state.v[i];
-        let contact = self.next_contact_force(i);
         for k in 0..3 {
             if !self.constraints.constrained[i][k] {
                 v[k] += 0.5 * h * (self.f_ext[i][k] - self.forces.f_int[i][k] + contact[k])
@@ -1109,13 +1114,14 @@ impl<'m> Explicit<'m> {
                     w_bc += (fi[k] - fe[k]) * half[k];
                 }
             }
+            let contact = this.next_contact_force(i);
             [
-                0.5 * this.mass[i] * this.full_step_velocity(state, i, h).norm_squared(),
+                0.5 * this.mass[i] * this.full_step_velocity(state, i, h, contact).norm_squared(),
                 fi.dot(&half),
                 fe.dot(&half),
                 damping * this.mass[i] * state.v[i].dot(&half),
                 w_bc,
-                this.next_contact_force(i).dot(&half),
+                contact.dot(&half),
             ]
         };
         let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums_into(n, terms, &mut partials);

@@ -542,6 +542,18 @@ impl MembraneBatch {
         xe
     }
 
+    /// ∂Nₐ/∂X of point `p` of element `e`, one per node, in the point's
+    /// local frame turned onto the fibres: what the force pass multiplies
+    /// the nodal positions by (for a port of the pass, e.g. drape-gpu).
+    pub fn point_gradients(&self, e: usize, p: usize) -> &[Vector2<f64>] {
+        self.point_grad(e, p)
+    }
+
+    /// The reference area (integration weight) of point `p` of element `e`.
+    pub fn point_weight(&self, e: usize, p: usize) -> f64 {
+        self.area[e * self.shape.points() + p]
+    }
+
     #[inline]
     fn point_grad(&self, e: usize, p: usize) -> &[Vector2<f64>] {
         let (nn, np) = (self.shape.nodes(), self.shape.points());

@@ -283,6 +283,12 @@ pub fn node_slots(
 }
 
 impl SlotLayout {
+    /// Each node's slots in the order [`Self::gather`] sums them: node i's
+    /// are `slots[ptr[i]..ptr[i + 1]]` of (`ptr`, `slots`).
+    pub fn node_slot_lists(&self) -> (&[usize], &[u32]) {
+        (&self.node_ptr, &self.node_slots)
+    }
+
     /// fₙ = Σ of node n's slots, in ascending slot order: the same sums in
     /// the same order whatever the number of threads.
     pub fn gather(&self, slots: &[Vector3<f64>], forces: &mut [Vector3<f64>]) {

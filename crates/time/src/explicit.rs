@@ -490,6 +490,13 @@ impl<'m> Explicit<'m> {
         self.contact.as_ref()
     }
 
+    /// The dashpot coefficient (N·s/mm) of each truss of each batch along
+    /// kinked yarns ([`ExplicitSettings::fibre_damping`]); an empty list for
+    /// a batch without. Fixed at set-up from the scaled masses.
+    pub fn fibre_dashpots(&self) -> &[Vec<f64>] {
+        &self.truss_damping
+    }
+
     /// The nodes' masses the driver integrates with (t): the model's, plus
     /// what mass scaling added.
     pub fn mass(&self) -> &[f64] {

@@ -1,0 +1,14 @@
+//! Compiles the kernels' CPU build (kernels/host.c over kernels/step.h),
+//! without contracting multiplies and adds, as the CPU driver does not.
+
+fn main() {
+    println!("cargo:rerun-if-changed=kernels/step.h");
+    println!("cargo:rerun-if-changed=kernels/host.c");
+    cc::Build::new()
+        .file("kernels/host.c")
+        .include("kernels")
+        .flag("-std=c99")
+        .flag_if_supported("-ffp-contract=off")
+        .opt_level(2)
+        .compile("drape_gpu_host");
+}

@@ -1,0 +1,82 @@
+/* drape's explicit step on the GPU: one thread per truss, quad, spring or
+ * node over the functions of kernels/step.h (which precedes this file in
+ * the source NVRTC compiles). A failing element records the lowest index
+ * in fault[kind] (an integer minimum: the same whatever the order). */
+
+#define DRAPE_INDEX ((long)blockIdx.x * (long)blockDim.x + (long)threadIdx.x)
+
+extern "C" __global__ void truss_forces(long count, double modulus, double crimp_strain,
+                                        double compression_factor, double buckling_stress,
+                                        const unsigned *nodes, const double *length,
+                                        const double *section, int has_dashpot,
+                                        const double *dashpot, const double *x,
+                                        const double *v, long n, double *slots,
+                                        long slot_count, long first, int *fault)
+{
+    long e = DRAPE_INDEX;
+    if (e >= count) {
+        return;
+    }
+    DrapeFibreLaw law = {modulus, crimp_strain, compression_factor, buckling_stress};
+    if (drape_truss_force(e, law, nodes, length, section, has_dashpot ? dashpot : 0, x, v, n,
+                          slots, slot_count, first)) {
+        atomicMin(fault, (int)e);
+    }
+}
+
+extern "C" __global__ void quad_forces(long count, const DrapeResinStep *resin,
+                                       const unsigned *nodes, const double *grad,
+                                       const double *area, double *history, long stride,
+                                       int commit, const double *x, long n, double *slots,
+                                       long slot_count, long first, int *fault)
+{
+    long e = DRAPE_INDEX;
+    if (e >= count) {
+        return;
+    }
+    if (drape_quad_force(e, count, resin, nodes, grad, area, history, stride, commit, x, n,
+                         slots, slot_count, first)) {
+        atomicMin(fault + 1, (int)e);
+    }
+}
+
+extern "C" __global__ void spring_forces(long count, const unsigned *nodes,
+                                         const double *anchor, const double *rest,
+                                         const long *table_start, const long *table_len,
+                                         const double *extension, const double *table_force,
+                                         const double *x, long n, double *slots,
+                                         long slot_count, long first)
+{
+    long e = DRAPE_INDEX;
+    if (e >= count) {
+        return;
+    }
+    drape_spring_force(e, nodes, anchor, rest, table_start, table_len, extension, table_force,
+                       count, x, n, slots, slot_count, first);
+}
+
+extern "C" __global__ void gather(long n, const long *ptr, const unsigned *node_slots,
+                                  const double *slots, long slot_count, double *f_int)
+{
+    long i = DRAPE_INDEX;
+    if (i >= n) {
+        return;
+    }
+    drape_gather(i, ptr, node_slots, slots, slot_count, f_int, n);
+}
+
+extern "C" __global__ void update(long n, const double *x, const double *v,
+                                  const double *f_ext, const double *f_int,
+                                  const double *mass, const unsigned char *fixed,
+                                  const double *x0, const double *params, double *x_new,
+                                  double *v_new)
+{
+    long i = DRAPE_INDEX;
+    if (i >= n) {
+        return;
+    }
+    /* The step's constants from device memory, so that a captured graph
+     * of steps runs again with other ones. */
+    drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, params[0], params[1], params[2],
+                 params[3], x_new, v_new);
+}

@@ -1,0 +1,65 @@
+/* The CPU build of drape's GPU kernels (kernels/step.h): each kernel's
+ * per-thread function called in a loop, so that the arithmetic the GPU runs
+ * is tested against the CPU driver on a machine without a GPU. Each loop
+ * returns the lowest failing element, or -1. */
+
+#include "step.h"
+
+long drape_host_truss_forces(long count, DrapeFibreLaw law, const unsigned *nodes,
+                             const double *length, const double *section,
+                             const double *dashpot, const double *x, const double *v,
+                             long n, double *slots, long slot_count, long first)
+{
+    for (long e = 0; e < count; e++) {
+        if (drape_truss_force(e, law, nodes, length, section, dashpot, x, v, n, slots,
+                              slot_count, first)) {
+            return e;
+        }
+    }
+    return -1;
+}
+
+long drape_host_quad_forces(long count, const DrapeResinStep *resin, const unsigned *nodes,
+                            const double *grad, const double *area, double *history,
+                            long stride, int commit, const double *x, long n, double *slots,
+                            long slot_count, long first)
+{
+    for (long e = 0; e < count; e++) {
+        if (drape_quad_force(e, count, resin, nodes, grad, area, history, stride, commit, x, n,
+                             slots, slot_count, first)) {
+            return e;
+        }
+    }
+    return -1;
+}
+
+void drape_host_spring_forces(long count, const unsigned *nodes, const double *anchor,
+                              const double *rest, const long *table_start,
+                              const long *table_len, const double *extension,
+                              const double *table_force, const double *x, long n,
+                              double *slots, long slot_count, long first)
+{
+    for (long e = 0; e < count; e++) {
+        drape_spring_force(e, nodes, anchor, rest, table_start, table_len, extension,
+                           table_force, count, x, n, slots, slot_count, first);
+    }
+}
+
+void drape_host_gather(long n, const long *ptr, const unsigned *node_slots, const double *slots,
+                       long slot_count, double *f_int)
+{
+    for (long i = 0; i < n; i++) {
+        drape_gather(i, ptr, node_slots, slots, slot_count, f_int, n);
+    }
+}
+
+void drape_host_update(long n, const double *x, const double *v, const double *f_ext,
+                       const double *f_int, const double *mass, const unsigned char *fixed,
+                       const double *x0, double c1, double c2, double dt_avg, double h,
+                       double *x_new, double *v_new)
+{
+    for (long i = 0; i < n; i++) {
+        drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, c1, c2, dt_avg, h, x_new,
+                     v_new);
+    }
+}

@@ -1,0 +1,368 @@
+/* drape's explicit step, one element or node at a time: the arithmetic the
+ * CUDA kernels run (kernels/cuda.cu, compiled at run time by NVRTC) and the
+ * CPU build of the same source (kernels/host.c, compiled by build.rs), so
+ * that the kernels' arithmetic is tested on a machine without a GPU.
+ *
+ * Each function does the CPU driver's operations in the CPU driver's order
+ * (drape-elements' truss_lanes.rs, quad_lanes.rs and spring.rs, the
+ * driver's central-difference update and the slot layout's gather), with
+ * no fused multiply-add (NVRTC is called with --fmad=false, the C compiler
+ * with -ffp-contract=off). On the CPU the results are the driver's bit for
+ * bit; on the GPU only log, expm1 and sqrt's last bits may differ.
+ *
+ * Arrays of 3-vectors are component-major: component k of entry i of an
+ * array of n entries is at [k*n + i]. A membrane batch's history is
+ * value-major: value i of point p of element e, of a batch of `count`
+ * elements with `stride` values per point, is at [(p*stride + i)*count + e].
+ *
+ * C99 and CUDA C++ both: no templates, no classes, no library calls but
+ * sqrt, log and expm1.
+ */
+
+#ifndef DRAPE_STEP_H
+#define DRAPE_STEP_H
+
+#ifdef __CUDACC__
+#define DRAPE_FN static __device__ __forceinline__
+#else
+#include <math.h>
+#define DRAPE_FN static inline
+#endif
+
+/* The crimp law's series threshold (FibreLaw::TENSION_SERIES_BELOW). */
+#define DRAPE_SERIES_BELOW 1e-3
+/* A membrane point is degenerate where det C <= this * (tr C)^2
+ * (drape_kinematics::right_stretch). */
+#define DRAPE_DEGENERATE_DET_C 1e-14
+/* A spring shorter than this has no direction (spring.rs). */
+#define DRAPE_NO_DIRECTION 1e-12
+/* The most Prony terms a step carries (the lanes' factor table). */
+#define DRAPE_MAX_PRONY 8
+
+/* A fibre law (drape_constitutive::FibreLaw) without confinement. */
+typedef struct {
+    double modulus;
+    double crimp_strain;
+    double compression_factor;
+    double buckling_stress;
+} DrapeFibreLaw;
+
+/* FibreLaw::stress. */
+DRAPE_FN double drape_fibre_stress(DrapeFibreLaw law, double eps)
+{
+    double e = law.modulus;
+    if (eps <= 0.0) {
+        if (law.buckling_stress > 0.0) {
+            /* FibreLaw::column at x = -eps/eps_sh. */
+            double x = -eps / law.crimp_strain;
+            double root = sqrt(1.0 + x);
+            return -law.buckling_stress * x / (root * (1.0 + root));
+        }
+        double k = law.compression_factor * e;
+        return k * eps;
+    }
+    double sh = law.crimp_strain;
+    if (sh == 0.0) {
+        return e * eps;
+    }
+    double x = eps / sh;
+    if (x < DRAPE_SERIES_BELOW) {
+        return e * sh * x * x * (0.5 - x * (1.0 / 6.0 - x * (1.0 / 24.0 - x / 120.0)));
+    }
+    double straightened = -expm1(-x);
+    return e * (eps - sh * straightened);
+}
+
+/* Truss e's two forces into slots first + 2e and first + 2e + 1, with its
+ * dashpot when `dashpot` is not null (TrussBatch::forces_with_damping_into
+ * at the velocities v). Returns 0, or 1 where the truss is collapsed or not
+ * finite (the slots are then not written). */
+DRAPE_FN int drape_truss_force(long e, DrapeFibreLaw law, const unsigned *nodes,
+                               const double *length, const double *section,
+                               const double *dashpot, const double *x,
+                               const double *v, long n, double *slots,
+                               long slot_count, long first)
+{
+    long i = nodes[2 * e], j = nodes[2 * e + 1];
+    double d0 = x[j] - x[i];
+    double d1 = x[n + j] - x[n + i];
+    double d2 = x[2 * n + j] - x[2 * n + i];
+    double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+    double reference = length[e];
+    /* l - l is 0 for a finite l and NaN otherwise. */
+    if (!(l - l == 0.0 && reference > 0.0 && reference - reference == 0.0 &&
+          l > 1e-12 * reference)) {
+        return 1;
+    }
+    double stretch = l / reference;
+    double n0 = d0 / l, n1 = d1 / l, n2 = d2 / l;
+    double tau = drape_fibre_stress(law, log(stretch));
+    double force = section[e] * tau / stretch;
+    double f0 = n0 * force, f1 = n1 * force, f2 = n2 * force;
+    double a0 = -f0, a1 = -f1, a2 = -f2;
+    double b0 = f0, b1 = f1, b2 = f2;
+    if (dashpot) {
+        /* TrussBatch::piece_damping_into: the direction again from d. */
+        if (l > 0.0) {
+            double m0 = d0 / l, m1 = d1 / l, m2 = d2 / l;
+            double w0 = v[j] - v[i];
+            double w1 = v[n + j] - v[n + i];
+            double w2 = v[2 * n + j] - v[2 * n + i];
+            double c = dashpot[e] * (m0 * w0 + m1 * w1 + m2 * w2);
+            double g0 = m0 * c, g1 = m1 * c, g2 = m2 * c;
+            a0 -= g0;
+            a1 -= g1;
+            a2 -= g2;
+            b0 += g0;
+            b1 += g1;
+            b2 += g2;
+        }
+    }
+    long s = first + 2 * e;
+    slots[s] = a0;
+    slots[slot_count + s] = a1;
+    slots[2 * slot_count + s] = a2;
+    slots[s + 1] = b0;
+    slots[slot_count + s + 1] = b1;
+    slots[2 * slot_count + s + 1] = b2;
+    return 0;
+}
+
+/* A resin's constants and a step's Prony factors (quad_lanes' ResinStep). */
+typedef struct {
+    double wave_modulus;
+    double poisson;
+    double shear_modulus;
+    double long_term;
+    double thickness;
+    int prony_terms;
+    /* (e^(-dt/tau_k), g_k * phi_k) per term. */
+    double decay[DRAPE_MAX_PRONY];
+    double weight[DRAPE_MAX_PRONY];
+} DrapeResinStep;
+
+/* Resin-only quad e (QuadLanes::block_forces_lanes, one lane): its four
+ * forces into slots first + 4e + a, its history advanced in place when
+ * `commit` (else read only, as a force evaluation from the committed
+ * history). grad: dN/dX per (element, point, node, 2); area per (element,
+ * point). Returns 0, or 1 where a point is degenerate or not finite
+ * (nothing written). */
+DRAPE_FN int drape_quad_force(long e, long count, const DrapeResinStep *resin,
+                              const unsigned *nodes, const double *grad,
+                              const double *area, double *history,
+                              long stride, int commit, const double *x,
+                              long n, double *slots, long slot_count,
+                              long first)
+{
+    double xe[4][3];
+    for (int a = 0; a < 4; a++) {
+        long i = nodes[4 * e + a];
+        xe[a][0] = x[i];
+        xe[a][1] = x[n + i];
+        xe[a][2] = x[2 * n + i];
+    }
+    double f[4][3][2];
+    double c[4][5];
+    int ok = 1;
+    for (int p = 0; p < 4; p++) {
+        const double *g = grad + ((e * 4 + p) * 4) * 2;
+        for (int r = 0; r < 3; r++) {
+            f[p][r][0] = 0.0;
+            f[p][r][1] = 0.0;
+        }
+        for (int a = 0; a < 4; a++) {
+            for (int r = 0; r < 3; r++) {
+                f[p][r][0] += xe[a][r] * g[2 * a];
+                f[p][r][1] += xe[a][r] * g[2 * a + 1];
+            }
+        }
+        double c00 = f[p][0][0] * f[p][0][0] + f[p][1][0] * f[p][1][0] + f[p][2][0] * f[p][2][0];
+        double c01 = f[p][0][0] * f[p][0][1] + f[p][1][0] * f[p][1][1] + f[p][2][0] * f[p][2][1];
+        double c11 = f[p][0][1] * f[p][0][1] + f[p][1][1] * f[p][1][1] + f[p][2][1] * f[p][2][1];
+        double det_c = c00 * c11 - c01 * c01;
+        double tr_c = c00 + c11;
+        c[p][0] = c00;
+        c[p][1] = c01;
+        c[p][2] = c11;
+        c[p][3] = det_c;
+        c[p][4] = tr_c;
+        ok &= det_c > DRAPE_DEGENERATE_DET_C * tr_c * tr_c;
+    }
+    if (!ok) {
+        return 1;
+    }
+    double force[4][3];
+    for (int a = 0; a < 4; a++) {
+        force[a][0] = 0.0;
+        force[a][1] = 0.0;
+        force[a][2] = 0.0;
+    }
+    for (int p = 0; p < 4; p++) {
+        const double *g = grad + ((e * 4 + p) * 4) * 2;
+        double c00 = c[p][0], c01 = c[p][1], c11 = c[p][2], det_c = c[p][3], tr_c = c[p][4];
+        double det_u = sqrt(det_c);
+        double s = sqrt(tr_c + 2.0 * det_u);
+        double u00 = (c00 + det_u) / s, u01 = (c01 + 0.0) / s, u11 = (c11 + det_u) / s;
+        double tr_u = u00 + u11;
+        double ui00 = (tr_u - u00) / det_u, ui01 = (0.0 - u01) / det_u,
+               ui11 = (tr_u - u11) / det_u;
+        double *h = history + (p * stride) * count + e;
+        double n00 = h[0], n11 = h[count], n01 = h[2 * count];
+        double m00 = (n00 + u00) * 0.5, m01 = (n01 + u01) * 0.5, m11 = (n11 + u11) * 0.5;
+        double det_m = m00 * m11 - m01 * m01;
+        double tr_m = m00 + m11;
+        double mi00 = (tr_m - m00) / det_m, mi01 = (0.0 - m01) / det_m,
+               mi11 = (tr_m - m11) / det_m;
+        double d00 = u00 - n00, d01 = u01 - n01, d11 = u11 - n11;
+        double l00 = d00 * mi00 + d01 * mi01;
+        double l01 = d00 * mi01 + d01 * mi11;
+        double l10 = d01 * mi00 + d11 * mi01;
+        double l11 = d01 * mi01 + d11 * mi11;
+        double e00 = (l00 + l00) * 0.5;
+        double e11 = (l11 + l11) * 0.5;
+        double e01 = (l01 + l10) * 0.5;
+        double e10 = (l10 + l01) * 0.5;
+        double k = resin->wave_modulus, nu = resin->poisson;
+        double t00 = h[3 * count] + k * (e00 + nu * e11);
+        double t11 = h[4 * count] + k * (nu * e00 + e11);
+        double d_s0 = resin->shear_modulus * (e01 + e10);
+        double t01;
+        if (resin->prony_terms == 0) {
+            t01 = h[5 * count] + d_s0;
+        } else {
+            double s0 = h[6 * count] + d_s0;
+            double relaxing = 0.0;
+            for (int q = 0; q < resin->prony_terms; q++) {
+                double qk = resin->decay[q] * h[(7 + q) * count] + resin->weight[q] * d_s0;
+                relaxing += qk;
+                if (commit) {
+                    h[(7 + q) * count] = qk;
+                }
+            }
+            if (commit) {
+                h[6 * count] = s0;
+            }
+            t01 = resin->long_term * s0 + relaxing;
+        }
+        if (commit) {
+            h[0] = u00;
+            h[count] = u11;
+            h[2 * count] = u01;
+            h[3 * count] = t00;
+            h[4 * count] = t11;
+            h[5 * count] = t01;
+        }
+        double a00 = ui00 * t00 + ui01 * t01;
+        double a01 = ui00 * t01 + ui01 * t11;
+        double a10 = ui01 * t00 + ui11 * t01;
+        double a11 = ui01 * t01 + ui11 * t11;
+        double b00 = a00 * ui00 + a01 * ui01;
+        double b01 = a00 * ui01 + a01 * ui11;
+        double b10 = a10 * ui00 + a11 * ui01;
+        double b11 = a10 * ui01 + a11 * ui11;
+        double h_m = resin->thickness;
+        double piola[3][2];
+        for (int r = 0; r < 3; r++) {
+            piola[r][0] = (f[p][r][0] * b00 + f[p][r][1] * b10) * h_m;
+            piola[r][1] = (f[p][r][0] * b01 + f[p][r][1] * b11) * h_m;
+        }
+        double w = area[e * 4 + p];
+        for (int a = 0; a < 4; a++) {
+            for (int r = 0; r < 3; r++) {
+                force[a][r] += (piola[r][0] * g[2 * a] + piola[r][1] * g[2 * a + 1]) * w;
+            }
+        }
+    }
+    for (int a = 0; a < 4; a++) {
+        long s = first + 4 * e + a;
+        slots[s] = force[a][0];
+        slots[slot_count + s] = force[a][1];
+        slots[2 * slot_count + s] = force[a][2];
+    }
+    return 0;
+}
+
+/* Spring e's force on its node into slot first + e (SpringBatch::
+ * element_force): F(|x - anchor| - L0) along the anchor-to-node direction.
+ * table: the (extension, force) points from table_start[e] to
+ * table_start[e] + table_len[e]. */
+DRAPE_FN void drape_spring_force(long e, const unsigned *nodes, const double *anchor,
+                                 const double *rest, const long *table_start,
+                                 const long *table_len, const double *extension,
+                                 const double *table_force, long springs,
+                                 const double *x, long n, double *slots,
+                                 long slot_count, long first)
+{
+    long i = nodes[e];
+    double d0 = x[i] - anchor[e];
+    double d1 = x[n + i] - anchor[springs + e];
+    double d2 = x[2 * n + i] - anchor[2 * springs + e];
+    double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+    if (l > DRAPE_NO_DIRECTION) {
+        double n0 = d0 / l, n1 = d1 / l, n2 = d2 / l;
+        double delta = l - rest[e];
+        const double *ext = extension + table_start[e];
+        const double *frc = table_force + table_start[e];
+        long last = table_len[e] - 2;
+        /* ForceTable::segment: how many of ext[1..=last] are <= delta. */
+        long seg = 0;
+        for (long k = 1; k <= last; k++) {
+            seg += ext[k] <= delta;
+        }
+        double k = (frc[seg + 1] - frc[seg]) / (ext[seg + 1] - ext[seg]);
+        double force = frc[seg] + k * (delta - ext[seg]);
+        s0 = n0 * force;
+        s1 = n1 * force;
+        s2 = n2 * force;
+    }
+    long s = first + e;
+    slots[s] = s0;
+    slots[slot_count + s] = s1;
+    slots[2 * slot_count + s] = s2;
+}
+
+/* Node i's internal force: its slots summed in the layout's order
+ * (SlotLayout::gather). */
+DRAPE_FN void drape_gather(long i, const long *ptr, const unsigned *node_slots,
+                           const double *slots, long slot_count, double *f_int,
+                           long n)
+{
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+    for (long k = ptr[i]; k < ptr[i + 1]; k++) {
+        long s = node_slots[k];
+        s0 += slots[s];
+        s1 += slots[slot_count + s];
+        s2 += slots[2 * slot_count + s];
+    }
+    f_int[i] = s0;
+    f_int[n + i] = s1;
+    f_int[2 * n + i] = s2;
+}
+
+/* Node i's central-difference update (Explicit's step): velocity to n+1/2
+ * with mass-proportional damping at the mid-step velocity, position to
+ * n+1; a fixed component (bit k of fixed[i]) stays at x0. */
+DRAPE_FN void drape_update(long i, long n, const double *x, const double *v,
+                           const double *f_ext, const double *f_int,
+                           const double *mass, const unsigned char *fixed,
+                           const double *x0, double c1, double c2,
+                           double dt_avg, double h, double *x_new,
+                           double *v_new)
+{
+    double m = mass[i];
+    for (int k = 0; k < 3; k++) {
+        long at = k * n + i;
+        double a = (f_ext[at] - f_int[at]) / m;
+        double vn = (v[at] * c1 + a * dt_avg) * c2;
+        double xn = x[at] + vn * h;
+        if (fixed[i] & (1 << k)) {
+            xn = x0[at] + 0.0;
+            vn = (xn - x[at]) / h;
+        }
+        v_new[at] = vn;
+        x_new[at] = xn;
+    }
+}
+
+#endif

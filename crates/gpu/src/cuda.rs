@@ -1,0 +1,589 @@
+//! The step on an NVIDIA GPU through cudarc: the model's arrays uploaded
+//! once, the kernels compiled by NVRTC, a block of equal steps captured
+//! once as a CUDA graph and replayed, the state downloaded only when the
+//! host asks for it.
+
+use std::sync::Arc;
+
+use cudarc::driver::{
+    CudaContext, CudaFunction, CudaGraph, CudaSlice, CudaStream, DeviceRepr, LaunchConfig,
+    PushKernelArg, ValidAsZeroBits, sys,
+};
+use cudarc::nvrtc::{CompileOptions, Ptx, compile_ptx_with_opts};
+use drape_model::{Model, State};
+use nalgebra::Vector3;
+
+use crate::GpuError;
+use crate::layout::{Flat, history_from_device, join, split};
+use crate::schedule::{Engine, StepParams};
+
+/// Threads per block of every kernel unless set otherwise (the results do
+/// not depend on it).
+const BLOCK: u32 = 256;
+/// Steps in the captured graph (even, so the position buffers it swaps
+/// end where they started).
+const GRAPH_STEPS: u64 = 20;
+/// "No fault" in a kernel's fault word.
+const NO_FAULT: i32 = i32::MAX;
+
+/// The CUDA source NVRTC compiles: `step.h` then `cuda.cu`.
+pub fn kernel_source() -> String {
+    format!(
+        "{}\n{}",
+        include_str!("../kernels/step.h"),
+        include_str!("../kernels/cuda.cu")
+    )
+}
+
+/// Whether the CUDA driver library and NVRTC can be opened, and how many
+/// GPUs the driver sees: `Err` with what is missing. cudarc panics on first
+/// use of a library it cannot open, so this runs before any other call.
+pub fn probe() -> Result<usize, GpuError> {
+    // SAFETY: opening a shared library by name runs its initialisers; these
+    // are the CUDA libraries cudarc opens itself.
+    if !unsafe { cudarc::driver::sys::is_culib_present() } {
+        return Err(GpuError::NoDevice(
+            "the CUDA driver library (libcuda.so.1) was not found: is an NVIDIA driver installed?"
+                .into(),
+        ));
+    }
+    // SAFETY: as above.
+    if !unsafe { cudarc::nvrtc::sys::is_culib_present() } {
+        return Err(GpuError::NoDevice(
+            "NVRTC (libnvrtc.so) was not found: add the CUDA toolkit's lib64 folder to \
+             LD_LIBRARY_PATH"
+                .into(),
+        ));
+    }
+    let count = CudaContext::device_count().map_err(|e| GpuError::NoDevice(e.to_string()))?;
+    if count < 1 {
+        return Err(GpuError::NoDevice("the CUDA driver sees no GPU".into()));
+    }
+    Ok(count as usize)
+}
+
+/// Compiles the kernels to PTX for `arch` (e.g. "compute_90"; None: NVRTC's
+/// default) without fused multiply-adds. Needs NVRTC only, not a GPU: CI
+/// checks with it that the kernels compile.
+pub fn compile_kernels(arch: Option<&str>) -> Result<Ptx, GpuError> {
+    // SAFETY: see `probe`.
+    if !unsafe { cudarc::nvrtc::sys::is_culib_present() } {
+        return Err(GpuError::NoDevice(
+            "NVRTC (libnvrtc.so) was not found".into(),
+        ));
+    }
+    let mut options = vec!["--std=c++17".to_owned()];
+    if let Some(a) = arch {
+        options.push(format!("--gpu-architecture={a}"));
+    }
+    compile_ptx_with_opts(
+        kernel_source(),
+        CompileOptions {
+            fmad: Some(false),
+            prec_div: Some(true),
+            prec_sqrt: Some(true),
+            ftz: Some(false),
+            options,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| GpuError::Cuda(format!("the kernels do not compile: {e}")))
+}
+
+fn cuda(e: impl std::fmt::Display) -> GpuError {
+    GpuError::Cuda(e.to_string())
+}
+
+fn upload<T: DeviceRepr + Copy + Default>(
+    stream: &Arc<CudaStream>,
+    v: &[T],
+) -> Result<CudaSlice<T>, GpuError> {
+    // (A zero-length allocation is refused.)
+    if v.is_empty() {
+        return stream.clone_htod(&[T::default()]).map_err(cuda);
+    }
+    stream.clone_htod(v).map_err(cuda)
+}
+
+fn zeros<T: DeviceRepr + ValidAsZeroBits>(
+    stream: &Arc<CudaStream>,
+    len: usize,
+) -> Result<CudaSlice<T>, GpuError> {
+    stream.alloc_zeros(len.max(1)).map_err(cuda)
+}
+
+fn grid(count: usize, block: u32) -> LaunchConfig {
+    LaunchConfig {
+        grid_dim: ((count as u32).div_ceil(block).max(1), 1, 1),
+        block_dim: (block, 1, 1),
+        shared_mem_bytes: 0,
+    }
+}
+
+struct DevTrusses {
+    count: i64,
+    law: [f64; 4],
+    nodes: CudaSlice<u32>,
+    length: CudaSlice<f64>,
+    section: CudaSlice<f64>,
+    has_dashpot: i32,
+    dashpot: CudaSlice<f64>,
+    first: i64,
+}
+
+struct DevQuads {
+    count: i64,
+    resin: CudaSlice<f64>,
+    nodes: CudaSlice<u32>,
+    grad: CudaSlice<f64>,
+    area: CudaSlice<f64>,
+    history: CudaSlice<f64>,
+    stride: i64,
+    first: i64,
+}
+
+struct DevSprings {
+    count: i64,
+    nodes: CudaSlice<u32>,
+    anchor: CudaSlice<f64>,
+    rest: CudaSlice<f64>,
+    table_start: CudaSlice<i64>,
+    table_len: CudaSlice<i64>,
+    extension: CudaSlice<f64>,
+    force: CudaSlice<f64>,
+    first: i64,
+}
+
+struct Kernels {
+    truss: CudaFunction,
+    quad: CudaFunction,
+    spring: CudaFunction,
+    gather: CudaFunction,
+    update: CudaFunction,
+}
+
+/// The step of a model on a GPU.
+pub struct CudaStep<'m> {
+    model: &'m Model,
+    flat: Flat,
+    stream: Arc<CudaStream>,
+    kernels: Kernels,
+    trusses: Vec<DevTrusses>,
+    quads: Vec<DevQuads>,
+    springs: Vec<DevSprings>,
+    ptr: CudaSlice<i64>,
+    node_slots: CudaSlice<u32>,
+    mass: CudaSlice<f64>,
+    fixed: CudaSlice<u8>,
+    x0: CudaSlice<f64>,
+    f_ext: CudaSlice<f64>,
+    /// Positions and velocities: [0] current, [1] the other buffer
+    /// (swapped by `parity`).
+    x: [CudaSlice<f64>; 2],
+    v: [CudaSlice<f64>; 2],
+    f_int: CudaSlice<f64>,
+    slots: CudaSlice<f64>,
+    /// Each step's [c₁, c₂, Δt̄, h] of a block of up to `GRAPH_STEPS`.
+    params: CudaSlice<f64>,
+    block: u32,
+    fault: CudaSlice<i32>,
+    /// Whether the current state is in buffer 1.
+    parity: usize,
+    /// The captured block of `GRAPH_STEPS` steps from parity 0.
+    graph: Option<CudaGraph>,
+    /// The GPU's name.
+    pub device: String,
+}
+
+impl<'m> CudaStep<'m> {
+    /// The step of `model` on GPU 0 with the driver's (scaled) `mass` and
+    /// truss `dashpots` (`drape_time::Explicit::mass`, `fibre_dashpots`).
+    pub fn new(model: &'m Model, mass: &[f64], dashpots: &[Vec<f64>]) -> Result<Self, GpuError> {
+        let flat = Flat::new(model, mass, dashpots)?;
+        probe()?;
+        let ctx = CudaContext::new(0).map_err(|e| GpuError::NoDevice(e.to_string()))?;
+        // One stream, ordered by itself: cudarc's per-buffer events are not
+        // needed, and they cannot be waited on inside a graph capture.
+        // SAFETY: no buffer is used from another stream.
+        unsafe { ctx.disable_event_tracking() };
+        let device = ctx.name().map_err(cuda)?;
+        let (major, minor) = ctx.compute_capability().map_err(cuda)?;
+        let ptx = compile_kernels(Some(&format!("compute_{major}{minor}")))?;
+        let module = ctx.load_module(ptx).map_err(cuda)?;
+        let load = |name: &str| module.load_function(name).map_err(cuda);
+        let kernels = Kernels {
+            truss: load("truss_forces")?,
+            quad: load("quad_forces")?,
+            spring: load("spring_forces")?,
+            gather: load("gather")?,
+            update: load("update")?,
+        };
+        // A stream of its own: the legacy default stream cannot be captured
+        // into a graph.
+        let stream = ctx.new_stream().map_err(cuda)?;
+        let s = &stream;
+        let trusses = flat
+            .trusses
+            .iter()
+            .map(|t| {
+                Ok(DevTrusses {
+                    count: t.length.len() as i64,
+                    law: t.law,
+                    nodes: upload(s, &t.nodes)?,
+                    length: upload(s, &t.length)?,
+                    section: upload(s, &t.section)?,
+                    has_dashpot: i32::from(!t.dashpot.is_empty()),
+                    dashpot: upload(s, &t.dashpot)?,
+                    first: t.first as i64,
+                })
+            })
+            .collect::<Result<_, GpuError>>()?;
+        let quads = flat
+            .quads
+            .iter()
+            .map(|q| {
+                Ok(DevQuads {
+                    count: q.count() as i64,
+                    resin: upload(s, &q.step(0.0))?,
+                    nodes: upload(s, &q.nodes)?,
+                    grad: upload(s, &q.grad)?,
+                    area: upload(s, &q.area)?,
+                    history: zeros(s, q.count() * 4 * q.stride)?,
+                    stride: q.stride as i64,
+                    first: q.first as i64,
+                })
+            })
+            .collect::<Result<_, GpuError>>()?;
+        let springs = flat
+            .springs
+            .iter()
+            .map(|p| {
+                Ok(DevSprings {
+                    count: p.nodes.len() as i64,
+                    nodes: upload(s, &p.nodes)?,
+                    anchor: upload(s, &p.anchor)?,
+                    rest: upload(s, &p.rest)?,
+                    table_start: upload(s, &p.table_start)?,
+                    table_len: upload(s, &p.table_len)?,
+                    extension: upload(s, &p.extension)?,
+                    force: upload(s, &p.force)?,
+                    first: p.first as i64,
+                })
+            })
+            .collect::<Result<_, GpuError>>()?;
+        let n = flat.nodes;
+        Ok(Self {
+            model,
+            ptr: upload(s, &flat.ptr)?,
+            node_slots: upload(s, &flat.node_slots)?,
+            mass: upload(s, &flat.mass)?,
+            fixed: upload(s, &flat.fixed)?,
+            x0: upload(s, &flat.x0)?,
+            f_ext: upload(s, &flat.f_ext)?,
+            x: [zeros(s, 3 * n)?, zeros(s, 3 * n)?],
+            v: [zeros(s, 3 * n)?, zeros(s, 3 * n)?],
+            f_int: zeros(s, 3 * n)?,
+            slots: zeros(s, 3 * flat.slot_count)?,
+            params: zeros(s, 4 * GRAPH_STEPS as usize)?,
+            block: BLOCK,
+            fault: upload(s, &[NO_FAULT, NO_FAULT])?,
+            parity: 0,
+            graph: None,
+            device,
+            trusses,
+            quads,
+            springs,
+            kernels,
+            stream,
+            flat,
+        })
+    }
+
+    /// Sets every quad batch's resin step for a step `dt`.
+    fn set_resin(&mut self, dt: f64) -> Result<(), GpuError> {
+        for (q, d) in self.flat.quads.iter().zip(&mut self.quads) {
+            self.stream
+                .memcpy_htod(&q.step(dt), &mut d.resin)
+                .map_err(cuda)?;
+        }
+        Ok(())
+    }
+
+    /// Threads per block of every kernel from now on (the results are the
+    /// same bits whatever it is: each thread writes its own slots).
+    /// Brought down to what every kernel can launch with its registers.
+    pub fn set_block_threads(&mut self, threads: u32) -> Result<u32, GpuError> {
+        let k = &self.kernels;
+        let mut most = 1024;
+        for f in [&k.truss, &k.quad, &k.spring, &k.gather, &k.update] {
+            most = most.min(f.max_threads_per_block().map_err(cuda)? as u32);
+        }
+        self.block = threads.clamp(32, most);
+        self.graph = None;
+        Ok(self.block)
+    }
+
+    /// Launches the forces at buffer `at` (positions and velocities), the
+    /// histories advanced when `commit`, and the gather.
+    fn launch_forces(&mut self, at: usize, commit: bool) -> Result<(), GpuError> {
+        let n = self.flat.nodes as i64;
+        let sc = self.flat.slot_count as i64;
+        let commit = i32::from(commit);
+        let (x, v) = (&self.x[at], &self.v[at]);
+        for t in &self.trusses {
+            let mut b = self.stream.launch_builder(&self.kernels.truss);
+            b.arg(&t.count)
+                .arg(&t.law[0])
+                .arg(&t.law[1])
+                .arg(&t.law[2])
+                .arg(&t.law[3])
+                .arg(&t.nodes)
+                .arg(&t.length)
+                .arg(&t.section)
+                .arg(&t.has_dashpot)
+                .arg(&t.dashpot)
+                .arg(x)
+                .arg(v)
+                .arg(&n)
+                .arg(&mut self.slots)
+                .arg(&sc)
+                .arg(&t.first)
+                .arg(&mut self.fault);
+            // SAFETY: the arguments match `truss_forces` in cuda.cu.
+            unsafe { b.launch(grid(t.count as usize, self.block)) }.map_err(cuda)?;
+        }
+        for q in &mut self.quads {
+            let mut b = self.stream.launch_builder(&self.kernels.quad);
+            b.arg(&q.count)
+                .arg(&q.resin)
+                .arg(&q.nodes)
+                .arg(&q.grad)
+                .arg(&q.area)
+                .arg(&mut q.history)
+                .arg(&q.stride)
+                .arg(&commit)
+                .arg(x)
+                .arg(&n)
+                .arg(&mut self.slots)
+                .arg(&sc)
+                .arg(&q.first)
+                .arg(&mut self.fault);
+            // SAFETY: the arguments match `quad_forces` in cuda.cu.
+            unsafe { b.launch(grid(q.count as usize, self.block)) }.map_err(cuda)?;
+        }
+        for p in &self.springs {
+            let mut b = self.stream.launch_builder(&self.kernels.spring);
+            b.arg(&p.count)
+                .arg(&p.nodes)
+                .arg(&p.anchor)
+                .arg(&p.rest)
+                .arg(&p.table_start)
+                .arg(&p.table_len)
+                .arg(&p.extension)
+                .arg(&p.force)
+                .arg(x)
+                .arg(&n)
+                .arg(&mut self.slots)
+                .arg(&sc)
+                .arg(&p.first);
+            // SAFETY: the arguments match `spring_forces` in cuda.cu.
+            unsafe { b.launch(grid(p.count as usize, self.block)) }.map_err(cuda)?;
+        }
+        let mut b = self.stream.launch_builder(&self.kernels.gather);
+        b.arg(&n)
+            .arg(&self.ptr)
+            .arg(&self.node_slots)
+            .arg(&self.slots)
+            .arg(&sc)
+            .arg(&mut self.f_int);
+        // SAFETY: the arguments match `gather` in cuda.cu.
+        unsafe { b.launch(grid(n as usize, self.block)) }.map_err(cuda)?;
+        Ok(())
+    }
+
+    /// One step from buffer `from` into the other, with the params of step
+    /// `k` of the block in device memory.
+    fn launch_step(&mut self, from: usize, k: usize) -> Result<(), GpuError> {
+        let n = self.flat.nodes as i64;
+        let to = 1 - from;
+        let [x0, x1] = &mut self.x;
+        let [v0, v1] = &mut self.v;
+        let (x, x_new, v, v_new) = if from == 0 {
+            (&*x0, x1, &*v0, v1)
+        } else {
+            (&*x1, x0, &*v1, v0)
+        };
+        let params = self.params.slice(4 * k..4 * k + 4);
+        let mut b = self.stream.launch_builder(&self.kernels.update);
+        b.arg(&n)
+            .arg(x)
+            .arg(v)
+            .arg(&self.f_ext)
+            .arg(&self.f_int)
+            .arg(&self.mass)
+            .arg(&self.fixed)
+            .arg(&self.x0)
+            .arg(&params)
+            .arg(x_new)
+            .arg(v_new);
+        // SAFETY: the arguments match `update` in cuda.cu.
+        unsafe { b.launch(grid(n as usize, self.block)) }.map_err(cuda)?;
+        self.launch_forces(to, true)
+    }
+
+    /// The fault words, reset; an element error if one is set.
+    fn check_faults(&mut self, step: u64) -> Result<(), GpuError> {
+        let fault = self.stream.clone_dtoh(&self.fault).map_err(cuda)?;
+        if fault[0] != NO_FAULT || fault[1] != NO_FAULT {
+            self.stream
+                .memcpy_htod(&[NO_FAULT, NO_FAULT], &mut self.fault)
+                .map_err(cuda)?;
+            let (kind, index) = if fault[0] != NO_FAULT {
+                ("truss", fault[0])
+            } else {
+                ("quad", fault[1])
+            };
+            return Err(GpuError::Element {
+                kind,
+                index: index as usize,
+                step,
+            });
+        }
+        Ok(())
+    }
+
+    /// `count` steps with `params` and their resin step, none of them
+    /// checked until the end: for timing the step alone. Returns the
+    /// seconds the GPU took (the stream synchronised before and after).
+    pub fn time_steps(&mut self, count: u64, params: StepParams) -> Result<f64, GpuError> {
+        self.set_resin(params.h)?;
+        self.stream.synchronize().map_err(cuda)?;
+        let started = std::time::Instant::now();
+        self.run_block(count, params, params)?;
+        self.stream.synchronize().map_err(cuda)?;
+        let seconds = started.elapsed().as_secs_f64();
+        self.check_faults(0)?;
+        Ok(seconds)
+    }
+
+    /// `count` steps, the first with `first`, the others with `rest`, in
+    /// chunks of `GRAPH_STEPS`: each chunk's params written to the device
+    /// (in stream order, so after the chunk before has run), then the
+    /// captured graph where the chunk is whole and starts at parity 0,
+    /// single launches otherwise.
+    fn run_block(
+        &mut self,
+        count: u64,
+        first: StepParams,
+        rest: StepParams,
+    ) -> Result<(), GpuError> {
+        let mut done = 0;
+        while done < count {
+            let chunk = (count - done).min(GRAPH_STEPS) as usize;
+            let mut params = [0.0; 4 * GRAPH_STEPS as usize];
+            for (k, p) in params.chunks_exact_mut(4).take(chunk).enumerate() {
+                let s = if done == 0 && k == 0 { first } else { rest };
+                p.copy_from_slice(&[s.c1, s.c2, s.dt_avg, s.h]);
+            }
+            self.stream
+                .memcpy_htod(&params, &mut self.params)
+                .map_err(cuda)?;
+            if self.parity == 0 && chunk == GRAPH_STEPS as usize {
+                if self.graph.is_none() {
+                    self.capture()?;
+                }
+                let graph = self.graph.as_ref().expect("captured just above");
+                graph.launch().map_err(cuda)?;
+            } else {
+                for k in 0..chunk {
+                    self.launch_step(self.parity, k)?;
+                    self.parity = 1 - self.parity;
+                }
+            }
+            done += chunk as u64;
+        }
+        Ok(())
+    }
+
+    fn capture(&mut self) -> Result<(), GpuError> {
+        self.stream
+            .begin_capture(sys::CUstreamCaptureMode::CU_STREAM_CAPTURE_MODE_THREAD_LOCAL)
+            .map_err(cuda)?;
+        let mut result = Ok(());
+        for k in 0..GRAPH_STEPS {
+            result = result.and_then(|()| self.launch_step((k % 2) as usize, k as usize));
+        }
+        let graph = self
+            .stream
+            .end_capture(sys::CUgraphInstantiate_flags(0))
+            .map_err(cuda)?;
+        result?;
+        self.graph = Some(graph.ok_or_else(|| GpuError::Cuda("the capture made no graph".into()))?);
+        Ok(())
+    }
+}
+
+impl Engine for CudaStep<'_> {
+    fn load(&mut self, state: &State) -> Result<(), GpuError> {
+        self.parity = 0;
+        self.stream
+            .memcpy_htod(&split(&state.x), &mut self.x[0])
+            .map_err(cuda)?;
+        self.stream
+            .memcpy_htod(&split(&state.v), &mut self.v[0])
+            .map_err(cuda)?;
+        for (h, d) in Flat::histories(self.model, state)
+            .iter()
+            .zip(&mut self.quads)
+        {
+            if !h.is_empty() {
+                self.stream.memcpy_htod(h, &mut d.history).map_err(cuda)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn store(&mut self, state: &mut State) -> Result<(), GpuError> {
+        let n = self.flat.nodes;
+        let x = self.stream.clone_dtoh(&self.x[self.parity]).map_err(cuda)?;
+        let v = self.stream.clone_dtoh(&self.v[self.parity]).map_err(cuda)?;
+        state.x = join(&x[..3 * n]);
+        state.v = join(&v[..3 * n]);
+        for ((b, d), h) in self
+            .model
+            .membranes
+            .iter()
+            .zip(&self.quads)
+            .zip(&mut state.history)
+        {
+            let values = self.stream.clone_dtoh(&d.history).map_err(cuda)?;
+            *h = history_from_device(b, &values[..h.len()]);
+        }
+        Ok(())
+    }
+
+    fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError> {
+        let n = self.flat.nodes;
+        let x = self.stream.clone_dtoh(&self.x[self.parity]).map_err(cuda)?;
+        Ok(join(&x[..3 * n]))
+    }
+
+    fn start_forces(&mut self, dt: f64) -> Result<(), GpuError> {
+        self.set_resin(dt)?;
+        self.launch_forces(self.parity, false)?;
+        self.check_faults(0)
+    }
+
+    fn steps(
+        &mut self,
+        count: u64,
+        first: StepParams,
+        rest: StepParams,
+        step: u64,
+    ) -> Result<(), GpuError> {
+        // Every step of a block has the same h, so one resin step.
+        self.set_resin(first.h)?;
+        self.run_block(count, first, rest)?;
+        self.check_faults(step)
+    }
+}

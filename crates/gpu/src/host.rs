@@ -1,0 +1,304 @@
+//! The kernels' CPU build (`kernels/host.c` over `kernels/step.h`): the
+//! GPU's arithmetic, one element after another, to test it against the
+//! CPU driver without a GPU. Not a fast path: the CPU driver is that.
+
+use drape_model::{Model, State};
+use nalgebra::Vector3;
+
+use crate::GpuError;
+use crate::layout::{Flat, history_from_device, join, split};
+use crate::schedule::{Engine, StepParams};
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+struct FibreLaw {
+    modulus: f64,
+    crimp_strain: f64,
+    compression_factor: f64,
+    buckling_stress: f64,
+}
+
+unsafe extern "C" {
+    fn drape_host_truss_forces(
+        count: i64,
+        law: FibreLaw,
+        nodes: *const u32,
+        length: *const f64,
+        section: *const f64,
+        dashpot: *const f64,
+        x: *const f64,
+        v: *const f64,
+        n: i64,
+        slots: *mut f64,
+        slot_count: i64,
+        first: i64,
+    ) -> i64;
+    fn drape_host_quad_forces(
+        count: i64,
+        resin: *const f64,
+        nodes: *const u32,
+        grad: *const f64,
+        area: *const f64,
+        history: *mut f64,
+        stride: i64,
+        commit: i32,
+        x: *const f64,
+        n: i64,
+        slots: *mut f64,
+        slot_count: i64,
+        first: i64,
+    ) -> i64;
+    fn drape_host_spring_forces(
+        count: i64,
+        nodes: *const u32,
+        anchor: *const f64,
+        rest: *const f64,
+        table_start: *const i64,
+        table_len: *const i64,
+        extension: *const f64,
+        table_force: *const f64,
+        x: *const f64,
+        n: i64,
+        slots: *mut f64,
+        slot_count: i64,
+        first: i64,
+    );
+    fn drape_host_gather(
+        n: i64,
+        ptr: *const i64,
+        node_slots: *const u32,
+        slots: *const f64,
+        slot_count: i64,
+        f_int: *mut f64,
+    );
+    fn drape_host_update(
+        n: i64,
+        x: *const f64,
+        v: *const f64,
+        f_ext: *const f64,
+        f_int: *const f64,
+        mass: *const f64,
+        fixed: *const u8,
+        x0: *const f64,
+        c1: f64,
+        c2: f64,
+        dt_avg: f64,
+        h: f64,
+        x_new: *mut f64,
+        v_new: *mut f64,
+    );
+}
+
+/// The GPU step's kernels run on the CPU, one element after another.
+pub struct HostStep<'m> {
+    model: &'m Model,
+    flat: Flat,
+    x: Vec<f64>,
+    v: Vec<f64>,
+    x_new: Vec<f64>,
+    v_new: Vec<f64>,
+    f_int: Vec<f64>,
+    slots: Vec<f64>,
+    history: Vec<Vec<f64>>,
+}
+
+impl<'m> HostStep<'m> {
+    /// The step of `model` with the driver's (scaled) `mass` and truss
+    /// `dashpots` (`drape_time::Explicit::mass`, `fibre_dashpots`).
+    pub fn new(model: &'m Model, mass: &[f64], dashpots: &[Vec<f64>]) -> Result<Self, GpuError> {
+        let flat = Flat::new(model, mass, dashpots)?;
+        let n = flat.nodes;
+        Ok(Self {
+            model,
+            x: vec![0.0; 3 * n],
+            v: vec![0.0; 3 * n],
+            x_new: vec![0.0; 3 * n],
+            v_new: vec![0.0; 3 * n],
+            f_int: vec![0.0; 3 * n],
+            slots: vec![0.0; 3 * flat.slot_count],
+            history: Vec::new(),
+            flat,
+        })
+    }
+
+    /// The internal forces of the last evaluation.
+    pub fn internal_forces(&self) -> Vec<Vector3<f64>> {
+        join(&self.f_int)
+    }
+
+    fn forces(&mut self, dt: f64, commit: bool, step: u64) -> Result<(), GpuError> {
+        let f = &self.flat;
+        let (n, sc) = (f.nodes as i64, f.slot_count as i64);
+        let slots = self.slots.as_mut_ptr();
+        for t in &f.trusses {
+            let law = FibreLaw {
+                modulus: t.law[0],
+                crimp_strain: t.law[1],
+                compression_factor: t.law[2],
+                buckling_stress: t.law[3],
+            };
+            let dashpot = if t.dashpot.is_empty() {
+                std::ptr::null()
+            } else {
+                t.dashpot.as_ptr()
+            };
+            // SAFETY: every array has the length the kernel reads (built
+            // together in `Flat::new`); the slots of the batch are its own.
+            let fault = unsafe {
+                drape_host_truss_forces(
+                    t.length.len() as i64,
+                    law,
+                    t.nodes.as_ptr(),
+                    t.length.as_ptr(),
+                    t.section.as_ptr(),
+                    dashpot,
+                    self.x.as_ptr(),
+                    self.v.as_ptr(),
+                    n,
+                    slots,
+                    sc,
+                    t.first as i64,
+                )
+            };
+            if fault >= 0 {
+                return Err(GpuError::Element {
+                    kind: "truss",
+                    index: fault as usize,
+                    step,
+                });
+            }
+        }
+        for (q, h) in f.quads.iter().zip(&mut self.history) {
+            let resin = q.step(dt);
+            // SAFETY: as above; `h` is the batch's value-major history.
+            let fault = unsafe {
+                drape_host_quad_forces(
+                    q.count() as i64,
+                    resin.as_ptr(),
+                    q.nodes.as_ptr(),
+                    q.grad.as_ptr(),
+                    q.area.as_ptr(),
+                    h.as_mut_ptr(),
+                    q.stride as i64,
+                    i32::from(commit),
+                    self.x.as_ptr(),
+                    n,
+                    slots,
+                    sc,
+                    q.first as i64,
+                )
+            };
+            if fault >= 0 {
+                return Err(GpuError::Element {
+                    kind: "quad",
+                    index: fault as usize,
+                    step,
+                });
+            }
+        }
+        for s in &f.springs {
+            // SAFETY: as above.
+            unsafe {
+                drape_host_spring_forces(
+                    s.nodes.len() as i64,
+                    s.nodes.as_ptr(),
+                    s.anchor.as_ptr(),
+                    s.rest.as_ptr(),
+                    s.table_start.as_ptr(),
+                    s.table_len.as_ptr(),
+                    s.extension.as_ptr(),
+                    s.force.as_ptr(),
+                    self.x.as_ptr(),
+                    n,
+                    slots,
+                    sc,
+                    s.first as i64,
+                )
+            };
+        }
+        // SAFETY: ptr has n + 1 entries indexing node_slots; f_int 3n.
+        unsafe {
+            drape_host_gather(
+                n,
+                f.ptr.as_ptr(),
+                f.node_slots.as_ptr(),
+                self.slots.as_ptr(),
+                sc,
+                self.f_int.as_mut_ptr(),
+            )
+        };
+        Ok(())
+    }
+
+    fn update(&mut self, p: StepParams) {
+        let f = &self.flat;
+        // SAFETY: every array has 3n entries (fixed and mass n).
+        unsafe {
+            drape_host_update(
+                f.nodes as i64,
+                self.x.as_ptr(),
+                self.v.as_ptr(),
+                f.f_ext.as_ptr(),
+                self.f_int.as_ptr(),
+                f.mass.as_ptr(),
+                f.fixed.as_ptr(),
+                f.x0.as_ptr(),
+                p.c1,
+                p.c2,
+                p.dt_avg,
+                p.h,
+                self.x_new.as_mut_ptr(),
+                self.v_new.as_mut_ptr(),
+            )
+        };
+        std::mem::swap(&mut self.x, &mut self.x_new);
+        std::mem::swap(&mut self.v, &mut self.v_new);
+    }
+}
+
+impl Engine for HostStep<'_> {
+    fn load(&mut self, state: &State) -> Result<(), GpuError> {
+        self.x = split(&state.x);
+        self.v = split(&state.v);
+        self.history = Flat::histories(self.model, state);
+        Ok(())
+    }
+
+    fn store(&mut self, state: &mut State) -> Result<(), GpuError> {
+        state.x = join(&self.x);
+        state.v = join(&self.v);
+        for ((b, d), h) in self
+            .model
+            .membranes
+            .iter()
+            .zip(&self.history)
+            .zip(&mut state.history)
+        {
+            *h = history_from_device(b, d);
+        }
+        Ok(())
+    }
+
+    fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError> {
+        Ok(join(&self.x))
+    }
+
+    fn start_forces(&mut self, dt: f64) -> Result<(), GpuError> {
+        self.forces(dt, false, 0)
+    }
+
+    fn steps(
+        &mut self,
+        count: u64,
+        first: StepParams,
+        rest: StepParams,
+        step: u64,
+    ) -> Result<(), GpuError> {
+        for k in 0..count {
+            let p = if k == 0 { first } else { rest };
+            self.update(p);
+            self.forces(p.h, true, step + k + 1)?;
+        }
+        Ok(())
+    }
+}

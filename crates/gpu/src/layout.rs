@@ -1,0 +1,313 @@
+//! A model flattened into the arrays the kernels read: 3-vectors
+//! component-major, membrane histories value-major (see `kernels/step.h`).
+
+use drape_constitutive::ResinLaw;
+use drape_elements::{MembraneBatch, MembraneShape};
+use drape_model::{Model, Motion, State};
+use nalgebra::Vector3;
+
+use crate::GpuError;
+
+/// The most Prony terms the kernels carry (`DRAPE_MAX_PRONY`).
+pub(crate) const MAX_PRONY: usize = 8;
+
+/// What `model` uses that the GPU step does not do yet, named as a scene
+/// names it; empty when the GPU can step it.
+pub fn unsupported(model: &Model) -> Vec<String> {
+    let f = model.features();
+    let mut out = Vec::new();
+    let mut no = |used: bool, what: &str| {
+        if used {
+            out.push(what.to_owned());
+        }
+    };
+    no(f.contact, "tools and contact ([[tools]])");
+    no(f.bending, "yarn bending (fabric.bending)");
+    no(
+        f.embedded_fibres,
+        "embedded fibres (fabric.fibres = \"embedded\")",
+    );
+    no(f.loads, "nodal loads ([[loads]])");
+    no(f.pressure, "pressure ([[pressure]])");
+    no(
+        f.prescribed_motion,
+        "prescribed motions (a boundary motion other than fixed)",
+    );
+    no(model.plies.len() > 1, "a stack of plies ([[plies]])");
+    no(
+        model
+            .membranes
+            .iter()
+            .any(|b| b.shape() == MembraneShape::Triangle && !b.is_empty()),
+        "triangle membranes (an imported triangle blank)",
+    );
+    no(
+        model
+            .membranes
+            .iter()
+            .any(|b| b.section.material.resin.shear_locking.is_some()),
+        "the shear-locking law (resin.shear_locking)",
+    );
+    no(
+        model
+            .membranes
+            .iter()
+            .any(|b| b.section.material.resin.prony.len() > MAX_PRONY),
+        "a resin of more than 8 Prony terms",
+    );
+    out
+}
+
+/// A truss batch.
+pub(crate) struct Trusses {
+    /// [E_f, ε_sh, c_c, σ_b].
+    pub law: [f64; 4],
+    pub nodes: Vec<u32>,
+    pub length: Vec<f64>,
+    pub section: Vec<f64>,
+    /// Empty for a batch without dashpots.
+    pub dashpot: Vec<f64>,
+    pub first: usize,
+}
+
+/// A resin-only quad batch.
+pub(crate) struct Quads {
+    pub resin: ResinLaw,
+    pub constants: [f64; 5],
+    pub nodes: Vec<u32>,
+    /// ∂N/∂X per (element, point, node, component).
+    pub grad: Vec<f64>,
+    /// Per (element, point).
+    pub area: Vec<f64>,
+    pub stride: usize,
+    pub first: usize,
+}
+
+impl Quads {
+    pub fn count(&self) -> usize {
+        self.area.len() / 4
+    }
+
+    /// The kernels' `DrapeResinStep` for a step `dt`, as 22 doubles (the
+    /// prony count in the low bytes of the sixth).
+    pub fn step(&self, dt: f64) -> [f64; 22] {
+        let mut factors = [(0.0, 0.0); MAX_PRONY];
+        let terms = self.resin.prony.len();
+        self.resin.prony_factors(dt, &mut factors[..terms]);
+        let mut out = [0.0; 22];
+        out[..5].copy_from_slice(&self.constants);
+        out[5] = f64::from_bits(terms as u64);
+        for (q, (decay, weight)) in factors.iter().enumerate() {
+            out[6 + q] = *decay;
+            out[6 + MAX_PRONY + q] = *weight;
+        }
+        out
+    }
+}
+
+/// A spring batch.
+pub(crate) struct Springs {
+    pub nodes: Vec<u32>,
+    /// Component-major.
+    pub anchor: Vec<f64>,
+    pub rest: Vec<f64>,
+    pub table_start: Vec<i64>,
+    pub table_len: Vec<i64>,
+    pub extension: Vec<f64>,
+    pub force: Vec<f64>,
+    pub first: usize,
+}
+
+/// The model as the kernels read it.
+pub(crate) struct Flat {
+    pub nodes: usize,
+    pub slot_count: usize,
+    pub trusses: Vec<Trusses>,
+    pub quads: Vec<Quads>,
+    pub springs: Vec<Springs>,
+    pub ptr: Vec<i64>,
+    pub node_slots: Vec<u32>,
+    pub mass: Vec<f64>,
+    /// Bit k: component k fixed.
+    pub fixed: Vec<u8>,
+    pub x0: Vec<f64>,
+    pub f_ext: Vec<f64>,
+}
+
+/// Component-major copy of `v`.
+pub(crate) fn split(v: &[Vector3<f64>]) -> Vec<f64> {
+    let n = v.len();
+    let mut out = vec![0.0; 3 * n];
+    for (i, p) in v.iter().enumerate() {
+        for k in 0..3 {
+            out[k * n + i] = p[k];
+        }
+    }
+    out
+}
+
+/// The 3-vectors of a component-major array.
+pub(crate) fn join(a: &[f64]) -> Vec<Vector3<f64>> {
+    let n = a.len() / 3;
+    (0..n)
+        .map(|i| Vector3::new(a[i], a[n + i], a[2 * n + i]))
+        .collect()
+}
+
+/// Batch `b`'s history, value-major, from the CPU's layout.
+pub(crate) fn history_to_device(b: &MembraneBatch, h: &[f64]) -> Vec<f64> {
+    let (count, eh) = (b.len(), b.element_history_len());
+    let mut out = vec![0.0; h.len()];
+    for e in 0..count {
+        for (j, v) in b.element_history(h, e).iter().enumerate() {
+            out[j * count + e] = *v;
+        }
+    }
+    debug_assert_eq!(out.len(), count * eh);
+    out
+}
+
+/// Batch `b`'s history in the CPU's layout, from the value-major one.
+pub(crate) fn history_from_device(b: &MembraneBatch, d: &[f64]) -> Vec<f64> {
+    let (count, eh) = (b.len(), b.element_history_len());
+    let mut out = vec![0.0; d.len()];
+    let mut values = vec![0.0; eh];
+    for e in 0..count {
+        for (j, v) in values.iter_mut().enumerate() {
+            *v = d[j * count + e];
+        }
+        b.set_element_history(&mut out, e, &values);
+    }
+    out
+}
+
+impl Flat {
+    /// `model` with the driver's (scaled) `mass` and truss `dashpots`
+    /// (`drape_time::Explicit::fibre_dashpots`).
+    pub fn new(model: &Model, mass: &[f64], dashpots: &[Vec<f64>]) -> Result<Self, GpuError> {
+        let missing = unsupported(model);
+        if !missing.is_empty() {
+            return Err(GpuError::Unsupported(missing));
+        }
+        let layout = model.slot_layout();
+        let n = model.node_count();
+        let trusses = model
+            .trusses
+            .iter()
+            .zip(&layout.truss_offsets)
+            .enumerate()
+            .map(|(b, (t, &first))| Trusses {
+                law: [
+                    t.law.modulus,
+                    t.law.crimp_strain,
+                    t.law.compression_factor,
+                    t.law.buckling_stress,
+                ],
+                nodes: t.nodes.iter().flatten().copied().collect(),
+                length: t.length.clone(),
+                section: t.section.clone(),
+                dashpot: dashpots.get(b).cloned().unwrap_or_default(),
+                first,
+            })
+            .collect();
+        let quads = model
+            .membranes
+            .iter()
+            .zip(&layout.membrane_offsets)
+            .map(|(m, &first)| {
+                let count = m.len();
+                let mut grad = Vec::with_capacity(count * 32);
+                let mut area = Vec::with_capacity(count * 4);
+                let mut nodes = Vec::with_capacity(count * 4);
+                for e in 0..count {
+                    nodes.extend_from_slice(m.element_nodes(e));
+                    for p in 0..4 {
+                        for g in m.point_gradients(e, p) {
+                            grad.extend([g.x, g.y]);
+                        }
+                        area.push(m.point_weight(e, p));
+                    }
+                }
+                let material = &m.section.material;
+                let resin = material.resin.clone();
+                // Summed as the CPU pass sums it (quad_lanes' ResinStep).
+                let mut long_term = 1.0;
+                for p in &resin.prony {
+                    long_term -= p.g;
+                }
+                Quads {
+                    constants: [
+                        resin.wave_modulus(),
+                        resin.poisson,
+                        resin.shear_modulus(),
+                        long_term,
+                        material.resin_thickness(),
+                    ],
+                    resin,
+                    nodes,
+                    grad,
+                    area,
+                    stride: m.history_stride(),
+                    first,
+                }
+            })
+            .collect();
+        let springs = model
+            .springs
+            .iter()
+            .zip(&layout.spring_offsets)
+            .map(|(s, &first)| {
+                let points: Vec<[f64; 2]> = s.table.clone().into();
+                let count = s.len();
+                Springs {
+                    nodes: s.nodes.clone(),
+                    anchor: split(&s.anchors),
+                    rest: s.rest_length.clone(),
+                    table_start: vec![0; count],
+                    table_len: vec![points.len() as i64; count],
+                    extension: points.iter().map(|p| p[0]).collect(),
+                    force: points.iter().map(|p| p[1]).collect(),
+                    first,
+                }
+            })
+            .collect();
+        let (ptr, node_slots) = layout.node_slot_lists();
+        let mut fixed = vec![0u8; n];
+        for bc in &model.boundary {
+            if matches!(bc.motion, Motion::Fixed) {
+                for &i in &bc.nodes {
+                    for k in 0..3 {
+                        if bc.components[k] {
+                            fixed[i as usize] |= 1 << k;
+                        }
+                    }
+                }
+            }
+        }
+        // Weight from the physical mass (drape-time's external forces).
+        let weight: Vec<Vector3<f64>> = model.mass.iter().map(|m| model.gravity * *m).collect();
+        Ok(Self {
+            nodes: n,
+            slot_count: layout.len,
+            trusses,
+            quads,
+            springs,
+            ptr: ptr.iter().map(|&p| p as i64).collect(),
+            node_slots: node_slots.to_vec(),
+            mass: mass.to_vec(),
+            fixed,
+            x0: split(&model.x0),
+            f_ext: split(&weight),
+        })
+    }
+
+    /// Every membrane batch's history, value-major, from `state`.
+    pub fn histories(model: &Model, state: &State) -> Vec<Vec<f64>> {
+        model
+            .membranes
+            .iter()
+            .zip(&state.history)
+            .map(|(b, h)| history_to_device(b, h))
+            .collect()
+    }
+}

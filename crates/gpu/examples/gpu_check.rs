@@ -99,8 +99,7 @@ fn gpu_run(scene: &Scene, steps: Option<u64>, threads: u32) -> (State, f64, u64,
     let mut settings = scene.settings.clone();
     settings.max_steps = steps;
     let explicit = Explicit::new(&scene.model, settings.clone()).expect("a driver");
-    let mut gpu = CudaStep::new(&scene.model, explicit.mass(), explicit.fibre_dashpots())
-        .expect("the GPU step");
+    let mut gpu = CudaStep::new(&explicit).expect("the GPU step");
     let threads = gpu.set_block_threads(threads).expect("threads per block");
     let mut state = scene.model.initial_state();
     let started = Instant::now();
@@ -178,19 +177,13 @@ fn main() {
         let started = Instant::now();
         let scene = blank(cells, 1.0);
         let explicit = Explicit::new(&scene.model, scene.settings.clone()).expect("a driver");
-        let mut gpu = CudaStep::new(&scene.model, explicit.mass(), explicit.fibre_dashpots())
-            .expect("the GPU step");
+        let mut gpu = CudaStep::new(&explicit).expect("the GPU step");
         let state = scene.model.initial_state();
         gpu.load(&state).expect("load");
         gpu.start_forces(0.0).expect("forces");
         let setup = started.elapsed().as_secs_f64();
         let dt = explicit.stable_time_step(&state.x);
-        let p = StepParams {
-            c1: 1.0,
-            c2: 1.0,
-            dt_avg: dt,
-            h: dt,
-        };
+        let p = StepParams::new(0.0, dt, dt);
         gpu.time_steps(40, p).expect("warm-up");
         let count = match cells {
             c if c <= 40 => 4000,

@@ -1,7 +1,8 @@
 /* drape's explicit step on the GPU: one thread per truss, quad, spring or
  * node over the functions of kernels/step.h (which precedes this file in
  * the source NVRTC compiles). A failing element records the lowest index
- * in fault[kind] (an integer minimum: the same whatever the order). */
+ * in fault[kind] (0 truss, 1 quad, 2 contact: an integer minimum, the same
+ * whatever the order). */
 
 #define DRAPE_INDEX ((long)blockIdx.x * (long)blockDim.x + (long)threadIdx.x)
 
@@ -79,4 +80,20 @@ extern "C" __global__ void update(long n, const double *x, const double *v,
      * of steps runs again with other ones. */
     drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, params[0], params[1], params[2],
                  params[3], x_new, v_new);
+}
+
+extern "C" __global__ void contact(long n, const double *tool, const double *params,
+                                   const double *mass, const unsigned char *fixed,
+                                   const double *x0, const double *x_old, double *x, double *v,
+                                   double *contact_force, int *fault)
+{
+    long i = DRAPE_INDEX;
+    if (i >= n) {
+        return;
+    }
+    int kind = drape_contact(i, n, tool, params, mass, fixed, x0, x_old, x, v, contact_force);
+    if (kind) {
+        /* The lowest node, with its kind in the low two bits. */
+        atomicMin(fault + 2, (int)(4 * i + kind));
+    }
 }

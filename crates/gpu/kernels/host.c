@@ -53,6 +53,20 @@ void drape_host_gather(long n, const long *ptr, const unsigned *node_slots, cons
     }
 }
 
+long drape_host_contact(long n, const double *tool, const double *params, const double *mass,
+                        const unsigned char *fixed, const double *x0, const double *x_old,
+                        double *x, double *v, double *contact_force)
+{
+    for (long i = 0; i < n; i++) {
+        int fault = drape_contact(i, n, tool, params, mass, fixed, x0, x_old, x, v,
+                                  contact_force);
+        if (fault) {
+            return 4 * i + fault;
+        }
+    }
+    return -1;
+}
+
 void drape_host_update(long n, const double *x, const double *v, const double *f_ext,
                        const double *f_int, const double *mass, const unsigned char *fixed,
                        const double *x0, double c1, double c2, double dt_avg, double h,

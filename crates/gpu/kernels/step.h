@@ -16,7 +16,7 @@
  * elements with `stride` values per point, is at [(p*stride + i)*count + e].
  *
  * C99 and CUDA C++ both: no templates, no classes, no library calls but
- * sqrt, log and expm1.
+ * sqrt, log, expm1, hypot, atan2, cos, sin and fabs.
  */
 
 #ifndef DRAPE_STEP_H
@@ -26,6 +26,7 @@
 #define DRAPE_FN static __device__ __forceinline__
 #else
 #include <math.h>
+#include <stddef.h>
 #define DRAPE_FN static inline
 #endif
 
@@ -363,6 +364,265 @@ DRAPE_FN void drape_update(long i, long n, const double *x, const double *v,
         v_new[at] = vn;
         x_new[at] = xn;
     }
+}
+
+/* ---- Contact with one rigid tool (drape-contact's explicit pass for a
+ * node against a single tool moved by a prescribed displacement: the
+ * forward-increment multiplier in closed form, then Coulomb friction by
+ * the return mapping; crates/contact/src/explicit.rs, surface.rs). ---- */
+
+/* A tool as the kernels read it, doubles at these indices. */
+#define DRAPE_TOOL_KIND 0      /* 0 plane, 1 sphere, 2 surface of revolution */
+#define DRAPE_TOOL_POINT 1     /* 3: plane point, sphere centre, axis origin */
+#define DRAPE_TOOL_NORMAL 4    /* 3: plane normal */
+#define DRAPE_TOOL_RADIUS 7    /* sphere radius */
+#define DRAPE_TOOL_FREE 8      /* 2: the profile's free start and end (0/1) */
+#define DRAPE_TOOL_AXIS 10     /* 3: direction of motion */
+#define DRAPE_TOOL_FRICTION 13 /* Coulomb mu */
+#define DRAPE_TOOL_OFFSET 14   /* the fabric's mid-surface offset */
+#define DRAPE_TOOL_SLACK 15    /* the contact guard's fault tolerance */
+#define DRAPE_TOOL_TRAVEL 16   /* the contact guard's largest travel */
+#define DRAPE_TOOL_SEGMENTS 17 /* number of profile segments */
+#define DRAPE_TOOL_PROFILE 18  /* 6 per segment: kind (0 line, 1 arc), then
+                                  line: from r, z, to r, z;
+                                  arc: centre r, z, radius, from, to (deg) */
+#define DRAPE_PI 3.14159265358979323846
+#define DRAPE_TAU 6.28318530717958647692
+
+/* Per step, the update's [c1, c2, dt_avg, h] and the tool's displacement
+ * after and before the step, its velocity, and tau = dt_avg/(1 +
+ * damping*dt_avg/2). */
+#define DRAPE_PARAMS 8
+
+/* ProfileSegment::closest: the closest point (pr, pz) of segment `seg` to
+ * (qr, qz), the left normal (nr, nz), and 0 inside, 1 at the start, 2 at
+ * the end. */
+DRAPE_FN int drape_segment_closest(const double *seg, double qr, double qz, double *pr,
+                                   double *pz, double *nr, double *nz)
+{
+    if (seg[0] == 0.0) {
+        double ar = seg[1], az = seg[2], br = seg[3], bz = seg[4];
+        double tr = br - ar, tz = bz - az;
+        double s = ((qr - ar) * tr + (qz - az) * tz) / (tr * tr + tz * tz);
+        double len = sqrt(tz * tz + tr * tr);
+        *nr = -tz / len;
+        *nz = tr / len;
+        if (s <= 0.0) {
+            *pr = ar;
+            *pz = az;
+            return 1;
+        }
+        if (s >= 1.0) {
+            *pr = br;
+            *pz = bz;
+            return 2;
+        }
+        *pr = ar + tr * s;
+        *pz = az + tz * s;
+        return 0;
+    }
+    double cr = seg[1], cz = seg[2], radius = seg[3];
+    double a0 = seg[4] * (DRAPE_PI / 180.0), a1 = seg[5] * (DRAPE_PI / 180.0);
+    double dr = qr - cr, dz = qz - cz;
+    double lo = a0 < a1 ? a0 : a1;
+    double hi = a0 < a1 ? a1 : a0;
+    double a = atan2(dz, dr);
+    while (a < lo) {
+        a += DRAPE_TAU;
+    }
+    while (a >= lo + DRAPE_TAU) {
+        a -= DRAPE_TAU;
+    }
+    int clamp = 0;
+    if (a <= hi) {
+        clamp = 0;
+    } else if (a - hi < lo + DRAPE_TAU - a) {
+        a = hi;
+        clamp = (a1 > a0) ? 2 : 1; /* at hi: the end when counter-clockwise */
+    } else {
+        a = lo;
+        clamp = (a1 > a0) ? 1 : 2;
+    }
+    double er = cos(a), ez = sin(a);
+    if (a1 > a0) {
+        *nr = -er;
+        *nz = -ez;
+    } else {
+        *nr = er;
+        *nz = ez;
+    }
+    *pr = cr + er * radius;
+    *pz = cz + ez * radius;
+    return clamp;
+}
+
+/* Tool::project of the point (x0, x1, x2) with the tool displaced by u:
+ * the signed gap (the surface's own) and the outward normal. */
+DRAPE_FN double drape_tool_project(const double *tool, double u, double x0, double x1,
+                                   double x2, double *normal)
+{
+    const double *axis = tool + DRAPE_TOOL_AXIS;
+    double q0 = x0 - axis[0] * u, q1 = x1 - axis[1] * u, q2 = x2 - axis[2] * u;
+    const double *o = tool + DRAPE_TOOL_POINT;
+    int kind = (int)tool[DRAPE_TOOL_KIND];
+    if (kind == 0) {
+        const double *n = tool + DRAPE_TOOL_NORMAL;
+        normal[0] = n[0];
+        normal[1] = n[1];
+        normal[2] = n[2];
+        return (q0 - o[0]) * n[0] + (q1 - o[1]) * n[1] + (q2 - o[2]) * n[2];
+    }
+    double d0 = q0 - o[0], d1 = q1 - o[1], d2 = q2 - o[2];
+    if (kind == 1) {
+        double r = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+        if (r > 0.0) {
+            normal[0] = d0 / r;
+            normal[1] = d1 / r;
+            normal[2] = d2 / r;
+        } else {
+            normal[0] = 0.0;
+            normal[1] = 0.0;
+            normal[2] = 1.0;
+        }
+        return r - tool[DRAPE_TOOL_RADIUS];
+    }
+    double r = hypot(d0, d1);
+    double e0 = 1.0, e1 = 0.0;
+    if (r > 0.0) {
+        e0 = d0 / r;
+        e1 = d1 / r;
+    }
+    int segments = (int)tool[DRAPE_TOOL_SEGMENTS];
+    double best_r = 0.0, best_z = 0.0, best_nr = 0.0, best_nz = 0.0, best_d2 = 1.0 / 0.0;
+    int at_free_end = 0;
+    for (int k = 0; k < segments; k++) {
+        double pr, pz, nr, nz;
+        int clamp = drape_segment_closest(tool + DRAPE_TOOL_PROFILE + 6 * k, r, d2, &pr, &pz,
+                                          &nr, &nz);
+        double vr = r - pr, vz = d2 - pz;
+        double dd = vr * vr + vz * vz;
+        if (dd < best_d2) {
+            best_r = pr;
+            best_z = pz;
+            best_nr = nr;
+            best_nz = nz;
+            best_d2 = dd;
+            at_free_end = (k == 0 && clamp == 1 && tool[DRAPE_TOOL_FREE] != 0.0) ||
+                          (k == segments - 1 && clamp == 2 && tool[DRAPE_TOOL_FREE + 1] != 0.0);
+        }
+    }
+    double vr = r - best_r, vz = d2 - best_z;
+    double dist = sqrt(vr * vr + vz * vz);
+    double sign = (at_free_end || vr * best_nr + vz * best_nz >= 0.0) ? 1.0 : -1.0;
+    double n2r = best_nr, n2z = best_nz;
+    if (dist > 1e-12) {
+        n2r = vr / dist * sign;
+        n2z = vz / dist * sign;
+    }
+    normal[0] = e0 * n2r + 0.0 * n2z;
+    normal[1] = e1 * n2r + 0.0 * n2z;
+    normal[2] = 0.0 * n2r + 1.0 * n2z;
+    return sign * dist;
+}
+
+/* Node i's contact with the tool after the update (ExplicitContact::
+ * enforce_step with one tool): a node inside it is put back on it by its
+ * multiplier, then friction on its tangential velocity relative to the
+ * tool; its force into contact_force (0 when free). Returns 0, 1 for a
+ * node that travelled more than the guard's limit, 2 for a gap that
+ * jumped more than the step explains (ContactFault: nothing corrected). */
+DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *params,
+                           const double *mass, const unsigned char *fixed,
+                           const double *x0, const double *x_old, double *x,
+                           double *v, double *contact_force)
+{
+    contact_force[i] = 0.0;
+    contact_force[n + i] = 0.0;
+    contact_force[2 * n + i] = 0.0;
+    if (fixed[i] == 7) {
+        return 0;
+    }
+    double h = params[3], u = params[4], u_before = params[5], v_tool = params[6];
+    double tau = params[7];
+    double xi0 = x[i], xi1 = x[n + i], xi2 = x[2 * n + i];
+    double nrm[3];
+    double gap = drape_tool_project(tool, u, xi0, xi1, xi2, nrm) - tool[DRAPE_TOOL_OFFSET];
+    if (!(gap < 0.0)) {
+        return 0;
+    }
+    const double *axis = tool + DRAPE_TOOL_AXIS;
+    double vi0 = v[i], vi1 = v[n + i], vi2 = v[2 * n + i];
+    double node_travel = sqrt(vi0 * vi0 + vi1 * vi1 + vi2 * vi2) * h;
+    double axis_len = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
+    double tool_travel = fabs(u - u_before) * axis_len;
+    double travel = node_travel + tool_travel;
+    double slack = tool[DRAPE_TOOL_SLACK];
+    if (travel > tool[DRAPE_TOOL_TRAVEL]) {
+        return 1;
+    }
+    if (-gap > travel + slack) {
+        double before[3] = {xi0 - vi0 * h, xi1 - vi1 * h, xi2 - vi2 * h};
+        double unused[3];
+        double previous = drape_tool_project(tool, u_before, before[0], before[1], before[2],
+                                             unused) -
+                          tool[DRAPE_TOOL_OFFSET];
+        if (previous - gap > travel + slack) {
+            return 2;
+        }
+    }
+    double m = mass[i];
+    double mu = -gap * m;
+    if (!(mu > 0.0)) {
+        mu = 0.0;
+    }
+    double xs[3] = {xi0, xi1, xi2};
+    double vs[3] = {vi0, vi1, vi2};
+    double f[3];
+    double lambda_scale = 1.0 / (h * tau);
+    double lambda = mu * lambda_scale;
+    for (int k = 0; k < 3; k++) {
+        double dx = nrm[k] * (mu / m);
+        xs[k] += dx;
+        vs[k] += dx / h;
+        f[k] = 0.0 + nrm[k] * lambda;
+    }
+    double friction = tool[DRAPE_TOOL_FRICTION];
+    if (friction != 0.0 && mu > 0.0) {
+        double rel[3], vt[3];
+        for (int k = 0; k < 3; k++) {
+            rel[k] = vs[k] - axis[k] * v_tool;
+        }
+        double dot = nrm[0] * rel[0] + nrm[1] * rel[1] + nrm[2] * rel[2];
+        for (int k = 0; k < 3; k++) {
+            vt[k] = rel[k] - nrm[k] * dot;
+        }
+        double speed = sqrt(vt[0] * vt[0] + vt[1] * vt[1] + vt[2] * vt[2]);
+        if (speed != 0.0) {
+            double slide_lambda = mu / (h * tau);
+            double trial = m * speed / tau;
+            double limit = friction * slide_lambda;
+            double magnitude = trial <= limit ? trial : limit;
+            for (int k = 0; k < 3; k++) {
+                double ft = -vt[k] / speed * magnitude;
+                double dv = ft * (tau / m);
+                vs[k] += dv;
+                xs[k] += dv * h;
+                f[k] += ft;
+            }
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        long at = k * n + i;
+        /* A partly constrained node keeps its prescribed components. */
+        if (fixed[i] & (1 << k)) {
+            xs[k] = x0[at] + 0.0;
+            vs[k] = (xs[k] - x_old[at]) / h;
+        }
+        x[at] = xs[k];
+        v[at] = vs[k];
+        contact_force[at] = f[k];
+    }
+    return 0;
 }
 
 #endif

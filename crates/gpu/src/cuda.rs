@@ -11,6 +11,7 @@ use cudarc::driver::{
 };
 use cudarc::nvrtc::{CompileOptions, Ptx, compile_ptx_with_opts};
 use drape_model::{Model, State};
+use drape_time::Explicit;
 use nalgebra::Vector3;
 
 use crate::GpuError;
@@ -25,6 +26,10 @@ const BLOCK: u32 = 256;
 const GRAPH_STEPS: u64 = 20;
 /// "No fault" in a kernel's fault word.
 const NO_FAULT: i32 = i32::MAX;
+/// Fault words: truss, quad, contact.
+const FAULTS: [i32; 3] = [NO_FAULT; 3];
+/// Doubles of one step's params (`DRAPE_PARAMS`).
+const PARAMS: usize = 8;
 
 /// The CUDA source NVRTC compiles: `step.h` then `cuda.cu`.
 pub fn kernel_source() -> String {
@@ -160,6 +165,7 @@ struct Kernels {
     spring: CudaFunction,
     gather: CudaFunction,
     update: CudaFunction,
+    contact: CudaFunction,
 }
 
 /// The step of a model on a GPU.
@@ -183,7 +189,10 @@ pub struct CudaStep<'m> {
     v: [CudaSlice<f64>; 2],
     f_int: CudaSlice<f64>,
     slots: CudaSlice<f64>,
-    /// Each step's [c₁, c₂, Δt̄, h] of a block of up to `GRAPH_STEPS`.
+    /// The tool (`DRAPE_TOOL_*`), when there is one.
+    tool: Option<CudaSlice<f64>>,
+    contact_force: CudaSlice<f64>,
+    /// Each step's `StepParams` of a block of up to `GRAPH_STEPS`.
     params: CudaSlice<f64>,
     block: u32,
     fault: CudaSlice<i32>,
@@ -196,10 +205,16 @@ pub struct CudaStep<'m> {
 }
 
 impl<'m> CudaStep<'m> {
-    /// The step of `model` on GPU 0 with the driver's (scaled) `mass` and
-    /// truss `dashpots` (`drape_time::Explicit::mass`, `fibre_dashpots`).
-    pub fn new(model: &'m Model, mass: &[f64], dashpots: &[Vec<f64>]) -> Result<Self, GpuError> {
-        let flat = Flat::new(model, mass, dashpots)?;
+    /// The step of the model `explicit` runs on GPU 0, with its (scaled)
+    /// masses, truss dashpots and contact settings.
+    pub fn new(explicit: &Explicit<'m>) -> Result<Self, GpuError> {
+        let model = explicit.model();
+        let flat = Flat::new(
+            model,
+            explicit.mass(),
+            explicit.fibre_dashpots(),
+            explicit.contact().map(|c| &c.settings),
+        )?;
         probe()?;
         let ctx = CudaContext::new(0).map_err(|e| GpuError::NoDevice(e.to_string()))?;
         // One stream, ordered by itself: cudarc's per-buffer events are not
@@ -217,6 +232,7 @@ impl<'m> CudaStep<'m> {
             spring: load("spring_forces")?,
             gather: load("gather")?,
             update: load("update")?,
+            contact: load("contact")?,
         };
         // A stream of its own: the legacy default stream cannot be captured
         // into a graph.
@@ -284,9 +300,15 @@ impl<'m> CudaStep<'m> {
             v: [zeros(s, 3 * n)?, zeros(s, 3 * n)?],
             f_int: zeros(s, 3 * n)?,
             slots: zeros(s, 3 * flat.slot_count)?,
-            params: zeros(s, 4 * GRAPH_STEPS as usize)?,
+            tool: if flat.tool.is_empty() {
+                None
+            } else {
+                Some(upload(s, &flat.tool)?)
+            },
+            contact_force: zeros(s, 3 * n)?,
+            params: zeros(s, PARAMS * GRAPH_STEPS as usize)?,
             block: BLOCK,
-            fault: upload(s, &[NO_FAULT, NO_FAULT])?,
+            fault: upload(s, &FAULTS)?,
             parity: 0,
             graph: None,
             device,
@@ -315,7 +337,9 @@ impl<'m> CudaStep<'m> {
     pub fn set_block_threads(&mut self, threads: u32) -> Result<u32, GpuError> {
         let k = &self.kernels;
         let mut most = 1024;
-        for f in [&k.truss, &k.quad, &k.spring, &k.gather, &k.update] {
+        for f in [
+            &k.truss, &k.quad, &k.spring, &k.gather, &k.update, &k.contact,
+        ] {
             most = most.min(f.max_threads_per_block().map_err(cuda)? as u32);
         }
         self.block = threads.clamp(32, most);
@@ -413,7 +437,7 @@ impl<'m> CudaStep<'m> {
         } else {
             (&*x1, x0, &*v1, v0)
         };
-        let params = self.params.slice(4 * k..4 * k + 4);
+        let params = self.params.slice(PARAMS * k..PARAMS * (k + 1));
         let mut b = self.stream.launch_builder(&self.kernels.update);
         b.arg(&n)
             .arg(x)
@@ -428,16 +452,42 @@ impl<'m> CudaStep<'m> {
             .arg(v_new);
         // SAFETY: the arguments match `update` in cuda.cu.
         unsafe { b.launch(grid(n as usize, self.block)) }.map_err(cuda)?;
+        if let Some(tool) = &self.tool {
+            let [x0, x1] = &mut self.x;
+            let [v0, v1] = &mut self.v;
+            let (x_old, x_new, v_new) = if from == 0 {
+                (&*x0, x1, v1)
+            } else {
+                (&*x1, x0, v0)
+            };
+            let mut b = self.stream.launch_builder(&self.kernels.contact);
+            b.arg(&n)
+                .arg(tool)
+                .arg(&params)
+                .arg(&self.mass)
+                .arg(&self.fixed)
+                .arg(&self.x0)
+                .arg(x_old)
+                .arg(x_new)
+                .arg(v_new)
+                .arg(&mut self.contact_force)
+                .arg(&mut self.fault);
+            // SAFETY: the arguments match `contact` in cuda.cu.
+            unsafe { b.launch(grid(n as usize, self.block)) }.map_err(cuda)?;
+        }
         self.launch_forces(to, true)
     }
 
     /// The fault words, reset; an element error if one is set.
     fn check_faults(&mut self, step: u64) -> Result<(), GpuError> {
         let fault = self.stream.clone_dtoh(&self.fault).map_err(cuda)?;
-        if fault[0] != NO_FAULT || fault[1] != NO_FAULT {
+        if fault.iter().any(|&f| f != NO_FAULT) {
             self.stream
-                .memcpy_htod(&[NO_FAULT, NO_FAULT], &mut self.fault)
+                .memcpy_htod(&FAULTS, &mut self.fault)
                 .map_err(cuda)?;
+            if fault[2] != NO_FAULT {
+                return Err(GpuError::contact_fault(fault[2] as u64, step));
+            }
             let (kind, index) = if fault[0] != NO_FAULT {
                 ("truss", fault[0])
             } else {
@@ -457,33 +507,26 @@ impl<'m> CudaStep<'m> {
     /// seconds the GPU took (the stream synchronised before and after).
     pub fn time_steps(&mut self, count: u64, params: StepParams) -> Result<f64, GpuError> {
         self.set_resin(params.h)?;
+        let block = vec![params; count as usize];
         self.stream.synchronize().map_err(cuda)?;
         let started = std::time::Instant::now();
-        self.run_block(count, params, params)?;
+        self.run_block(&block)?;
         self.stream.synchronize().map_err(cuda)?;
         let seconds = started.elapsed().as_secs_f64();
         self.check_faults(0)?;
         Ok(seconds)
     }
 
-    /// `count` steps, the first with `first`, the others with `rest`, in
-    /// chunks of `GRAPH_STEPS`: each chunk's params written to the device
-    /// (in stream order, so after the chunk before has run), then the
-    /// captured graph where the chunk is whole and starts at parity 0,
-    /// single launches otherwise.
-    fn run_block(
-        &mut self,
-        count: u64,
-        first: StepParams,
-        rest: StepParams,
-    ) -> Result<(), GpuError> {
-        let mut done = 0;
-        while done < count {
-            let chunk = (count - done).min(GRAPH_STEPS) as usize;
-            let mut params = [0.0; 4 * GRAPH_STEPS as usize];
-            for (k, p) in params.chunks_exact_mut(4).take(chunk).enumerate() {
-                let s = if done == 0 && k == 0 { first } else { rest };
-                p.copy_from_slice(&[s.c1, s.c2, s.dt_avg, s.h]);
+    /// A step of each of `steps`, in chunks of `GRAPH_STEPS`: each chunk's
+    /// params written to the device (in stream order, so after the chunk
+    /// before has run), then the captured graph where the chunk is whole
+    /// and starts at parity 0, single launches otherwise.
+    fn run_block(&mut self, steps: &[StepParams]) -> Result<(), GpuError> {
+        for part in steps.chunks(GRAPH_STEPS as usize) {
+            let chunk = part.len();
+            let mut params = [0.0; PARAMS * GRAPH_STEPS as usize];
+            for (p, s) in params.chunks_exact_mut(PARAMS).zip(part) {
+                p.copy_from_slice(&s.values());
             }
             self.stream
                 .memcpy_htod(&params, &mut self.params)
@@ -500,7 +543,6 @@ impl<'m> CudaStep<'m> {
                     self.parity = 1 - self.parity;
                 }
             }
-            done += chunk as u64;
         }
         Ok(())
     }
@@ -574,16 +616,10 @@ impl Engine for CudaStep<'_> {
         self.check_faults(0)
     }
 
-    fn steps(
-        &mut self,
-        count: u64,
-        first: StepParams,
-        rest: StepParams,
-        step: u64,
-    ) -> Result<(), GpuError> {
+    fn steps(&mut self, params: &[StepParams], step: u64) -> Result<(), GpuError> {
         // Every step of a block has the same h, so one resin step.
-        self.set_resin(first.h)?;
-        self.run_block(count, first, rest)?;
+        self.set_resin(params[0].h)?;
+        self.run_block(params)?;
         self.check_faults(step)
     }
 }

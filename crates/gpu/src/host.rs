@@ -3,6 +3,7 @@
 //! CPU driver without a GPU. Not a fast path: the CPU driver is that.
 
 use drape_model::{Model, State};
+use drape_time::Explicit;
 use nalgebra::Vector3;
 
 use crate::GpuError;
@@ -71,6 +72,18 @@ unsafe extern "C" {
         slot_count: i64,
         f_int: *mut f64,
     );
+    fn drape_host_contact(
+        n: i64,
+        tool: *const f64,
+        params: *const f64,
+        mass: *const f64,
+        fixed: *const u8,
+        x0: *const f64,
+        x_old: *const f64,
+        x: *mut f64,
+        v: *mut f64,
+        contact_force: *mut f64,
+    ) -> i64;
     fn drape_host_update(
         n: i64,
         x: *const f64,
@@ -99,14 +112,21 @@ pub struct HostStep<'m> {
     v_new: Vec<f64>,
     f_int: Vec<f64>,
     slots: Vec<f64>,
+    contact_force: Vec<f64>,
     history: Vec<Vec<f64>>,
 }
 
 impl<'m> HostStep<'m> {
-    /// The step of `model` with the driver's (scaled) `mass` and truss
-    /// `dashpots` (`drape_time::Explicit::mass`, `fibre_dashpots`).
-    pub fn new(model: &'m Model, mass: &[f64], dashpots: &[Vec<f64>]) -> Result<Self, GpuError> {
-        let flat = Flat::new(model, mass, dashpots)?;
+    /// The step of the model `explicit` runs, with its (scaled) masses,
+    /// truss dashpots and contact settings.
+    pub fn new(explicit: &Explicit<'m>) -> Result<Self, GpuError> {
+        let model = explicit.model();
+        let flat = Flat::new(
+            model,
+            explicit.mass(),
+            explicit.fibre_dashpots(),
+            explicit.contact().map(|c| &c.settings),
+        )?;
         let n = flat.nodes;
         Ok(Self {
             model,
@@ -115,6 +135,7 @@ impl<'m> HostStep<'m> {
             x_new: vec![0.0; 3 * n],
             v_new: vec![0.0; 3 * n],
             f_int: vec![0.0; 3 * n],
+            contact_force: vec![0.0; 3 * n],
             slots: vec![0.0; 3 * flat.slot_count],
             history: Vec::new(),
             flat,
@@ -230,7 +251,7 @@ impl<'m> HostStep<'m> {
         Ok(())
     }
 
-    fn update(&mut self, p: StepParams) {
+    fn update(&mut self, p: StepParams, step: u64) -> Result<(), GpuError> {
         let f = &self.flat;
         // SAFETY: every array has 3n entries (fixed and mass n).
         unsafe {
@@ -251,8 +272,31 @@ impl<'m> HostStep<'m> {
                 self.v_new.as_mut_ptr(),
             )
         };
+        if !f.tool.is_empty() {
+            let params = p.values();
+            // SAFETY: the tool is encoded as step.h reads it, the params
+            // are 8 doubles, every node array has 3n entries.
+            let fault = unsafe {
+                drape_host_contact(
+                    f.nodes as i64,
+                    f.tool.as_ptr(),
+                    params.as_ptr(),
+                    f.mass.as_ptr(),
+                    f.fixed.as_ptr(),
+                    f.x0.as_ptr(),
+                    self.x.as_ptr(),
+                    self.x_new.as_mut_ptr(),
+                    self.v_new.as_mut_ptr(),
+                    self.contact_force.as_mut_ptr(),
+                )
+            };
+            if fault >= 0 {
+                return Err(GpuError::contact_fault(fault as u64, step));
+            }
+        }
         std::mem::swap(&mut self.x, &mut self.x_new);
         std::mem::swap(&mut self.v, &mut self.v_new);
+        Ok(())
     }
 }
 
@@ -287,17 +331,11 @@ impl Engine for HostStep<'_> {
         self.forces(dt, false, 0)
     }
 
-    fn steps(
-        &mut self,
-        count: u64,
-        first: StepParams,
-        rest: StepParams,
-        step: u64,
-    ) -> Result<(), GpuError> {
-        for k in 0..count {
-            let p = if k == 0 { first } else { rest };
-            self.update(p);
-            self.forces(p.h, true, step + k + 1)?;
+    fn steps(&mut self, params: &[StepParams], step: u64) -> Result<(), GpuError> {
+        for (k, p) in params.iter().enumerate() {
+            let at = step + k as u64 + 1;
+            self.update(*p, at)?;
+            self.forces(p.h, true, at)?;
         }
         Ok(())
     }

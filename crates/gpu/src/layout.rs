@@ -2,6 +2,7 @@
 //! component-major, membrane histories value-major (see `kernels/step.h`).
 
 use drape_constitutive::ResinLaw;
+use drape_contact::{ContactSettings, ProfileSegment, Surface, Tool};
 use drape_elements::{MembraneBatch, MembraneShape};
 use drape_model::{Model, Motion, State};
 use nalgebra::Vector3;
@@ -21,7 +22,21 @@ pub fn unsupported(model: &Model) -> Vec<String> {
             out.push(what.to_owned());
         }
     };
-    no(f.contact, "tools and contact ([[tools]])");
+    no(
+        model.tools.len() > 1,
+        "more than one tool (the coupled contact solve of a node between two tools)",
+    );
+    no(
+        f.force_driven_tools,
+        "a force-driven tool (motion.kind = \"force\")",
+    );
+    no(
+        model
+            .tools
+            .iter()
+            .any(|t| matches!(t.surface, Surface::Mesh(_))),
+        "a triangle-mesh tool (geometry from an STL or OBJ file)",
+    );
     no(f.bending, "yarn bending (fabric.bending)");
     no(
         f.embedded_fibres,
@@ -132,6 +147,59 @@ pub(crate) struct Flat {
     pub fixed: Vec<u8>,
     pub x0: Vec<f64>,
     pub f_ext: Vec<f64>,
+    /// The tool as `kernels/step.h` reads it (`DRAPE_TOOL_*`); empty for a
+    /// model without one.
+    pub tool: Vec<f64>,
+}
+
+/// `tool` as `kernels/step.h` reads it, with the contact pass's `offset`
+/// (half the thickness), fault tolerance `slack` and largest travel.
+pub(crate) fn encode_tool(tool: &Tool, offset: f64, slack: f64, max_travel: f64) -> Vec<f64> {
+    let mut t = vec![0.0; 18];
+    let put3 = |t: &mut Vec<f64>, at: usize, v: &Vector3<f64>| {
+        t[at..at + 3].copy_from_slice(v.as_slice());
+    };
+    match &tool.surface {
+        Surface::Plane { point, normal } => {
+            t[0] = 0.0;
+            put3(&mut t, 1, point);
+            put3(&mut t, 4, normal);
+        }
+        Surface::Sphere { center, radius } => {
+            t[0] = 1.0;
+            put3(&mut t, 1, center);
+            t[7] = *radius;
+        }
+        Surface::Revolution {
+            origin,
+            profile,
+            free_ends,
+        } => {
+            t[0] = 2.0;
+            put3(&mut t, 1, origin);
+            t[8] = f64::from(u8::from(free_ends[0]));
+            t[9] = f64::from(u8::from(free_ends[1]));
+            t[17] = profile.len() as f64;
+            for s in profile {
+                t.extend(match *s {
+                    ProfileSegment::Line { from, to } => [0.0, from[0], from[1], to[0], to[1], 0.0],
+                    ProfileSegment::Arc {
+                        center,
+                        radius,
+                        from_deg,
+                        to_deg,
+                    } => [1.0, center[0], center[1], radius, from_deg, to_deg],
+                });
+            }
+        }
+        Surface::Mesh(_) => unreachable!("refused by `unsupported`"),
+    }
+    put3(&mut t, 10, &tool.motion.direction());
+    t[13] = tool.friction;
+    t[14] = offset;
+    t[15] = slack;
+    t[16] = max_travel;
+    t
 }
 
 /// Component-major copy of `v`.
@@ -182,9 +250,15 @@ pub(crate) fn history_from_device(b: &MembraneBatch, d: &[f64]) -> Vec<f64> {
 }
 
 impl Flat {
-    /// `model` with the driver's (scaled) `mass` and truss `dashpots`
-    /// (`drape_time::Explicit::fibre_dashpots`).
-    pub fn new(model: &Model, mass: &[f64], dashpots: &[Vec<f64>]) -> Result<Self, GpuError> {
+    /// `model` with the driver's (scaled) `mass`, truss `dashpots` and
+    /// contact settings (`drape_time::Explicit::mass`, `fibre_dashpots`,
+    /// `contact`).
+    pub fn new(
+        model: &Model,
+        mass: &[f64],
+        dashpots: &[Vec<f64>],
+        contact: Option<&ContactSettings>,
+    ) -> Result<Self, GpuError> {
         let missing = unsupported(model);
         if !missing.is_empty() {
             return Err(GpuError::Unsupported(missing));
@@ -298,6 +372,17 @@ impl Flat {
             fixed,
             x0: split(&model.x0),
             f_ext: split(&weight),
+            tool: match (model.tools.first(), contact) {
+                (Some(tool), Some(c)) => {
+                    encode_tool(tool, c.offset, c.fault_tolerance, c.max_travel)
+                }
+                (Some(_), None) => {
+                    return Err(GpuError::Unsupported(vec![
+                        "a tool without the driver's contact settings".into(),
+                    ]));
+                }
+                (None, _) => Vec::new(),
+            },
         })
     }
 

@@ -42,6 +42,21 @@ mod host;
 mod layout;
 mod schedule;
 
+impl GpuError {
+    /// The contact kernel's fault word `4·node + kind` at `step`.
+    pub(crate) fn contact_fault(word: u64, step: u64) -> Self {
+        Self::Contact {
+            node: (word / 4) as usize,
+            what: if word % 4 == 1 {
+                "travelled more than the contact guard's largest travel in one step"
+            } else {
+                "is inside the tool by more than its step explains (its gap jumped)"
+            },
+            step,
+        }
+    }
+}
+
 pub use cuda::{CudaStep, compile_kernels, kernel_source, probe};
 pub use host::HostStep;
 pub use layout::unsupported;
@@ -59,6 +74,17 @@ pub enum GpuError {
     /// A CUDA call or the kernels' compilation failed.
     #[error("CUDA: {0}")]
     Cuda(String),
+    /// The contact guard's fault (`drape_contact::ContactFault`): a node
+    /// inside the tool by more than its step explains, nothing corrected.
+    #[error("contact fault at step {step}: node {node} {what}")]
+    Contact {
+        /// The node.
+        node: usize,
+        /// What the guard saw.
+        what: &'static str,
+        /// The step.
+        step: u64,
+    },
     /// An element's kinematics failed (collapsed truss, degenerate quad
     /// point, non-finite position): the CPU driver names the element.
     #[error("{kind} {index} is collapsed, degenerate or not finite at step {step}")]

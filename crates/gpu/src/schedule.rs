@@ -13,8 +13,12 @@ use nalgebra::Vector3;
 use crate::GpuError;
 
 /// One step's constants: the update's damping factors c₁ = 1 − αΔt̄/2 and
-/// c₂ = 1/(1 + αΔt̄/2), the mean step Δt̄ and the step h.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// c₂ = 1/(1 + αΔt̄/2), the mean step Δt̄ and the step h; the tool's
+/// displacement after and before the step and its velocity, and the time
+/// τ = Δt̄/(1 + αΔt̄/2) over which a contact force changes a velocity.
+/// The kernels read them as 8 doubles in this order (`DRAPE_PARAMS`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
 pub struct StepParams {
     /// 1 − α·Δt̄/2.
     pub c1: f64,
@@ -24,17 +28,42 @@ pub struct StepParams {
     pub dt_avg: f64,
     /// The step.
     pub h: f64,
+    /// The tool's displacement at the end of the step.
+    pub tool_displacement: f64,
+    /// ... and at its start.
+    pub tool_displacement_before: f64,
+    /// The tool's velocity over the step.
+    pub tool_velocity: f64,
+    /// Δt̄/(1 + α·Δt̄/2).
+    pub tau: f64,
 }
 
 impl StepParams {
-    fn new(damping: f64, dt_prev: f64, h: f64) -> Self {
+    /// The step's constants without a tool (one that does not move).
+    pub fn new(damping: f64, dt_prev: f64, h: f64) -> Self {
         let dt_avg = 0.5 * (dt_prev + h);
         Self {
             c1: 1.0 - 0.5 * damping * dt_avg,
             c2: 1.0 / (1.0 + 0.5 * damping * dt_avg),
             dt_avg,
             h,
+            tau: dt_avg / (1.0 + 0.5 * damping * dt_avg),
+            ..Self::default()
         }
+    }
+
+    /// As the kernels read them.
+    pub(crate) fn values(&self) -> [f64; 8] {
+        [
+            self.c1,
+            self.c2,
+            self.dt_avg,
+            self.h,
+            self.tool_displacement,
+            self.tool_displacement_before,
+            self.tool_velocity,
+            self.tau,
+        ]
     }
 }
 
@@ -52,17 +81,11 @@ pub trait Engine {
     /// the committed histories over a step `dt`, the histories left as they
     /// are (the run's start).
     fn start_forces(&mut self, dt: f64) -> Result<(), GpuError>;
-    /// `count` steps, the first with `first`, the others with `rest` (the
-    /// same h): each the update, then the forces at the new positions with
-    /// the histories advanced. `step` is the state's step count before
-    /// them, to name a failure.
-    fn steps(
-        &mut self,
-        count: u64,
-        first: StepParams,
-        rest: StepParams,
-        step: u64,
-    ) -> Result<(), GpuError>;
+    /// A step of each of `params` (the same h): each the update, the
+    /// contact, then the forces at the new positions with the histories
+    /// advanced. `step` is the state's step count before them, to name a
+    /// failure.
+    fn steps(&mut self, params: &[StepParams], step: u64) -> Result<(), GpuError>;
 }
 
 /// What [`run_steps`] did.
@@ -91,6 +114,25 @@ pub fn run_steps(
     let started = Instant::now();
     let end = settings.end_time;
     let interval = settings.time_step_interval.max(1);
+    let model = explicit.model();
+    if state.step == 0 {
+        // As the CPU driver starts (its start-up checks say so).
+        let free: Vec<bool> = (0..model.node_count())
+            .map(|i| {
+                !model
+                    .boundary
+                    .iter()
+                    .any(|b| b.components.iter().any(|&c| c) && b.nodes.contains(&(i as u32)))
+            })
+            .collect();
+        drape_time::guard::settle_on_tools(model, &mut state.x, &free);
+    }
+    let tool = model.tools.first();
+    let mut tool_u = explicit
+        .contact()
+        .and_then(|c| c.tool_state.first())
+        .map_or(0.0, |s| s.displacement);
+    let mut block: Vec<StepParams> = Vec::with_capacity(interval.min(4096) as usize);
     engine.load(state)?;
     // Forces at the start, with no time passing so no relaxation.
     engine.start_forces(0.0)?;
@@ -124,12 +166,20 @@ pub fn run_steps(
             time += h;
             count += 1;
         }
-        let first = StepParams::new(settings.damping, dt_prev, h);
-        let rest = StepParams::new(settings.damping, h, h);
-        engine.steps(count, first, rest, state.step)?;
-        for _ in 0..count {
-            state.time += h;
+        block.clear();
+        for k in 0..count {
+            let mut p = StepParams::new(settings.damping, if k == 0 { dt_prev } else { h }, h);
+            let t_new = state.time + h;
+            if let Some(u) = tool.and_then(|t| t.prescribed_displacement(t_new)) {
+                p.tool_displacement_before = tool_u;
+                p.tool_velocity = (u - tool_u) / h;
+                p.tool_displacement = u;
+                tool_u = u;
+            }
+            block.push(p);
+            state.time = t_new;
         }
+        engine.steps(&block, state.step)?;
         state.step += count;
         steps += count;
         blocks += 1;

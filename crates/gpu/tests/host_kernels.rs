@@ -14,8 +14,9 @@ fn scene(text: &str) -> Scene {
 }
 
 /// `steps` steps of `scene` by the CPU driver and by the kernels' CPU
-/// build, from the model's initial state.
-fn both(scene: &Scene, steps: u64) -> (State, State) {
+/// build, from the model's initial state; and how many nodes the CPU
+/// driver's last step pressed on a tool.
+fn both_counting_contacts(scene: &Scene, steps: u64) -> (State, State, usize) {
     let model = &scene.model;
     let mut settings = scene.settings.clone();
     settings.max_steps = Some(steps);
@@ -24,12 +25,22 @@ fn both(scene: &Scene, steps: u64) -> (State, State) {
     explicit
         .run(&mut cpu, &mut NoObserver)
         .expect("the CPU run");
+    let touching = explicit.contact().map_or(0, |c| {
+        c.force
+            .iter()
+            .filter(|f| **f != nalgebra::Vector3::zeros())
+            .count()
+    });
     let explicit = Explicit::new(model, settings.clone()).expect("a driver");
-    let mut host = HostStep::new(model, explicit.mass(), explicit.fibre_dashpots())
-        .expect("a model the GPU steps");
+    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
     let mut gpu = model.initial_state();
     let run = run_steps(&mut host, &explicit, &settings, &mut gpu, Some(steps)).expect("steps");
     assert_eq!(run.steps, cpu.step);
+    (cpu, gpu, touching)
+}
+
+fn both(scene: &Scene, steps: u64) -> (State, State) {
+    let (cpu, gpu, _) = both_counting_contacts(scene, steps);
     (cpu, gpu)
 }
 
@@ -110,6 +121,25 @@ fn a_run_ends_on_its_end_time_as_on_the_cpu() {
 }
 
 #[test]
+fn the_shipped_hemisphere_without_bending_steps_as_on_the_cpu_through_contact_and_friction() {
+    let overrides = [
+        ("fabric.bending", "false"),
+        ("fabric.blank.cells", "[16, 16]"),
+        ("tools.0.friction", "0.3"),
+    ]
+    .map(|(k, v)| (k.to_owned(), v.to_owned()));
+    let s = Scene::from_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/hemisphere-0-90.toml"),
+        &overrides,
+    )
+    .expect("the shipped scene");
+    let (cpu, gpu, touching) = both_counting_contacts(&s, 20_000);
+    // The punch has come up about 40 mm and carries the middle of the blank.
+    assert_same(&cpu, &gpu);
+    assert!(touching > 10, "{touching} nodes on the punch");
+}
+
+#[test]
 fn what_the_gpu_does_not_do_is_named() {
     let s = scene(
         r#"
@@ -123,12 +153,18 @@ blank = { width = 100, height = 100, cells = [4, 4] }
 name = "punch"
 geometry = { kind = "hemispherical_punch", pole = [0, 0, -1], radius = 40, shank = 50 }
 motion = { kind = "displacement", direction = [0, 0, 1], distance = 20, amplitude = { kind = "smooth_step", duration = 0.1 } }
+[[tools]]
+name = "ring"
+geometry = { kind = "plane", point = [0, 0, 5], normal = [0, 0, -1] }
 "#,
     );
     let missing = unsupported(&s.model);
-    assert!(missing.iter().any(|m| m.contains("tools")), "{missing:?}");
+    assert!(
+        missing.iter().any(|m| m.contains("more than one tool")),
+        "{missing:?}"
+    );
     assert!(missing.iter().any(|m| m.contains("bending")), "{missing:?}");
     let explicit = Explicit::new(&s.model, s.settings.clone()).expect("a driver");
-    let refused = HostStep::new(&s.model, explicit.mass(), explicit.fibre_dashpots());
+    let refused = HostStep::new(&explicit);
     assert!(matches!(refused, Err(GpuError::Unsupported(m)) if m == missing));
 }

@@ -490,6 +490,11 @@ impl<'m> Explicit<'m> {
         self.contact.as_ref()
     }
 
+    /// The model it runs.
+    pub fn model(&self) -> &'m Model {
+        self.model
+    }
+
     /// The dashpot coefficient (N·s/mm) of each truss of each batch along
     /// kinked yarns ([`ExplicitSettings::fibre_damping`]); an empty list for
     /// a batch without. Fixed at set-up from the scaled masses.

@@ -240,6 +240,12 @@ impl BendingBatch {
         }
     }
 
+    /// K of each triplet (N·mm): the energy is K·(p − d)/(p + d) (for a
+    /// port of the force pass, e.g. drape-gpu).
+    pub fn stiffnesses(&self) -> &[f64] {
+        &self.stiffness
+    }
+
     /// Number of triplets.
     pub fn len(&self) -> usize {
         self.nodes.len()

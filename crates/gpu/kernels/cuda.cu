@@ -1,8 +1,8 @@
 /* drape's explicit step on the GPU: one thread per truss, quad, spring or
  * node over the functions of kernels/step.h (which precedes this file in
  * the source NVRTC compiles). A failing element records the lowest index
- * in fault[kind] (0 truss, 1 quad, 2 contact: an integer minimum, the same
- * whatever the order). */
+ * in fault[kind] (0 truss, 1 quad, 2 contact, 3 bending: an integer
+ * minimum, the same whatever the order). */
 
 #define DRAPE_INDEX ((long)blockIdx.x * (long)blockDim.x + (long)threadIdx.x)
 
@@ -38,6 +38,20 @@ extern "C" __global__ void quad_forces(long count, const DrapeResinStep *resin,
     if (drape_quad_force(e, count, resin, nodes, grad, area, history, stride, commit, x, n,
                          slots, slot_count, first)) {
         atomicMin(fault + 1, (int)e);
+    }
+}
+
+extern "C" __global__ void bending_forces(long count, const unsigned *nodes,
+                                          const double *stiffness, const double *x, long n,
+                                          double *slots, long slot_count, long first,
+                                          int *fault)
+{
+    long e = DRAPE_INDEX;
+    if (e >= count) {
+        return;
+    }
+    if (drape_bending_force(e, nodes, stiffness, x, n, slots, slot_count, first)) {
+        atomicMin(fault + 3, (int)e);
     }
 }
 

@@ -33,6 +33,18 @@ long drape_host_quad_forces(long count, const DrapeResinStep *resin, const unsig
     return -1;
 }
 
+long drape_host_bending_forces(long count, const unsigned *nodes, const double *stiffness,
+                               const double *x, long n, double *slots, long slot_count,
+                               long first)
+{
+    for (long e = 0; e < count; e++) {
+        if (drape_bending_force(e, nodes, stiffness, x, n, slots, slot_count, first)) {
+            return e;
+        }
+    }
+    return -1;
+}
+
 void drape_host_spring_forces(long count, const unsigned *nodes, const double *anchor,
                               const double *rest, const long *table_start,
                               const long *table_len, const double *extension,

@@ -129,6 +129,46 @@ DRAPE_FN int drape_truss_force(long e, DrapeFibreLaw law, const unsigned *nodes,
     return 0;
 }
 
+/* Yarn bending triplet e, nodes (i, j, k) with j in the middle
+ * (BendingBatch::element_force): E = K (p - d)/(p + d) with a = x_j - x_i,
+ * b = x_k - x_j, p = |a||b|, d = a.b; its three forces into slots
+ * first + 3e + 0..2. Returns 0, or 1 for a triplet with an edge of no
+ * length, not finite, or folded back on itself (nothing written). */
+DRAPE_FN int drape_bending_force(long e, const unsigned *nodes, const double *stiffness,
+                                 const double *x, long n, double *slots, long slot_count,
+                                 long first)
+{
+    long i = nodes[3 * e], j = nodes[3 * e + 1], k = nodes[3 * e + 2];
+    double a[3], b[3];
+    for (int c = 0; c < 3; c++) {
+        a[c] = x[c * n + j] - x[c * n + i];
+        b[c] = x[c * n + k] - x[c * n + j];
+    }
+    double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    if (!(la - la == 0.0 && lb - lb == 0.0 && la > 0.0 && lb > 0.0)) {
+        return 1;
+    }
+    double p = la * lb;
+    double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    double s = p + d;
+    if (s <= 5e-13 * p) {
+        return 1;
+    }
+    double kk = stiffness[e];
+    double gp = 2.0 * d / (s * s);
+    double gd = -2.0 * p / (s * s);
+    long at = first + 3 * e;
+    for (int c = 0; c < 3; c++) {
+        double da = (a[c] * (gp * lb / la) + b[c] * gd) * kk;
+        double db = (b[c] * (gp * la / lb) + a[c] * gd) * kk;
+        slots[c * slot_count + at] = -da;
+        slots[c * slot_count + at + 1] = da - db;
+        slots[c * slot_count + at + 2] = db;
+    }
+    return 0;
+}
+
 /* A resin's constants and a step's Prony factors (quad_lanes' ResinStep). */
 typedef struct {
     double wave_modulus;

@@ -26,8 +26,8 @@ const BLOCK: u32 = 256;
 const GRAPH_STEPS: u64 = 20;
 /// "No fault" in a kernel's fault word.
 const NO_FAULT: i32 = i32::MAX;
-/// Fault words: truss, quad, contact.
-const FAULTS: [i32; 3] = [NO_FAULT; 3];
+/// Fault words: truss, quad, contact, bending.
+const FAULTS: [i32; 4] = [NO_FAULT; 4];
 /// Doubles of one step's params (`DRAPE_PARAMS`).
 const PARAMS: usize = 8;
 
@@ -159,6 +159,13 @@ struct DevSprings {
     first: i64,
 }
 
+struct DevBending {
+    count: i64,
+    nodes: CudaSlice<u32>,
+    stiffness: CudaSlice<f64>,
+    first: i64,
+}
+
 struct Kernels {
     truss: CudaFunction,
     quad: CudaFunction,
@@ -166,6 +173,7 @@ struct Kernels {
     gather: CudaFunction,
     update: CudaFunction,
     contact: CudaFunction,
+    bending: CudaFunction,
 }
 
 /// The step of a model on a GPU.
@@ -177,6 +185,7 @@ pub struct CudaStep<'m> {
     trusses: Vec<DevTrusses>,
     quads: Vec<DevQuads>,
     springs: Vec<DevSprings>,
+    bending: Vec<DevBending>,
     ptr: CudaSlice<i64>,
     node_slots: CudaSlice<u32>,
     mass: CudaSlice<f64>,
@@ -233,6 +242,7 @@ impl<'m> CudaStep<'m> {
             gather: load("gather")?,
             update: load("update")?,
             contact: load("contact")?,
+            bending: load("bending_forces")?,
         };
         // A stream of its own: the legacy default stream cannot be captured
         // into a graph.
@@ -287,6 +297,18 @@ impl<'m> CudaStep<'m> {
                 })
             })
             .collect::<Result<_, GpuError>>()?;
+        let bending = flat
+            .bending
+            .iter()
+            .map(|b| {
+                Ok(DevBending {
+                    count: b.stiffness.len() as i64,
+                    nodes: upload(s, &b.nodes)?,
+                    stiffness: upload(s, &b.stiffness)?,
+                    first: b.first as i64,
+                })
+            })
+            .collect::<Result<_, GpuError>>()?;
         let n = flat.nodes;
         Ok(Self {
             model,
@@ -315,6 +337,7 @@ impl<'m> CudaStep<'m> {
             trusses,
             quads,
             springs,
+            bending,
             kernels,
             stream,
             flat,
@@ -338,7 +361,7 @@ impl<'m> CudaStep<'m> {
         let k = &self.kernels;
         let mut most = 1024;
         for f in [
-            &k.truss, &k.quad, &k.spring, &k.gather, &k.update, &k.contact,
+            &k.truss, &k.quad, &k.spring, &k.gather, &k.update, &k.contact, &k.bending,
         ] {
             most = most.min(f.max_threads_per_block().map_err(cuda)? as u32);
         }
@@ -412,6 +435,20 @@ impl<'m> CudaStep<'m> {
                 .arg(&p.first);
             // SAFETY: the arguments match `spring_forces` in cuda.cu.
             unsafe { b.launch(grid(p.count as usize, self.block)) }.map_err(cuda)?;
+        }
+        for t in &self.bending {
+            let mut b = self.stream.launch_builder(&self.kernels.bending);
+            b.arg(&t.count)
+                .arg(&t.nodes)
+                .arg(&t.stiffness)
+                .arg(x)
+                .arg(&n)
+                .arg(&mut self.slots)
+                .arg(&sc)
+                .arg(&t.first)
+                .arg(&mut self.fault);
+            // SAFETY: the arguments match `bending_forces` in cuda.cu.
+            unsafe { b.launch(grid(t.count as usize, self.block)) }.map_err(cuda)?;
         }
         let mut b = self.stream.launch_builder(&self.kernels.gather);
         b.arg(&n)
@@ -490,8 +527,10 @@ impl<'m> CudaStep<'m> {
             }
             let (kind, index) = if fault[0] != NO_FAULT {
                 ("truss", fault[0])
-            } else {
+            } else if fault[1] != NO_FAULT {
                 ("quad", fault[1])
+            } else {
+                ("bending triplet", fault[3])
             };
             return Err(GpuError::Element {
                 kind,

@@ -49,6 +49,16 @@ unsafe extern "C" {
         slot_count: i64,
         first: i64,
     ) -> i64;
+    fn drape_host_bending_forces(
+        count: i64,
+        nodes: *const u32,
+        stiffness: *const f64,
+        x: *const f64,
+        n: i64,
+        slots: *mut f64,
+        slot_count: i64,
+        first: i64,
+    ) -> i64;
     fn drape_host_spring_forces(
         count: i64,
         nodes: *const u32,
@@ -236,6 +246,28 @@ impl<'m> HostStep<'m> {
                     s.first as i64,
                 )
             };
+        }
+        for b in &f.bending {
+            // SAFETY: as above.
+            let fault = unsafe {
+                drape_host_bending_forces(
+                    b.stiffness.len() as i64,
+                    b.nodes.as_ptr(),
+                    b.stiffness.as_ptr(),
+                    self.x.as_ptr(),
+                    n,
+                    slots,
+                    sc,
+                    b.first as i64,
+                )
+            };
+            if fault >= 0 {
+                return Err(GpuError::Element {
+                    kind: "bending triplet",
+                    index: fault as usize,
+                    step,
+                });
+            }
         }
         // SAFETY: ptr has n + 1 entries indexing node_slots; f_int 3n.
         unsafe {

@@ -37,7 +37,6 @@ pub fn unsupported(model: &Model) -> Vec<String> {
             .any(|t| matches!(t.surface, Surface::Mesh(_))),
         "a triangle-mesh tool (geometry from an STL or OBJ file)",
     );
-    no(f.bending, "yarn bending (fabric.bending)");
     no(
         f.embedded_fibres,
         "embedded fibres (fabric.fibres = \"embedded\")",
@@ -120,6 +119,13 @@ impl Quads {
     }
 }
 
+/// A bending batch.
+pub(crate) struct Bending {
+    pub nodes: Vec<u32>,
+    pub stiffness: Vec<f64>,
+    pub first: usize,
+}
+
 /// A spring batch.
 pub(crate) struct Springs {
     pub nodes: Vec<u32>,
@@ -140,6 +146,7 @@ pub(crate) struct Flat {
     pub trusses: Vec<Trusses>,
     pub quads: Vec<Quads>,
     pub springs: Vec<Springs>,
+    pub bending: Vec<Bending>,
     pub ptr: Vec<i64>,
     pub node_slots: Vec<u32>,
     pub mass: Vec<f64>,
@@ -345,6 +352,16 @@ impl Flat {
                 }
             })
             .collect();
+        let bending = model
+            .bending
+            .iter()
+            .zip(&layout.bending_offsets)
+            .map(|(b, &first)| Bending {
+                nodes: b.nodes.iter().flatten().copied().collect(),
+                stiffness: b.stiffnesses().to_vec(),
+                first,
+            })
+            .collect();
         let (ptr, node_slots) = layout.node_slot_lists();
         let mut fixed = vec![0u8; n];
         for bc in &model.boundary {
@@ -366,6 +383,7 @@ impl Flat {
             trusses,
             quads,
             springs,
+            bending,
             ptr: ptr.iter().map(|&p| p as i64).collect(),
             node_slots: node_slots.to_vec(),
             mass: mass.to_vec(),

@@ -17,13 +17,15 @@
 //! CPU driver step by step, and [`compile_kernels`] checks that the CUDA
 //! source compiles, both without a GPU.
 //!
-//! What it is not (yet): a driver. It covers the paper's element (fibre
-//! trusses with the crimp law and their dashpots, resin-only quads with
-//! Prony relaxation), holding springs, gravity and fixed nodes; a model
-//! with anything else is refused by [`unsupported`], naming what (tools and
-//! contact, yarn bending, triangles, embedded fibres, shear locking, loads,
-//! pressure, prescribed motions, plies). The energy balance, the guard,
-//! frames and checkpoints stay with `drape_time::Explicit`.
+//! What it covers: the paper's element (fibre trusses with the crimp law,
+//! the buckled column and their dashpots, resin-only quads with Prony
+//! relaxation), yarn bending, holding springs, gravity, fixed nodes and
+//! mass-proportional damping, and contact with one rigid tool (plane,
+//! sphere or surface of revolution, moved by a prescribed displacement)
+//! with Coulomb friction: the shipped hemisphere scenes. A model with
+//! anything else is refused by [`unsupported`], naming what (a second
+//! tool, a force-driven or a mesh tool, triangles, embedded fibres, shear
+//! locking, loads, pressure, prescribed motions, plies).
 //!
 //! ```
 //! use drape_gpu::unsupported;

@@ -42,7 +42,7 @@ use drape_io::results::{
     CutbackRow, DrawInMm, EnergyRow, EnergySummary, FrameData, ImplicitRunInfo, Peaks, ResultsDir,
     ResultsError, RunInfo, Summary, ToolForceRow, ToolMeshes, ToolSummary, max_yarn_tension,
 };
-use drape_io::scene::{Scene, SceneFile, Solver};
+use drape_io::scene::{Device, Scene, SceneFile, Solver};
 use drape_model::{Measures, State};
 use drape_time::{
     Control, CutbackReport, DriverState, Energies, Explicit, Frame, Implicit, Observer, Progress,
@@ -467,6 +467,9 @@ impl Observer for Recorder<'_> {
 /// (see [`drape_time::guard::check_tools_at_start`]). The error is the
 /// reason; the warnings are what the run will also report.
 pub fn check_scene(scene: &Scene) -> Result<Vec<String>, String> {
+    if scene.spec.simulation.device == Device::Gpu {
+        check_gpu(scene)?;
+    }
     let checked = match scene.spec.simulation.solver {
         Solver::Explicit => Explicit::new(&scene.model, scene.settings.clone()).and_then(|d| {
             limits::check_explicit(scene, &d).map_err(drape_time::RunError::Setup)?;
@@ -481,6 +484,29 @@ pub fn check_scene(scene: &Scene) -> Result<Vec<String>, String> {
         Err(drape_time::RunError::Setup(reason)) => Err(reason),
         Err(e) => Err(e.to_string()),
     }
+}
+
+/// Whether `scene` can run on this machine's GPU: the explicit driver, only
+/// what the GPU step does, a GPU and NVRTC to compile its kernels.
+fn check_gpu(scene: &Scene) -> Result<(), String> {
+    if scene.spec.simulation.solver == Solver::Implicit {
+        return Err(
+            "simulation.device = \"gpu\" steps the explicit driver; this scene's solver is \
+             implicit"
+                .into(),
+        );
+    }
+    let missing = drape_gpu::unsupported(&scene.model);
+    if !missing.is_empty() {
+        return Err(format!(
+            "simulation.device = \"gpu\": the GPU step does not do {} yet; run the scene on \
+             the CPU (without --device gpu)",
+            missing.join(", ")
+        ));
+    }
+    drape_gpu::probe()
+        .map(|_| ())
+        .map_err(|e| format!("simulation.device = \"gpu\": {e}"))
 }
 
 /// Runs `scene`, writing its results into `out` (created if needed), and
@@ -652,7 +678,18 @@ pub fn run_in(
             if let Some(d) = driver {
                 explicit.resume_from(d);
             }
-            let outcome = explicit.run(&mut state, &mut recorder);
+            let outcome = if scene.spec.simulation.device == Device::Gpu {
+                // The CPU driver's set-up (masses, dashpots, contact
+                // settings), the steps on the GPU.
+                match drape_gpu::CudaStep::new(&explicit) {
+                    Ok(mut engine) => {
+                        drape_gpu::run(&explicit, &mut engine, &mut state, &mut recorder)
+                    }
+                    Err(e) => Err(drape_time::RunError::Setup(e.to_string())),
+                }
+            } else {
+                explicit.run(&mut state, &mut recorder)
+            };
             let contact = explicit.contact().map(drape_contact::ExplicitContact::view);
             // A failed run's state is its last frame's; the tools are there too.
             end_tools = if outcome.is_err() {

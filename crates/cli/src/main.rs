@@ -19,7 +19,7 @@ use anyhow::{Context, Result, anyhow};
 use clap::{Parser, Subcommand};
 use drape::{Checkpoint, RunControl, RunOptions, RunProgress, open_output, run_in, run_scene};
 use drape_io::results::{OutputLock, ResultsError, Summary};
-use drape_io::scene::Scene;
+use drape_io::scene::{Device, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 
@@ -61,6 +61,10 @@ enum Command {
         /// at once is brought down to that).
         #[arg(long)]
         threads: Option<usize>,
+        /// Where the explicit steps run: cpu (the default) or gpu (an
+        /// NVIDIA GPU; the same as --set simulation.device=gpu).
+        #[arg(long, value_name = "DEVICE")]
+        device: Option<String>,
         /// Write a restart file (checkpoint.json) every N steps; a run that
         /// completes removes it.
         #[arg(long, value_name = "N")]
@@ -305,11 +309,21 @@ fn main() -> ExitCode {
             out,
             set,
             threads,
+            device,
             checkpoint_every,
             resume,
         } => with_threads(threads, || match (resume, scene) {
+            (Some(_), _) if device.is_some() => Err(bad(
+                "--device is for a new run: a resumed run continues where it ran",
+            )),
             (Some(dir), _) => resume_run(&dir, checkpoint_every),
-            (None, Some(scene)) => run(&scene, out, &set, checkpoint_every),
+            (None, Some(scene)) => {
+                let mut set = set;
+                if let Some(d) = device {
+                    set.push(format!("simulation.device={d}"));
+                }
+                run(&scene, out, &set, checkpoint_every)
+            }
             (None, None) => Err(bad("give a scene file or --resume DIR")),
         }),
         Command::New { template, path } => new(template.as_deref(), path),
@@ -478,6 +492,13 @@ fn run(
     for w in &warnings {
         eprintln!("warning: {w}");
     }
+    if scene.spec.simulation.device == Device::Gpu && checkpoint_every.is_some() {
+        return Err(bad(format!(
+            "{}: a run on the GPU writes no checkpoints yet: leave out --checkpoint-every or \
+             run on the CPU",
+            scene_path.display()
+        )));
+    }
     let out = out.unwrap_or_else(|| default_out(scene_path, ""));
     drape::limits::check_output(&[&scene], &out)
         .map_err(|reason| bad(format!("{}: {reason}", scene_path.display())))?;
@@ -592,6 +613,9 @@ fn finish_run(scene: &Scene, out: &Path, options: RunOptions) -> Result<ExitCode
     }
     if let Some(setup) = drape::run_setup(scene) {
         print_setup(&setup, scene.spec.simulation.solver);
+        if scene.spec.simulation.device == Device::Gpu {
+            eprintln!("device            GPU (the steps on the GPU, frames and energies here)");
+        }
     }
     let mut reporter = Reporter::new();
     let report = run_in(scene, results, options, &mut |p| reporter.update(p))

@@ -41,6 +41,22 @@ extern "C" __global__ void quad_forces(long count, const DrapeResinStep *resin,
     }
 }
 
+extern "C" __global__ void triangle_forces(long count, const DrapeResinStep *resin,
+                                       const unsigned *nodes, const double *grad,
+                                       const double *area, double *history, long stride,
+                                       int commit, const double *x, long n, double *slots,
+                                       long slot_count, long first, int *fault)
+{
+    long e = DRAPE_INDEX;
+    if (e >= count) {
+        return;
+    }
+    if (drape_triangle_force(e, count, resin, nodes, grad, area, history, stride, commit, x, n,
+                         slots, slot_count, first)) {
+        atomicMin(fault + 1, (int)e);
+    }
+}
+
 extern "C" __global__ void bending_forces(long count, const unsigned *nodes,
                                           const double *stiffness, const double *x, long n,
                                           double *slots, long slot_count, long first,
@@ -80,32 +96,19 @@ extern "C" __global__ void gather(long n, const long *ptr, const unsigned *node_
     drape_gather(i, ptr, node_slots, slots, slot_count, f_int, n);
 }
 
-extern "C" __global__ void update(long n, const double *x, const double *v,
-                                  const double *f_ext, const double *f_int,
-                                  const double *mass, const unsigned char *fixed,
-                                  const double *x0, const double *params, double *x_new,
-                                  double *v_new)
+extern "C" __global__ void node_step(long n, const double *params, const double *x,
+                                     const double *v, const double *f_ext, const double *f_int,
+                                     const double *mass, const unsigned char *fixed,
+                                     const double *x0, int has_tool, const double *tool,
+                                     double *x_new, double *v_new, double *contact_force,
+                                     unsigned char *status, double *sums, int *fault)
 {
     long i = DRAPE_INDEX;
     if (i >= n) {
         return;
     }
-    /* The step's constants from device memory, so that a captured graph
-     * of steps runs again with other ones. */
-    drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, params[0], params[1], params[2],
-                 params[3], x_new, v_new);
-}
-
-extern "C" __global__ void contact(long n, const double *tool, const double *params,
-                                   const double *mass, const unsigned char *fixed,
-                                   const double *x0, const double *x_old, double *x, double *v,
-                                   double *contact_force, int *fault)
-{
-    long i = DRAPE_INDEX;
-    if (i >= n) {
-        return;
-    }
-    int kind = drape_contact(i, n, tool, params, mass, fixed, x0, x_old, x, v, contact_force);
+    int kind = drape_node_step(i, n, params, x, v, f_ext, f_int, mass, fixed, x0,
+                               has_tool ? tool : 0, x_new, v_new, contact_force, status, sums);
     if (kind) {
         /* The lowest node, with its kind in the low two bits. */
         atomicMin(fault + 2, (int)(4 * i + kind));

@@ -33,6 +33,20 @@ long drape_host_quad_forces(long count, const DrapeResinStep *resin, const unsig
     return -1;
 }
 
+long drape_host_triangle_forces(long count, const DrapeResinStep *resin, const unsigned *nodes,
+                            const double *grad, const double *area, double *history,
+                            long stride, int commit, const double *x, long n, double *slots,
+                            long slot_count, long first)
+{
+    for (long e = 0; e < count; e++) {
+        if (drape_triangle_force(e, count, resin, nodes, grad, area, history, stride, commit, x, n,
+                             slots, slot_count, first)) {
+            return e;
+        }
+    }
+    return -1;
+}
+
 long drape_host_bending_forces(long count, const unsigned *nodes, const double *stiffness,
                                const double *x, long n, double *slots, long slot_count,
                                long first)
@@ -65,27 +79,19 @@ void drape_host_gather(long n, const long *ptr, const unsigned *node_slots, cons
     }
 }
 
-long drape_host_contact(long n, const double *tool, const double *params, const double *mass,
-                        const unsigned char *fixed, const double *x0, const double *x_old,
-                        double *x, double *v, double *contact_force)
+long drape_host_node_step(long n, const double *params, const double *x, const double *v,
+                          const double *f_ext, const double *f_int, const double *mass,
+                          const unsigned char *fixed, const double *x0, const double *tool,
+                          double *x_new, double *v_new, double *contact_force,
+                          unsigned char *status, double *sums)
 {
+    long first = -1;
     for (long i = 0; i < n; i++) {
-        int fault = drape_contact(i, n, tool, params, mass, fixed, x0, x_old, x, v,
-                                  contact_force);
-        if (fault) {
-            return 4 * i + fault;
+        int fault = drape_node_step(i, n, params, x, v, f_ext, f_int, mass, fixed, x0, tool,
+                                    x_new, v_new, contact_force, status, sums);
+        if (fault && first < 0) {
+            first = 4 * i + fault;
         }
     }
-    return -1;
-}
-
-void drape_host_update(long n, const double *x, const double *v, const double *f_ext,
-                       const double *f_int, const double *mass, const unsigned char *fixed,
-                       const double *x0, double c1, double c2, double dt_avg, double h,
-                       double *x_new, double *v_new)
-{
-    for (long i = 0; i < n; i++) {
-        drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, c1, c2, dt_avg, h, x_new,
-                     v_new);
-    }
+    return first;
 }

@@ -182,22 +182,23 @@ typedef struct {
     double weight[DRAPE_MAX_PRONY];
 } DrapeResinStep;
 
-/* Resin-only quad e (QuadLanes::block_forces_lanes, one lane): its four
- * forces into slots first + 4e + a, its history advanced in place when
- * `commit` (else read only, as a force evaluation from the committed
- * history). grad: dN/dX per (element, point, node, 2); area per (element,
- * point). Returns 0, or 1 where a point is degenerate or not finite
- * (nothing written). */
-DRAPE_FN int drape_quad_force(long e, long count, const DrapeResinStep *resin,
-                              const unsigned *nodes, const double *grad,
-                              const double *area, double *history,
-                              long stride, int commit, const double *x,
-                              long n, double *slots, long slot_count,
-                              long first)
+/* Resin-only membrane e of `nodes_per` nodes and `points` integration
+ * points (quads 4 and 4, triangles 3 and 1; QuadLanes::block_forces_lanes,
+ * one lane, which is the scalar path's arithmetic): its forces into slots
+ * first + nodes_per*e + a, its history advanced in place when `commit`
+ * (else read only, as a force evaluation from the committed history).
+ * grad: dN/dX per (element, point, node, 2); area per (element, point).
+ * Returns 0, or 1 where a point is degenerate or not finite (nothing
+ * written). */
+DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
+                                  const DrapeResinStep *resin, const unsigned *nodes,
+                                  const double *grad, const double *area, double *history,
+                                  long stride, int commit, const double *x, long n,
+                                  double *slots, long slot_count, long first)
 {
     double xe[4][3];
-    for (int a = 0; a < 4; a++) {
-        long i = nodes[4 * e + a];
+    for (int a = 0; a < nodes_per; a++) {
+        long i = nodes[nodes_per * e + a];
         xe[a][0] = x[i];
         xe[a][1] = x[n + i];
         xe[a][2] = x[2 * n + i];
@@ -205,13 +206,13 @@ DRAPE_FN int drape_quad_force(long e, long count, const DrapeResinStep *resin,
     double f[4][3][2];
     double c[4][5];
     int ok = 1;
-    for (int p = 0; p < 4; p++) {
-        const double *g = grad + ((e * 4 + p) * 4) * 2;
+    for (int p = 0; p < points; p++) {
+        const double *g = grad + ((e * points + p) * nodes_per) * 2;
         for (int r = 0; r < 3; r++) {
             f[p][r][0] = 0.0;
             f[p][r][1] = 0.0;
         }
-        for (int a = 0; a < 4; a++) {
+        for (int a = 0; a < nodes_per; a++) {
             for (int r = 0; r < 3; r++) {
                 f[p][r][0] += xe[a][r] * g[2 * a];
                 f[p][r][1] += xe[a][r] * g[2 * a + 1];
@@ -238,8 +239,8 @@ DRAPE_FN int drape_quad_force(long e, long count, const DrapeResinStep *resin,
         force[a][1] = 0.0;
         force[a][2] = 0.0;
     }
-    for (int p = 0; p < 4; p++) {
-        const double *g = grad + ((e * 4 + p) * 4) * 2;
+    for (int p = 0; p < points; p++) {
+        const double *g = grad + ((e * points + p) * nodes_per) * 2;
         double c00 = c[p][0], c01 = c[p][1], c11 = c[p][2], det_c = c[p][3], tr_c = c[p][4];
         double det_u = sqrt(det_c);
         double s = sqrt(tr_c + 2.0 * det_u);
@@ -307,20 +308,41 @@ DRAPE_FN int drape_quad_force(long e, long count, const DrapeResinStep *resin,
             piola[r][0] = (f[p][r][0] * b00 + f[p][r][1] * b10) * h_m;
             piola[r][1] = (f[p][r][0] * b01 + f[p][r][1] * b11) * h_m;
         }
-        double w = area[e * 4 + p];
-        for (int a = 0; a < 4; a++) {
+        double w = area[e * points + p];
+        for (int a = 0; a < nodes_per; a++) {
             for (int r = 0; r < 3; r++) {
                 force[a][r] += (piola[r][0] * g[2 * a] + piola[r][1] * g[2 * a + 1]) * w;
             }
         }
     }
-    for (int a = 0; a < 4; a++) {
-        long s = first + 4 * e + a;
+    for (int a = 0; a < nodes_per; a++) {
+        long s = first + nodes_per * e + a;
         slots[s] = force[a][0];
         slots[slot_count + s] = force[a][1];
         slots[2 * slot_count + s] = force[a][2];
     }
     return 0;
+}
+
+/* A quad (4 nodes, 2 x 2 points) and a triangle (3 nodes, 1 point), the
+ * counts constant so that the loops unroll. */
+DRAPE_FN int drape_quad_force(long e, long count, const DrapeResinStep *resin,
+                              const unsigned *nodes, const double *grad, const double *area,
+                              double *history, long stride, int commit, const double *x,
+                              long n, double *slots, long slot_count, long first)
+{
+    return drape_membrane_force(e, 4, 4, count, resin, nodes, grad, area, history, stride,
+                                commit, x, n, slots, slot_count, first);
+}
+
+DRAPE_FN int drape_triangle_force(long e, long count, const DrapeResinStep *resin,
+                                  const unsigned *nodes, const double *grad,
+                                  const double *area, double *history, long stride,
+                                  int commit, const double *x, long n, double *slots,
+                                  long slot_count, long first)
+{
+    return drape_membrane_force(e, 3, 1, count, resin, nodes, grad, area, history, stride,
+                                commit, x, n, slots, slot_count, first);
 }
 
 /* Spring e's force on its node into slot first + e (SpringBatch::
@@ -430,9 +452,24 @@ DRAPE_FN void drape_update(long i, long n, const double *x, const double *v,
 #define DRAPE_TAU 6.28318530717958647692
 
 /* Per step, the update's [c1, c2, dt_avg, h] and the tool's displacement
- * after and before the step, its velocity, and tau = dt_avg/(1 +
- * damping*dt_avg/2). */
-#define DRAPE_PARAMS 8
+ * after and before the step, its velocity, tau = dt_avg/(1 +
+ * damping*dt_avg/2), the step before (0 at a run's first) and the
+ * mass-proportional damping alpha. */
+#define DRAPE_PARAMS 10
+
+/* Each node's running sums over the steps, doubles [k*n + i] for these k:
+ * the works of the internal, external, damping, boundary and contact
+ * forces, the friction dissipated, and the impulse of the normal contact
+ * force along the tool's axis; then (k = 7, not summed) that force at the
+ * last step. */
+#define DRAPE_SUMS 8
+/* A node's contact status (drape_contact::ContactStatus). */
+#define DRAPE_OPEN 0
+#define DRAPE_STICK 1
+#define DRAPE_SLIP 2
+/* drape_contact::TOUCHING: within this fraction of the offset a node
+ * rests on a tool. */
+#define DRAPE_TOUCHING 1e-6
 
 /* ProfileSegment::closest: the closest point (pr, pz) of segment `seg` to
  * (qr, qz), the left normal (nr, nz), and 0 inside, 1 at the start, 2 at
@@ -574,11 +611,14 @@ DRAPE_FN double drape_tool_project(const double *tool, double u, double x0, doub
 DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *params,
                            const double *mass, const unsigned char *fixed,
                            const double *x0, const double *x_old, double *x,
-                           double *v, double *contact_force)
+                           double *v, double *contact_force, unsigned char *status,
+                           double *sums)
 {
     contact_force[i] = 0.0;
     contact_force[n + i] = 0.0;
     contact_force[2 * n + i] = 0.0;
+    status[i] = DRAPE_OPEN;
+    sums[7 * n + i] = 0.0;
     if (fixed[i] == 7) {
         return 0;
     }
@@ -588,6 +628,9 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
     double nrm[3];
     double gap = drape_tool_project(tool, u, xi0, xi1, xi2, nrm) - tool[DRAPE_TOOL_OFFSET];
     if (!(gap < 0.0)) {
+        if (gap <= DRAPE_TOUCHING * tool[DRAPE_TOOL_OFFSET]) {
+            status[i] = DRAPE_STICK;
+        }
         return 0;
     }
     const double *axis = tool + DRAPE_TOOL_AXIS;
@@ -626,7 +669,18 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
         vs[k] += dx / h;
         f[k] = 0.0 + nrm[k] * lambda;
     }
+    status[i] = DRAPE_STICK;
+    /* The tool's force on the fabric along its axis (its magnitude for a
+     * tool that does not move), over the step. */
+    double along = lambda;
+    if (axis[0] != 0.0 || axis[1] != 0.0 || axis[2] != 0.0) {
+        along = (nrm[0] * axis[0] + nrm[1] * axis[1] + nrm[2] * axis[2]) * lambda;
+    }
+    sums[6 * n + i] += along * h;
+    sums[7 * n + i] = along;
     double friction = tool[DRAPE_TOOL_FRICTION];
+    double ft[3] = {0.0, 0.0, 0.0};
+    int slid = 0;
     if (friction != 0.0 && mu > 0.0) {
         double rel[3], vt[3];
         for (int k = 0; k < 3; k++) {
@@ -642,14 +696,29 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
             double trial = m * speed / tau;
             double limit = friction * slide_lambda;
             double magnitude = trial <= limit ? trial : limit;
+            status[i] = trial <= limit ? DRAPE_STICK : DRAPE_SLIP;
             for (int k = 0; k < 3; k++) {
-                double ft = -vt[k] / speed * magnitude;
-                double dv = ft * (tau / m);
+                ft[k] = -vt[k] / speed * magnitude;
+                double dv = ft[k] * (tau / m);
                 vs[k] += dv;
                 xs[k] += dv * h;
-                f[k] += ft;
+                f[k] += ft[k];
             }
+            slid = 1;
         }
+    }
+    if (slid) {
+        /* What the friction force does against the slip left after it. */
+        double rel[3];
+        for (int k = 0; k < 3; k++) {
+            rel[k] = vs[k] - axis[k] * v_tool;
+        }
+        double dot = nrm[0] * rel[0] + nrm[1] * rel[1] + nrm[2] * rel[2];
+        double w = 0.0;
+        for (int k = 0; k < 3; k++) {
+            w += ft[k] * (rel[k] - nrm[k] * dot);
+        }
+        sums[5 * n + i] -= w * h;
     }
     for (int k = 0; k < 3; k++) {
         long at = k * n + i;
@@ -663,6 +732,63 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
         contact_force[at] = f[k];
     }
     return 0;
+}
+
+/* Node i's works over the step (Explicit's step: the centred increment
+ * dx = v_n-1/2 * dt_prev/2 + (x_n+1 - x_n)/2 at the forces of step n),
+ * added to its running sums. x, v: step n's; x_new, v_new: n+1's after
+ * the contact; f_int, f_ext: step n's; contact_force: this step's. */
+DRAPE_FN void drape_works(long i, long n, const double *params, const double *mass,
+                          const unsigned char *fixed, const double *x, const double *v,
+                          const double *x_new, const double *v_new, const double *f_int,
+                          const double *f_ext, const double *contact_force, double *sums)
+{
+    double dt_avg = params[2], dt_prev = params[8], damping = params[9];
+    double m = mass[i];
+    double w_int = 0.0, w_ext = 0.0, w_damp = 0.0, w_bc = 0.0, w_c = 0.0;
+    for (int k = 0; k < 3; k++) {
+        long at = k * n + i;
+        double dx = v[at] * (0.5 * dt_prev) + (x_new[at] - x[at]) * 0.5;
+        double v_mid = (v[at] + v_new[at]) * 0.5;
+        double damp = (v[at] + v_new[at]) * 0.5 * (damping * m);
+        if ((fixed[i] & (1 << k)) && dt_avg > 0.0) {
+            double inertia = (v_new[at] - v[at]) * (m / dt_avg);
+            double r = inertia - (f_ext[at] - f_int[at] - damp + contact_force[at]);
+            double dx_inertia = dt_prev > 0.0 ? dx : v_mid * dt_avg;
+            w_bc += r * dx + inertia * (dx_inertia - dx);
+        }
+        w_int += f_int[at] * dx;
+        w_ext += f_ext[at] * dx;
+        w_damp += damp * dx;
+        w_c += contact_force[at] * dx;
+    }
+    sums[i] += w_int;
+    sums[n + i] += w_ext;
+    sums[2 * n + i] += w_damp;
+    sums[3 * n + i] += w_bc;
+    sums[4 * n + i] += w_c;
+}
+
+/* Node i's whole step: the update, the contact when there is a tool
+ * (`tool` not null), the works. Returns the contact's fault (0: none). */
+DRAPE_FN int drape_node_step(long i, long n, const double *params, const double *x,
+                             const double *v, const double *f_ext, const double *f_int,
+                             const double *mass, const unsigned char *fixed, const double *x0,
+                             const double *tool, double *x_new, double *v_new,
+                             double *contact_force, unsigned char *status, double *sums)
+{
+    drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, params[0], params[1], params[2],
+                 params[3], x_new, v_new);
+    int fault = 0;
+    if (tool) {
+        fault = drape_contact(i, n, tool, params, mass, fixed, x0, x, x_new, v_new,
+                              contact_force, status, sums);
+    }
+    if (fault == 0) {
+        drape_works(i, n, params, mass, fixed, x, v, x_new, v_new, f_int, f_ext,
+                    contact_force, sums);
+    }
+    return fault;
 }
 
 #endif

@@ -15,7 +15,8 @@ use drape_time::Explicit;
 use nalgebra::Vector3;
 
 use crate::GpuError;
-use crate::layout::{Flat, history_from_device, join, split};
+use crate::layout::{Flat, SUMS, history_from_device, join, split};
+use crate::schedule::Snapshot;
 use crate::schedule::{Engine, StepParams};
 
 /// Threads per block of every kernel unless set otherwise (the results do
@@ -29,7 +30,7 @@ const NO_FAULT: i32 = i32::MAX;
 /// Fault words: truss, quad, contact, bending.
 const FAULTS: [i32; 4] = [NO_FAULT; 4];
 /// Doubles of one step's params (`DRAPE_PARAMS`).
-const PARAMS: usize = 8;
+const PARAMS: usize = 10;
 
 /// The CUDA source NVRTC compiles: `step.h` then `cuda.cu`.
 pub fn kernel_source() -> String {
@@ -137,6 +138,7 @@ struct DevTrusses {
 }
 
 struct DevQuads {
+    triangles: bool,
     count: i64,
     resin: CudaSlice<f64>,
     nodes: CudaSlice<u32>,
@@ -169,10 +171,10 @@ struct DevBending {
 struct Kernels {
     truss: CudaFunction,
     quad: CudaFunction,
+    triangle: CudaFunction,
     spring: CudaFunction,
     gather: CudaFunction,
-    update: CudaFunction,
-    contact: CudaFunction,
+    node_step: CudaFunction,
     bending: CudaFunction,
 }
 
@@ -198,9 +200,16 @@ pub struct CudaStep<'m> {
     v: [CudaSlice<f64>; 2],
     f_int: CudaSlice<f64>,
     slots: CudaSlice<f64>,
-    /// The tool (`DRAPE_TOOL_*`), when there is one.
-    tool: Option<CudaSlice<f64>>,
+    /// The tool (`DRAPE_TOOL_*`), when `has_tool`.
+    tool: CudaSlice<f64>,
+    has_tool: i32,
+    /// Streams the element kinds run on beside the main one, forked from
+    /// it after the node step and joined before the gather.
+    side: Vec<Arc<CudaStream>>,
     contact_force: CudaSlice<f64>,
+    status: CudaSlice<u8>,
+    /// Each node's running sums (`DRAPE_SUMS`).
+    sums: CudaSlice<f64>,
     /// Each step's `StepParams` of a block of up to `GRAPH_STEPS`.
     params: CudaSlice<f64>,
     block: u32,
@@ -238,10 +247,10 @@ impl<'m> CudaStep<'m> {
         let kernels = Kernels {
             truss: load("truss_forces")?,
             quad: load("quad_forces")?,
+            triangle: load("triangle_forces")?,
             spring: load("spring_forces")?,
             gather: load("gather")?,
-            update: load("update")?,
-            contact: load("contact")?,
+            node_step: load("node_step")?,
             bending: load("bending_forces")?,
         };
         // A stream of its own: the legacy default stream cannot be captured
@@ -269,12 +278,13 @@ impl<'m> CudaStep<'m> {
             .iter()
             .map(|q| {
                 Ok(DevQuads {
+                    triangles: q.triangles,
                     count: q.count() as i64,
                     resin: upload(s, &q.step(0.0))?,
                     nodes: upload(s, &q.nodes)?,
                     grad: upload(s, &q.grad)?,
                     area: upload(s, &q.area)?,
-                    history: zeros(s, q.count() * 4 * q.stride)?,
+                    history: zeros(s, q.count() * q.points() * q.stride)?,
                     stride: q.stride as i64,
                     first: q.first as i64,
                 })
@@ -322,12 +332,14 @@ impl<'m> CudaStep<'m> {
             v: [zeros(s, 3 * n)?, zeros(s, 3 * n)?],
             f_int: zeros(s, 3 * n)?,
             slots: zeros(s, 3 * flat.slot_count)?,
-            tool: if flat.tool.is_empty() {
-                None
-            } else {
-                Some(upload(s, &flat.tool)?)
-            },
+            tool: upload(s, &flat.tool)?,
+            has_tool: i32::from(!flat.tool.is_empty()),
+            side: (0..3)
+                .map(|_| ctx.new_stream().map_err(cuda))
+                .collect::<Result<_, _>>()?,
             contact_force: zeros(s, 3 * n)?,
+            status: zeros(s, n)?,
+            sums: zeros(s, SUMS * n)?,
             params: zeros(s, PARAMS * GRAPH_STEPS as usize)?,
             block: BLOCK,
             fault: upload(s, &FAULTS)?,
@@ -361,7 +373,13 @@ impl<'m> CudaStep<'m> {
         let k = &self.kernels;
         let mut most = 1024;
         for f in [
-            &k.truss, &k.quad, &k.spring, &k.gather, &k.update, &k.contact, &k.bending,
+            &k.truss,
+            &k.quad,
+            &k.triangle,
+            &k.spring,
+            &k.gather,
+            &k.node_step,
+            &k.bending,
         ] {
             most = most.min(f.max_threads_per_block().map_err(cuda)? as u32);
         }
@@ -371,14 +389,20 @@ impl<'m> CudaStep<'m> {
     }
 
     /// Launches the forces at buffer `at` (positions and velocities), the
-    /// histories advanced when `commit`, and the gather.
+    /// histories advanced when `commit`, and the gather: the element kinds
+    /// side by side (trusses, springs and bending on streams of their own,
+    /// the quads on the main one), each into its own slots, joined before
+    /// the gather.
     fn launch_forces(&mut self, at: usize, commit: bool) -> Result<(), GpuError> {
         let n = self.flat.nodes as i64;
         let sc = self.flat.slot_count as i64;
         let commit = i32::from(commit);
         let (x, v) = (&self.x[at], &self.v[at]);
+        for side in &self.side {
+            side.join(&self.stream).map_err(cuda)?;
+        }
         for t in &self.trusses {
-            let mut b = self.stream.launch_builder(&self.kernels.truss);
+            let mut b = self.side[0].launch_builder(&self.kernels.truss);
             b.arg(&t.count)
                 .arg(&t.law[0])
                 .arg(&t.law[1])
@@ -400,7 +424,12 @@ impl<'m> CudaStep<'m> {
             unsafe { b.launch(grid(t.count as usize, self.block)) }.map_err(cuda)?;
         }
         for q in &mut self.quads {
-            let mut b = self.stream.launch_builder(&self.kernels.quad);
+            let kernel = if q.triangles {
+                &self.kernels.triangle
+            } else {
+                &self.kernels.quad
+            };
+            let mut b = self.stream.launch_builder(kernel);
             b.arg(&q.count)
                 .arg(&q.resin)
                 .arg(&q.nodes)
@@ -419,7 +448,7 @@ impl<'m> CudaStep<'m> {
             unsafe { b.launch(grid(q.count as usize, self.block)) }.map_err(cuda)?;
         }
         for p in &self.springs {
-            let mut b = self.stream.launch_builder(&self.kernels.spring);
+            let mut b = self.side[1].launch_builder(&self.kernels.spring);
             b.arg(&p.count)
                 .arg(&p.nodes)
                 .arg(&p.anchor)
@@ -437,7 +466,7 @@ impl<'m> CudaStep<'m> {
             unsafe { b.launch(grid(p.count as usize, self.block)) }.map_err(cuda)?;
         }
         for t in &self.bending {
-            let mut b = self.stream.launch_builder(&self.kernels.bending);
+            let mut b = self.side[2].launch_builder(&self.kernels.bending);
             b.arg(&t.count)
                 .arg(&t.nodes)
                 .arg(&t.stiffness)
@@ -449,6 +478,9 @@ impl<'m> CudaStep<'m> {
                 .arg(&mut self.fault);
             // SAFETY: the arguments match `bending_forces` in cuda.cu.
             unsafe { b.launch(grid(t.count as usize, self.block)) }.map_err(cuda)?;
+        }
+        for side in &self.side {
+            self.stream.join(side).map_err(cuda)?;
         }
         let mut b = self.stream.launch_builder(&self.kernels.gather);
         b.arg(&n)
@@ -463,7 +495,8 @@ impl<'m> CudaStep<'m> {
     }
 
     /// One step from buffer `from` into the other, with the params of step
-    /// `k` of the block in device memory.
+    /// `k` of the block in device memory: the node step (update, contact,
+    /// works), then the forces.
     fn launch_step(&mut self, from: usize, k: usize) -> Result<(), GpuError> {
         let n = self.flat.nodes as i64;
         let to = 1 - from;
@@ -475,8 +508,9 @@ impl<'m> CudaStep<'m> {
             (&*x1, x0, &*v1, v0)
         };
         let params = self.params.slice(PARAMS * k..PARAMS * (k + 1));
-        let mut b = self.stream.launch_builder(&self.kernels.update);
+        let mut b = self.stream.launch_builder(&self.kernels.node_step);
         b.arg(&n)
+            .arg(&params)
             .arg(x)
             .arg(v)
             .arg(&self.f_ext)
@@ -484,34 +518,16 @@ impl<'m> CudaStep<'m> {
             .arg(&self.mass)
             .arg(&self.fixed)
             .arg(&self.x0)
-            .arg(&params)
+            .arg(&self.has_tool)
+            .arg(&self.tool)
             .arg(x_new)
-            .arg(v_new);
-        // SAFETY: the arguments match `update` in cuda.cu.
+            .arg(v_new)
+            .arg(&mut self.contact_force)
+            .arg(&mut self.status)
+            .arg(&mut self.sums)
+            .arg(&mut self.fault);
+        // SAFETY: the arguments match `node_step` in cuda.cu.
         unsafe { b.launch(grid(n as usize, self.block)) }.map_err(cuda)?;
-        if let Some(tool) = &self.tool {
-            let [x0, x1] = &mut self.x;
-            let [v0, v1] = &mut self.v;
-            let (x_old, x_new, v_new) = if from == 0 {
-                (&*x0, x1, v1)
-            } else {
-                (&*x1, x0, v0)
-            };
-            let mut b = self.stream.launch_builder(&self.kernels.contact);
-            b.arg(&n)
-                .arg(tool)
-                .arg(&params)
-                .arg(&self.mass)
-                .arg(&self.fixed)
-                .arg(&self.x0)
-                .arg(x_old)
-                .arg(x_new)
-                .arg(v_new)
-                .arg(&mut self.contact_force)
-                .arg(&mut self.fault);
-            // SAFETY: the arguments match `contact` in cuda.cu.
-            unsafe { b.launch(grid(n as usize, self.block)) }.map_err(cuda)?;
-        }
         self.launch_forces(to, true)
     }
 
@@ -528,7 +544,7 @@ impl<'m> CudaStep<'m> {
             let (kind, index) = if fault[0] != NO_FAULT {
                 ("truss", fault[0])
             } else if fault[1] != NO_FAULT {
-                ("quad", fault[1])
+                ("membrane element", fault[1])
             } else {
                 ("bending triplet", fault[3])
             };
@@ -647,6 +663,25 @@ impl Engine for CudaStep<'_> {
         let n = self.flat.nodes;
         let x = self.stream.clone_dtoh(&self.x[self.parity]).map_err(cuda)?;
         Ok(join(&x[..3 * n]))
+    }
+
+    fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError> {
+        self.store(state)?;
+        let n = self.flat.nodes;
+        let get =
+            |s: &Arc<CudaStream>, b: &CudaSlice<f64>, len: usize| -> Result<Vec<f64>, GpuError> {
+                let mut v = s.clone_dtoh(b).map_err(cuda)?;
+                v.truncate(len);
+                Ok(v)
+            };
+        let mut status = self.stream.clone_dtoh(&self.status).map_err(cuda)?;
+        status.truncate(n);
+        Ok(Snapshot {
+            f_int: join(&get(&self.stream, &self.f_int, 3 * n)?),
+            contact_force: join(&get(&self.stream, &self.contact_force, 3 * n)?),
+            status,
+            sums: get(&self.stream, &self.sums, SUMS * n)?,
+        })
     }
 
     fn start_forces(&mut self, dt: f64) -> Result<(), GpuError> {

@@ -7,7 +7,8 @@ use drape_time::Explicit;
 use nalgebra::Vector3;
 
 use crate::GpuError;
-use crate::layout::{Flat, history_from_device, join, split};
+use crate::layout::{Flat, SUMS, history_from_device, join, split};
+use crate::schedule::Snapshot;
 use crate::schedule::{Engine, StepParams};
 
 #[repr(C)]
@@ -20,6 +21,23 @@ struct FibreLaw {
 }
 
 unsafe extern "C" {
+    fn drape_host_node_step(
+        n: i64,
+        params: *const f64,
+        x: *const f64,
+        v: *const f64,
+        f_ext: *const f64,
+        f_int: *const f64,
+        mass: *const f64,
+        fixed: *const u8,
+        x0: *const f64,
+        tool: *const f64,
+        x_new: *mut f64,
+        v_new: *mut f64,
+        contact_force: *mut f64,
+        status: *mut u8,
+        sums: *mut f64,
+    ) -> i64;
     fn drape_host_truss_forces(
         count: i64,
         law: FibreLaw,
@@ -35,6 +53,21 @@ unsafe extern "C" {
         first: i64,
     ) -> i64;
     fn drape_host_quad_forces(
+        count: i64,
+        resin: *const f64,
+        nodes: *const u32,
+        grad: *const f64,
+        area: *const f64,
+        history: *mut f64,
+        stride: i64,
+        commit: i32,
+        x: *const f64,
+        n: i64,
+        slots: *mut f64,
+        slot_count: i64,
+        first: i64,
+    ) -> i64;
+    fn drape_host_triangle_forces(
         count: i64,
         resin: *const f64,
         nodes: *const u32,
@@ -82,34 +115,6 @@ unsafe extern "C" {
         slot_count: i64,
         f_int: *mut f64,
     );
-    fn drape_host_contact(
-        n: i64,
-        tool: *const f64,
-        params: *const f64,
-        mass: *const f64,
-        fixed: *const u8,
-        x0: *const f64,
-        x_old: *const f64,
-        x: *mut f64,
-        v: *mut f64,
-        contact_force: *mut f64,
-    ) -> i64;
-    fn drape_host_update(
-        n: i64,
-        x: *const f64,
-        v: *const f64,
-        f_ext: *const f64,
-        f_int: *const f64,
-        mass: *const f64,
-        fixed: *const u8,
-        x0: *const f64,
-        c1: f64,
-        c2: f64,
-        dt_avg: f64,
-        h: f64,
-        x_new: *mut f64,
-        v_new: *mut f64,
-    );
 }
 
 /// The GPU step's kernels run on the CPU, one element after another.
@@ -123,6 +128,8 @@ pub struct HostStep<'m> {
     f_int: Vec<f64>,
     slots: Vec<f64>,
     contact_force: Vec<f64>,
+    status: Vec<u8>,
+    sums: Vec<f64>,
     history: Vec<Vec<f64>>,
 }
 
@@ -146,6 +153,8 @@ impl<'m> HostStep<'m> {
             v_new: vec![0.0; 3 * n],
             f_int: vec![0.0; 3 * n],
             contact_force: vec![0.0; 3 * n],
+            status: vec![0; n],
+            sums: vec![0.0; SUMS * n],
             slots: vec![0.0; 3 * flat.slot_count],
             history: Vec::new(),
             flat,
@@ -202,8 +211,13 @@ impl<'m> HostStep<'m> {
         for (q, h) in f.quads.iter().zip(&mut self.history) {
             let resin = q.step(dt);
             // SAFETY: as above; `h` is the batch's value-major history.
+            let membrane_forces = if q.triangles {
+                drape_host_triangle_forces
+            } else {
+                drape_host_quad_forces
+            };
             let fault = unsafe {
-                drape_host_quad_forces(
+                membrane_forces(
                     q.count() as i64,
                     resin.as_ptr(),
                     q.nodes.as_ptr(),
@@ -221,7 +235,7 @@ impl<'m> HostStep<'m> {
             };
             if fault >= 0 {
                 return Err(GpuError::Element {
-                    kind: "quad",
+                    kind: if q.triangles { "triangle" } else { "quad" },
                     index: fault as usize,
                     step,
                 });
@@ -285,10 +299,18 @@ impl<'m> HostStep<'m> {
 
     fn update(&mut self, p: StepParams, step: u64) -> Result<(), GpuError> {
         let f = &self.flat;
-        // SAFETY: every array has 3n entries (fixed and mass n).
-        unsafe {
-            drape_host_update(
+        let params = p.values();
+        let tool = if f.tool.is_empty() {
+            std::ptr::null()
+        } else {
+            f.tool.as_ptr()
+        };
+        // SAFETY: every node array has 3n entries (fixed and mass n, the
+        // sums SUMS·n), the params 10, the tool as step.h reads it.
+        let fault = unsafe {
+            drape_host_node_step(
                 f.nodes as i64,
+                params.as_ptr(),
                 self.x.as_ptr(),
                 self.v.as_ptr(),
                 f.f_ext.as_ptr(),
@@ -296,35 +318,16 @@ impl<'m> HostStep<'m> {
                 f.mass.as_ptr(),
                 f.fixed.as_ptr(),
                 f.x0.as_ptr(),
-                p.c1,
-                p.c2,
-                p.dt_avg,
-                p.h,
+                tool,
                 self.x_new.as_mut_ptr(),
                 self.v_new.as_mut_ptr(),
+                self.contact_force.as_mut_ptr(),
+                self.status.as_mut_ptr(),
+                self.sums.as_mut_ptr(),
             )
         };
-        if !f.tool.is_empty() {
-            let params = p.values();
-            // SAFETY: the tool is encoded as step.h reads it, the params
-            // are 8 doubles, every node array has 3n entries.
-            let fault = unsafe {
-                drape_host_contact(
-                    f.nodes as i64,
-                    f.tool.as_ptr(),
-                    params.as_ptr(),
-                    f.mass.as_ptr(),
-                    f.fixed.as_ptr(),
-                    f.x0.as_ptr(),
-                    self.x.as_ptr(),
-                    self.x_new.as_mut_ptr(),
-                    self.v_new.as_mut_ptr(),
-                    self.contact_force.as_mut_ptr(),
-                )
-            };
-            if fault >= 0 {
-                return Err(GpuError::contact_fault(fault as u64, step));
-            }
+        if fault >= 0 {
+            return Err(GpuError::contact_fault(fault as u64, step));
         }
         std::mem::swap(&mut self.x, &mut self.x_new);
         std::mem::swap(&mut self.v, &mut self.v_new);
@@ -357,6 +360,16 @@ impl Engine for HostStep<'_> {
 
     fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError> {
         Ok(join(&self.x))
+    }
+
+    fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError> {
+        self.store(state)?;
+        Ok(Snapshot {
+            f_int: join(&self.f_int),
+            contact_force: join(&self.contact_force),
+            status: self.status.clone(),
+            sums: self.sums.clone(),
+        })
     }
 
     fn start_forces(&mut self, dt: f64) -> Result<(), GpuError> {

@@ -11,6 +11,8 @@ use crate::GpuError;
 
 /// The most Prony terms the kernels carry (`DRAPE_MAX_PRONY`).
 pub(crate) const MAX_PRONY: usize = 8;
+/// Running sums per node (`DRAPE_SUMS`).
+pub(crate) const SUMS: usize = 8;
 
 /// What `model` uses that the GPU step does not do yet, named as a scene
 /// names it; empty when the GPU can step it.
@@ -52,13 +54,6 @@ pub fn unsupported(model: &Model) -> Vec<String> {
         model
             .membranes
             .iter()
-            .any(|b| b.shape() == MembraneShape::Triangle && !b.is_empty()),
-        "triangle membranes (an imported triangle blank)",
-    );
-    no(
-        model
-            .membranes
-            .iter()
             .any(|b| b.section.material.resin.shear_locking.is_some()),
         "the shear-locking law (resin.shear_locking)",
     );
@@ -84,8 +79,10 @@ pub(crate) struct Trusses {
     pub first: usize,
 }
 
-/// A resin-only quad batch.
+/// A resin-only membrane batch (quads or triangles).
 pub(crate) struct Quads {
+    /// Whether its elements are triangles (3 nodes, 1 point), else quads.
+    pub triangles: bool,
     pub resin: ResinLaw,
     pub constants: [f64; 5],
     pub nodes: Vec<u32>,
@@ -99,7 +96,12 @@ pub(crate) struct Quads {
 
 impl Quads {
     pub fn count(&self) -> usize {
-        self.area.len() / 4
+        self.area.len() / self.points()
+    }
+
+    /// Integration points per element.
+    pub fn points(&self) -> usize {
+        if self.triangles { 1 } else { 4 }
     }
 
     /// The kernels' `DrapeResinStep` for a step `dt`, as 22 doubles (the
@@ -297,12 +299,13 @@ impl Flat {
             .zip(&layout.membrane_offsets)
             .map(|(m, &first)| {
                 let count = m.len();
-                let mut grad = Vec::with_capacity(count * 32);
-                let mut area = Vec::with_capacity(count * 4);
-                let mut nodes = Vec::with_capacity(count * 4);
+                let shape = m.shape();
+                let mut grad = Vec::with_capacity(count * 2 * shape.nodes() * shape.points());
+                let mut area = Vec::with_capacity(count * shape.points());
+                let mut nodes = Vec::with_capacity(count * shape.nodes());
                 for e in 0..count {
                     nodes.extend_from_slice(m.element_nodes(e));
-                    for p in 0..4 {
+                    for p in 0..shape.points() {
                         for g in m.point_gradients(e, p) {
                             grad.extend([g.x, g.y]);
                         }
@@ -317,6 +320,7 @@ impl Flat {
                     long_term -= p.g;
                 }
                 Quads {
+                    triangles: shape == MembraneShape::Triangle,
                     constants: [
                         resin.wave_modulus(),
                         resin.poisson,

@@ -40,6 +40,7 @@
 //! ```
 
 mod cuda;
+mod driver;
 mod host;
 mod layout;
 mod schedule;
@@ -60,9 +61,10 @@ impl GpuError {
 }
 
 pub use cuda::{CudaStep, compile_kernels, kernel_source, probe};
+pub use driver::run;
 pub use host::HostStep;
 pub use layout::unsupported;
-pub use schedule::{Engine, StepParams, StepRun, run_steps};
+pub use schedule::{Engine, Snapshot, StepParams, StepRun, run_steps};
 
 /// Why a model cannot be stepped on the GPU, or the GPU failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use drape_model::State;
-use drape_time::{Explicit, ExplicitSettings};
+use drape_time::Explicit;
 use nalgebra::Vector3;
 
 use crate::GpuError;
@@ -16,7 +16,7 @@ use crate::GpuError;
 /// c₂ = 1/(1 + αΔt̄/2), the mean step Δt̄ and the step h; the tool's
 /// displacement after and before the step and its velocity, and the time
 /// τ = Δt̄/(1 + αΔt̄/2) over which a contact force changes a velocity.
-/// The kernels read them as 8 doubles in this order (`DRAPE_PARAMS`).
+/// The kernels read them as 10 doubles in this order (`DRAPE_PARAMS`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[repr(C)]
 pub struct StepParams {
@@ -36,6 +36,10 @@ pub struct StepParams {
     pub tool_velocity: f64,
     /// Δt̄/(1 + α·Δt̄/2).
     pub tau: f64,
+    /// The step before (0 at a run's first).
+    pub dt_prev: f64,
+    /// The mass-proportional damping α (1/s).
+    pub damping: f64,
 }
 
 impl StepParams {
@@ -48,12 +52,14 @@ impl StepParams {
             dt_avg,
             h,
             tau: dt_avg / (1.0 + 0.5 * damping * dt_avg),
+            dt_prev,
+            damping,
             ..Self::default()
         }
     }
 
     /// As the kernels read them.
-    pub(crate) fn values(&self) -> [f64; 8] {
+    pub(crate) fn values(&self) -> [f64; 10] {
         [
             self.c1,
             self.c2,
@@ -63,8 +69,26 @@ impl StepParams {
             self.tool_displacement_before,
             self.tool_velocity,
             self.tau,
+            self.dt_prev,
+            self.damping,
         ]
     }
+}
+
+/// What the host reads at an energy check or a frame, besides the state.
+#[derive(Debug, Clone, Default)]
+pub struct Snapshot {
+    /// The internal forces at the state.
+    pub f_int: Vec<Vector3<f64>>,
+    /// The last step's contact force on each node (N).
+    pub contact_force: Vec<Vector3<f64>>,
+    /// Each node's contact status (0 open, 1 stick, 2 slip).
+    pub status: Vec<u8>,
+    /// Each node's running sums (`DRAPE_SUMS`): works of the internal,
+    /// external, damping, boundary and contact forces, friction
+    /// dissipated, the normal contact impulse along the tool's axis;
+    /// `[k·n + i]`.
+    pub sums: Vec<f64>,
 }
 
 /// What runs the steps: the GPU ([`crate::CudaStep`]) or the kernels' CPU
@@ -77,6 +101,9 @@ pub trait Engine {
     fn store(&mut self, state: &mut State) -> Result<(), GpuError>;
     /// The current positions.
     fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError>;
+    /// The state into `state` (as [`Self::store`]) and the rest of what an
+    /// energy check and a frame read.
+    fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError>;
     /// The internal forces at the current positions and velocities from
     /// the committed histories over a step `dt`, the histories left as they
     /// are (the run's start).
@@ -97,101 +124,172 @@ pub struct StepRun {
     pub dt_range: (f64, f64),
     /// Blocks handed to the engine.
     pub blocks: u64,
+    /// Of `seconds`, the stable step's re-estimates on the host (the
+    /// positions fetched from the engine included).
+    pub estimate_seconds: f64,
     /// Wall time of the steps (s), the stable-step estimates included.
     pub seconds: f64,
 }
 
-/// Runs `engine` from `state` to `settings.end_time` (or `max_steps`), as
-/// `explicit` (built from the same model and settings) would step it, and
-/// leaves the reached state in `state`.
+/// The driver's stepping between the times the host looks: the stable
+/// step and its re-estimates, the tool's motion, the counts.
+pub(crate) struct Stepper {
+    end: f64,
+    interval: u64,
+    damping: f64,
+    dt: f64,
+    /// The last step taken (0 before the first).
+    pub dt_prev: f64,
+    /// The tool's displacement and velocity after the last step.
+    pub tool_displacement: f64,
+    pub tool_velocity: f64,
+    pub steps: u64,
+    pub blocks: u64,
+    pub dt_min: f64,
+    pub dt_max: f64,
+    /// Seconds spent re-estimating the stable step.
+    pub estimate_seconds: f64,
+    block: Vec<StepParams>,
+}
+
+impl Stepper {
+    /// Starts `engine` at `state` as the CPU driver starts: the blank
+    /// settled on the tools (its start-up checks said so), the forces at
+    /// the start with no time passing, the first stable step.
+    pub fn start(
+        engine: &mut dyn Engine,
+        explicit: &Explicit<'_>,
+        state: &mut State,
+    ) -> Result<Self, GpuError> {
+        let settings = explicit.settings();
+        let model = explicit.model();
+        if state.step == 0 {
+            let free: Vec<bool> = (0..model.node_count())
+                .map(|i| {
+                    !model
+                        .boundary
+                        .iter()
+                        .any(|b| b.components.iter().any(|&c| c) && b.nodes.contains(&(i as u32)))
+                })
+                .collect();
+            drape_time::guard::settle_on_tools(model, &mut state.x, &free);
+        }
+        engine.load(state)?;
+        engine.start_forces(0.0)?;
+        let dt = explicit.stable_time_step(&state.x);
+        let interval = settings.time_step_interval.max(1);
+        let tool = explicit.contact().and_then(|c| c.tool_state.first());
+        Ok(Self {
+            end: settings.end_time,
+            interval,
+            damping: settings.damping,
+            dt,
+            dt_prev: if state.step == 0 { 0.0 } else { dt },
+            tool_displacement: tool.map_or(0.0, |t| t.displacement),
+            tool_velocity: tool.map_or(0.0, |t| t.velocity),
+            steps: 0,
+            blocks: 0,
+            dt_min: f64::INFINITY,
+            dt_max: 0.0,
+            estimate_seconds: 0.0,
+            block: Vec::with_capacity(interval.min(4096) as usize),
+        })
+    }
+
+    /// Whether `state` is at the end time (a remainder below a millionth
+    /// of a step is round-off).
+    pub fn at_end(&self, state: &State) -> bool {
+        self.end - state.time <= 1e-6 * self.dt
+    }
+
+    /// Steps until the first step whose time is at or past `until`, the
+    /// end time or `max_steps` steps in all, in blocks of equal steps that
+    /// end at the stable step's re-estimates.
+    pub fn advance(
+        &mut self,
+        engine: &mut dyn Engine,
+        explicit: &Explicit<'_>,
+        state: &mut State,
+        until: f64,
+        max_steps: Option<u64>,
+    ) -> Result<(), GpuError> {
+        let tool = explicit.model().tools.first();
+        let end = self.end;
+        while !self.at_end(state) && state.time < until && max_steps.is_none_or(|m| self.steps < m)
+        {
+            if state.step > 0 && state.step % self.interval == 0 {
+                let started = Instant::now();
+                self.dt = explicit.stable_time_step(&engine.positions()?);
+                self.estimate_seconds += started.elapsed().as_secs_f64();
+            }
+            let dt = self.dt;
+            if !(dt > 0.0 && dt.is_finite()) {
+                return Err(GpuError::Cuda(format!(
+                    "stable time step {dt:e} at step {} is not positive",
+                    state.step
+                )));
+            }
+            // The block: to the next re-estimate, while a step is a whole
+            // Δt (the time summed step by step, as the CPU driver sums it).
+            let left = end - state.time;
+            let h = if left < 4.0 * dt {
+                left / (left / dt - 1e-6).ceil().max(1.0)
+            } else {
+                dt
+            };
+            let limit = (self.interval - state.step % self.interval)
+                .min(max_steps.map_or(u64::MAX, |m| m - self.steps));
+            let (mut count, mut time) = (1u64, state.time + h);
+            while count < limit && h == dt && end - time >= 4.0 * dt && time < until {
+                time += h;
+                count += 1;
+            }
+            self.block.clear();
+            for k in 0..count {
+                let before = if k == 0 { self.dt_prev } else { h };
+                let mut p = StepParams::new(self.damping, before, h);
+                let t_new = state.time + h;
+                if let Some(u) = tool.and_then(|t| t.prescribed_displacement(t_new)) {
+                    p.tool_displacement_before = self.tool_displacement;
+                    p.tool_velocity = (u - self.tool_displacement) / h;
+                    p.tool_displacement = u;
+                    self.tool_displacement = u;
+                    self.tool_velocity = p.tool_velocity;
+                }
+                self.block.push(p);
+                state.time = t_new;
+            }
+            engine.steps(&self.block, state.step)?;
+            state.step += count;
+            self.steps += count;
+            self.blocks += 1;
+            self.dt_prev = h;
+            self.dt_min = self.dt_min.min(h);
+            self.dt_max = self.dt_max.max(h);
+        }
+        Ok(())
+    }
+}
+
+/// Runs `engine` from `state` to its end time (or `max_steps`), as
+/// `explicit` would step it, and leaves the reached state in `state`:
+/// the steps alone, with no energies, guard or frames (see
+/// [`crate::run`] for the whole run).
 pub fn run_steps(
     engine: &mut dyn Engine,
     explicit: &Explicit<'_>,
-    settings: &ExplicitSettings,
     state: &mut State,
     max_steps: Option<u64>,
 ) -> Result<StepRun, GpuError> {
     let started = Instant::now();
-    let end = settings.end_time;
-    let interval = settings.time_step_interval.max(1);
-    let model = explicit.model();
-    if state.step == 0 {
-        // As the CPU driver starts (its start-up checks say so).
-        let free: Vec<bool> = (0..model.node_count())
-            .map(|i| {
-                !model
-                    .boundary
-                    .iter()
-                    .any(|b| b.components.iter().any(|&c| c) && b.nodes.contains(&(i as u32)))
-            })
-            .collect();
-        drape_time::guard::settle_on_tools(model, &mut state.x, &free);
-    }
-    let tool = model.tools.first();
-    let mut tool_u = explicit
-        .contact()
-        .and_then(|c| c.tool_state.first())
-        .map_or(0.0, |s| s.displacement);
-    let mut block: Vec<StepParams> = Vec::with_capacity(interval.min(4096) as usize);
-    engine.load(state)?;
-    // Forces at the start, with no time passing so no relaxation.
-    engine.start_forces(0.0)?;
-    let mut dt = explicit.stable_time_step(&state.x);
-    let mut dt_prev = if state.step == 0 { 0.0 } else { dt };
-    let (mut steps, mut blocks) = (0u64, 0u64);
-    let (mut dt_min, mut dt_max) = (f64::INFINITY, 0.0f64);
-    while end - state.time > 1e-6 * dt && max_steps.is_none_or(|m| steps < m) {
-        if state.step > 0 && state.step % interval == 0 {
-            dt = explicit.stable_time_step(&engine.positions()?);
-        }
-        if !(dt > 0.0 && dt.is_finite()) {
-            return Err(GpuError::Cuda(format!(
-                "stable time step {dt:e} at step {} is not positive",
-                state.step
-            )));
-        }
-        // The block: to the next re-estimate, while a step is a whole Δt
-        // (the time summed step by step, as the CPU driver sums it).
-        let left = end - state.time;
-        let h = if left < 4.0 * dt {
-            left / (left / dt - 1e-6).ceil().max(1.0)
-        } else {
-            dt
-        };
-        let mut count = 1u64;
-        let mut time = state.time + h;
-        let limit =
-            (interval - state.step % interval).min(max_steps.map_or(u64::MAX, |m| m - steps));
-        while count < limit && h == dt && end - time >= 4.0 * dt {
-            time += h;
-            count += 1;
-        }
-        block.clear();
-        for k in 0..count {
-            let mut p = StepParams::new(settings.damping, if k == 0 { dt_prev } else { h }, h);
-            let t_new = state.time + h;
-            if let Some(u) = tool.and_then(|t| t.prescribed_displacement(t_new)) {
-                p.tool_displacement_before = tool_u;
-                p.tool_velocity = (u - tool_u) / h;
-                p.tool_displacement = u;
-                tool_u = u;
-            }
-            block.push(p);
-            state.time = t_new;
-        }
-        engine.steps(&block, state.step)?;
-        state.step += count;
-        steps += count;
-        blocks += 1;
-        dt_prev = h;
-        dt_min = dt_min.min(h);
-        dt_max = dt_max.max(h);
-    }
+    let mut stepper = Stepper::start(engine, explicit, state)?;
+    stepper.advance(engine, explicit, state, f64::INFINITY, max_steps)?;
     engine.store(state)?;
     Ok(StepRun {
-        steps,
-        dt_range: (dt_min, dt_max),
-        blocks,
+        steps: stepper.steps,
+        dt_range: (stepper.dt_min, stepper.dt_max),
+        blocks: stepper.blocks,
+        estimate_seconds: stepper.estimate_seconds,
         seconds: started.elapsed().as_secs_f64(),
     })
 }

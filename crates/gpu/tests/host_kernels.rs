@@ -34,7 +34,7 @@ fn both_counting_contacts(scene: &Scene, steps: u64) -> (State, State, usize) {
     let explicit = Explicit::new(model, settings.clone()).expect("a driver");
     let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
     let mut gpu = model.initial_state();
-    let run = run_steps(&mut host, &explicit, &settings, &mut gpu, Some(steps)).expect("steps");
+    let run = run_steps(&mut host, &explicit, &mut gpu, Some(steps)).expect("steps");
     assert_eq!(run.steps, cpu.step);
     (cpu, gpu, touching)
 }
@@ -140,6 +140,25 @@ fn the_shipped_hemisphere_steps_as_on_the_cpu_through_contact_friction_and_bendi
 }
 
 #[test]
+fn the_shipped_45_degree_hemisphere_with_its_triangles_steps_as_on_the_cpu() {
+    let overrides = [("fabric.blank.cells", "[12, 12]")].map(|(k, v)| (k.to_owned(), v.to_owned()));
+    let s = Scene::from_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/hemisphere-45.toml"),
+        &overrides,
+    )
+    .expect("the shipped scene");
+    assert!(
+        s.model
+            .membranes
+            .iter()
+            .any(|b| b.shape() == drape_elements::MembraneShape::Triangle && !b.is_empty())
+    );
+    let (cpu, gpu, touching) = both_counting_contacts(&s, 20_000);
+    assert_same(&cpu, &gpu);
+    assert!(touching > 10, "{touching} nodes on the punch");
+}
+
+#[test]
 fn what_the_gpu_does_not_do_is_named() {
     let s = scene(
         r#"
@@ -166,4 +185,76 @@ geometry = { kind = "plane", point = [0, 0, 5], normal = [0, 0, -1] }
     let explicit = Explicit::new(&s.model, s.settings.clone()).expect("a driver");
     let refused = HostStep::new(&explicit);
     assert!(matches!(refused, Err(GpuError::Unsupported(m)) if m == missing));
+}
+
+/// Frames and the last progress a run hands its observer.
+#[derive(Default)]
+struct Frames {
+    energies: Vec<drape_time::Energies>,
+    times: Vec<f64>,
+    contact_force: Vec<f64>,
+}
+
+impl drape_time::Observer for Frames {
+    fn frame(&mut self, f: &drape_time::Frame<'_>) {
+        self.energies.push(*f.energy);
+        self.times.push(f.state.time);
+        self.contact_force
+            .push(f.contact.map_or(0.0, |c| c.tool_force.iter().sum()));
+    }
+}
+
+#[test]
+fn a_whole_run_through_the_gpu_driver_gives_the_cpu_drivers_frames_and_energies() {
+    let overrides = [
+        ("fabric.blank.cells", "[16, 16]"),
+        ("simulation.end_time", "0.4"),
+        ("simulation.frames", "4"),
+    ]
+    .map(|(k, v)| (k.to_owned(), v.to_owned()));
+    let s = Scene::from_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/hemisphere-0-90.toml"),
+        &overrides,
+    )
+    .expect("the shipped scene");
+    let model = &s.model;
+    let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
+    let (mut cpu_frames, mut gpu_frames) = (Frames::default(), Frames::default());
+    let mut explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
+    let cpu_run = explicit
+        .run(&mut cpu, &mut cpu_frames)
+        .expect("the CPU run");
+    let explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
+    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
+    let gpu_run = drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("run");
+    assert_eq!(cpu_run.steps, gpu_run.steps);
+    assert_same(&cpu, &gpu);
+    assert_eq!(cpu_frames.times, gpu_frames.times);
+    for (c, g) in cpu_frames.energies.iter().zip(&gpu_frames.energies) {
+        // The same states; the works summed node by node over the steps
+        // instead of over the nodes at each step: round-off apart.
+        let scale = c.external_work.abs().max(c.kinetic).max(1e-12);
+        for (what, a, b) in [
+            ("kinetic", c.kinetic, g.kinetic),
+            ("strain", c.strain, g.strain),
+            ("internal work", c.internal_work, g.internal_work),
+            ("external work", c.external_work, g.external_work),
+            ("contact work", c.contact_work, g.contact_work),
+            ("friction", c.friction_dissipation, g.friction_dissipation),
+            ("balance", c.balance_error, g.balance_error),
+        ] {
+            assert!(
+                (a - b).abs() <= 1e-9 * scale,
+                "{what}: CPU {a:e}, GPU {b:e}"
+            );
+        }
+    }
+    // The punch carries the blank at the end, and the frame says with
+    // what force (summed node by node in both drivers' order).
+    let (c, g) = (
+        cpu_frames.contact_force.last(),
+        gpu_frames.contact_force.last(),
+    );
+    assert!(c.is_some_and(|f| *f > 0.0), "{c:?}");
+    assert_eq!(c, g);
 }

@@ -16,9 +16,11 @@ fn the_cuda_kernels_compile_with_nvrtc() {
                 for kernel in [
                     "truss_forces",
                     "quad_forces",
+                    "triangle_forces",
                     "spring_forces",
+                    "bending_forces",
                     "gather",
-                    "update",
+                    "node_step",
                 ] {
                     assert!(
                         text.contains(&format!(".entry {kernel}")),

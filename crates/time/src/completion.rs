@@ -158,7 +158,7 @@ pub fn deepest_penetration(
 /// the end and the tools at `displacements`: a [`RunError::Penetration`]
 /// naming the deepest node, its tool and the setting to change. For an
 /// implicit run, `gap_tolerance` is its setting (the advice depends on it).
-pub(crate) fn check_at_end(
+pub fn check_at_end(
     model: &Model,
     state: &drape_model::State,
     displacements: &[f64],

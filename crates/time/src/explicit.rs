@@ -495,6 +495,11 @@ impl<'m> Explicit<'m> {
         self.model
     }
 
+    /// Its settings.
+    pub fn settings(&self) -> &ExplicitSettings {
+        &self.settings
+    }
+
     /// The dashpot coefficient (N·s/mm) of each truss of each batch along
     /// kinked yarns ([`ExplicitSettings::fibre_damping`]); an empty list for
     /// a batch without. Fixed at set-up from the scaled masses.

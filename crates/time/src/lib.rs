@@ -78,3 +78,4 @@ pub use observer::{
 };
 pub use ply_check::ply_overlap_tolerance;
 pub use profile::{Pass, ProfileClock, StepProfile};
+pub use shared::strain_energy;

@@ -545,7 +545,7 @@ impl PressurePass {
 }
 
 /// Stored strain energy at `state`.
-pub(crate) fn strain_energy(model: &Model, state: &State) -> f64 {
+pub fn strain_energy(model: &Model, state: &State) -> f64 {
     strain_energy_confined(model, state, &[])
 }
 

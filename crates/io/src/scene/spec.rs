@@ -23,6 +23,17 @@ pub enum Solver {
     Implicit,
 }
 
+/// Where the explicit driver's steps run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Device {
+    /// On the CPU's cores.
+    #[default]
+    Cpu,
+    /// On an NVIDIA GPU (drape-gpu): the scene must use only what it does.
+    Gpu,
+}
+
 /// Implicit: the resin membranes' tangent in the factorised K̂ (the
 /// residual is exact either way; see [`MembraneTangentChoice`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -97,6 +108,9 @@ pub struct SimulationSpec {
     /// Integrator.
     #[serde(default)]
     pub solver: Solver,
+    /// Where the explicit steps run.
+    #[serde(default)]
+    pub device: Device,
     /// Time to reach (s).
     pub end_time: f64,
     /// Output frames after the initial one.

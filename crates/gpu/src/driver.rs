@@ -1,0 +1,347 @@
+//! The explicit run with the steps on an [`Engine`]: `drape_time::Explicit`'s
+//! loop at the times the host looks (energy checks, frames, progress), the
+//! steps between them on the GPU. The energies, the instability guard, the
+//! frames and the end-of-run contact check are the CPU driver's own
+//! functions, fed from what the engine hands back at those times.
+//!
+//! Not done here (refused at the start): resuming from a checkpoint and
+//! writing checkpoints.
+
+use std::time::Instant;
+
+use drape_contact::{ContactStatus, ContactView, ToolState};
+use drape_elements::{ElementError, KinematicsError};
+use drape_model::State;
+use drape_time::guard::{Guard, MIN_ENERGY_CHECKS};
+use drape_time::{
+    Control, Energies, Explicit, Frame, Observer, Progress, RunError, RunSummary, strain_energy,
+};
+use nalgebra::Vector3;
+
+use crate::schedule::{Snapshot, Stepper};
+use crate::{Engine, GpuError};
+
+/// What the last snapshot's contact looks like, as a frame shows it.
+struct ContactRecord {
+    tool_state: Vec<ToolState>,
+    force: Vec<Vector3<f64>>,
+    status: Vec<ContactStatus>,
+    tool_of: Vec<u32>,
+    tool_force: Vec<f64>,
+    friction_dissipation: f64,
+}
+
+impl ContactRecord {
+    /// The record as a frame takes it, for a model with a tool.
+    fn view<'a>(&'a self, tools: &'a [drape_contact::Tool]) -> Option<ContactView<'a>> {
+        (!tools.is_empty()).then_some(ContactView {
+            tools,
+            tool_state: &self.tool_state,
+            force: &self.force,
+            status: &self.status,
+            tool_of: &self.tool_of,
+            tool_force: &self.tool_force,
+            friction_dissipation: self.friction_dissipation,
+            plies: None,
+        })
+    }
+}
+
+/// A GPU failure as the run reports it.
+fn run_error(e: GpuError, state: &State) -> RunError {
+    match e {
+        GpuError::Element { kind, index, step } => RunError::Element {
+            step,
+            time: state.time,
+            batch: format!("{kind} (on the GPU)"),
+            error: ElementError {
+                element: index,
+                point: 0,
+                cause: KinematicsError::NonFinite {
+                    what: "element: collapsed, degenerate or not finite (the CPU driver names \
+                           the cause)",
+                },
+            },
+        },
+        other => RunError::Setup(format!(
+            "the GPU run stopped near t = {:.6e} s: {other}",
+            state.time
+        )),
+    }
+}
+
+/// Σ of each running sum over the nodes (in node order).
+fn totals(s: &Snapshot, n: usize) -> [f64; 8] {
+    let mut out = [0.0; 8];
+    for (k, o) in out.iter_mut().enumerate() {
+        *o = s.sums[k * n..(k + 1) * n].iter().sum();
+    }
+    out
+}
+
+/// Runs `explicit`'s model from `state` (at its start) to its end time with
+/// the steps on `engine`, handing `observer` the frames and progress the
+/// CPU driver would. On an error `state` holds the last frame that passed
+/// every check (or the start).
+pub fn run(
+    explicit: &Explicit<'_>,
+    engine: &mut dyn Engine,
+    state: &mut State,
+    observer: &mut dyn Observer,
+) -> Result<RunSummary, RunError> {
+    let started = Instant::now();
+    let model = explicit.model();
+    let settings = explicit.settings();
+    if state.step != 0 {
+        return Err(RunError::Setup(
+            "resuming a run on the GPU is not done yet: resume it without --device gpu".into(),
+        ));
+    }
+    if settings.checkpoint_every.is_some() {
+        return Err(RunError::Setup(
+            "the GPU run writes no checkpoints yet: leave out --checkpoint-every".into(),
+        ));
+    }
+    let n = model.node_count();
+    let end = settings.end_time;
+    let mass = explicit.mass();
+    let constrained: Vec<[bool; 3]> = {
+        let mut c = vec![[false; 3]; n];
+        for bc in &model.boundary {
+            for &i in &bc.nodes {
+                for (held, &by) in c[i as usize].iter_mut().zip(&bc.components) {
+                    *held |= by;
+                }
+            }
+        }
+        c
+    };
+    let movable: Vec<bool> = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
+    let weight: Vec<Vector3<f64>> = model.mass.iter().map(|m| model.gravity * *m).collect();
+    let mut guard = Guard::new(model, settings.guard.clone(), end);
+    let mut stepper = Stepper::start(engine, explicit, state).map_err(|e| run_error(e, state))?;
+    let kinetic0: f64 = (0..n)
+        .map(|i| 0.5 * mass[i] * state.v[i].norm_squared())
+        .sum();
+    guard.begin(state);
+    let mut record = ContactRecord {
+        tool_state: explicit
+            .contact()
+            .map_or_else(Vec::new, |c| c.tool_state.clone()),
+        force: vec![Vector3::zeros(); n],
+        status: vec![ContactStatus::Open; n],
+        tool_of: vec![u32::MAX; n],
+        tool_force: vec![0.0; model.tools.len()],
+        friction_dissipation: 0.0,
+    };
+    let mut reactions = vec![Vector3::zeros(); n];
+    let mut energy = Energies {
+        kinetic: kinetic0,
+        strain: strain_energy(model, state),
+        ..Energies::default()
+    };
+    observer.frame(&Frame {
+        index: 0,
+        model,
+        state,
+        energy: &energy,
+        reactions: &reactions,
+        contact: record.view(&model.tools),
+    });
+    let frame_dt = if settings.frames > 0 {
+        end / settings.frames as f64
+    } else {
+        f64::INFINITY
+    };
+    let check_dt = end / settings.frames.max(MIN_ENERGY_CHECKS) as f64;
+    let (mut next_frame, mut next_check) = (1usize, 1.0f64);
+    let mut stopped = false;
+    let mut last_progress = Instant::now();
+    while !stepper.at_end(state) {
+        if settings.max_steps.is_some_and(|m| stepper.steps >= m) {
+            stopped = true;
+            break;
+        }
+        // To the first step at or past the next frame or check, as the CPU
+        // driver's tests take them.
+        let until = (next_frame as f64 * frame_dt).min(next_check * check_dt) * (1.0 - 1e-12);
+        stepper
+            .advance(engine, explicit, state, until, settings.max_steps)
+            .map_err(|e| {
+                let e = run_error(e, state);
+                guard.fall_back(state);
+                e
+            })?;
+        let at_end = stepper.at_end(state);
+        let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
+        let at_check = state.time >= next_check * check_dt * (1.0 - 1e-12);
+        let snapshot = engine.snapshot(state).map_err(|e| run_error(e, state))?;
+        let unstable = |what| RunError::Unstable {
+            step: state.step,
+            time: state.time,
+            what,
+        };
+        if let Err(what) = guard.nodes(&state.x, &state.v, &movable) {
+            let e = unstable(what);
+            guard.fall_back(state);
+            return Err(e);
+        }
+        // The contact as the frame shows it.
+        let sums = totals(&snapshot, n);
+        record.force.clone_from(&snapshot.contact_force);
+        for (i, s) in snapshot.status.iter().enumerate() {
+            record.status[i] = match s {
+                1 => ContactStatus::Stick,
+                2 => ContactStatus::Slip,
+                _ => ContactStatus::Open,
+            };
+            record.tool_of[i] = if *s == 0 { u32::MAX } else { 0 };
+        }
+        record.friction_dissipation = sums[5];
+        if let Some(ts) = record.tool_state.first_mut() {
+            ts.displacement = stepper.tool_displacement;
+            ts.velocity = stepper.tool_velocity;
+            ts.impulse = sums[6];
+            record.tool_force[0] = sums[7];
+        }
+        if at_frame || at_end || at_check {
+            energy = energies_at(
+                &EnergyInputs {
+                    model_strain: strain_energy(model, state),
+                    mass,
+                    weight: &weight,
+                    constrained: &constrained,
+                    damping: settings.damping,
+                    kinetic0,
+                    h: stepper.dt_prev,
+                },
+                state,
+                &snapshot,
+                sums,
+            );
+            if let Err(what) = guard.energy(&energy, state.time) {
+                let e = unstable(what);
+                guard.fall_back(state);
+                return Err(e);
+            }
+            while next_check * check_dt <= state.time * (1.0 + 1e-12) {
+                next_check += 1.0;
+            }
+            if at_frame || at_end {
+                guard.accept(state);
+            }
+            if at_frame {
+                for (i, (r, c)) in reactions.iter_mut().zip(&constrained).enumerate() {
+                    let quasi_static = snapshot.f_int[i] - weight[i];
+                    *r = Vector3::from_fn(|k, _| if c[k] { quasi_static[k] } else { 0.0 });
+                }
+                observer.frame(&Frame {
+                    index: next_frame,
+                    model,
+                    state,
+                    energy: &energy,
+                    reactions: &reactions,
+                    contact: record.view(&model.tools),
+                });
+                while next_frame as f64 * frame_dt <= state.time * (1.0 + 1e-12) {
+                    next_frame += 1;
+                }
+            }
+        }
+        if last_progress.elapsed().as_millis() >= 100 || at_end {
+            last_progress = Instant::now();
+            let p = Progress {
+                step: state.step,
+                time: state.time,
+                end_time: end,
+                dt: stepper.dt_prev,
+                increment: None,
+            };
+            if observer.progress(&p) == Control::Stop && !at_end {
+                stopped = true;
+                break;
+            }
+        }
+    }
+    if !stopped {
+        let u: Vec<f64> = record.tool_state.iter().map(|t| t.displacement).collect();
+        drape_time::completion::check_at_end(model, state, &u, None)?;
+    }
+    Ok(RunSummary {
+        steps: stepper.steps,
+        dt_range: (stepper.dt_min, stepper.dt_max),
+        added_mass: explicit.added_mass(),
+        total_mass: mass.iter().sum(),
+        energy,
+        stopped,
+        wall_seconds: started.elapsed().as_secs_f64(),
+        threads: 1,
+        warnings: explicit.warnings().to_vec(),
+        implicit: None,
+    })
+}
+
+/// What [`energies_at`] reads besides the snapshot.
+struct EnergyInputs<'a> {
+    model_strain: f64,
+    mass: &'a [f64],
+    weight: &'a [Vector3<f64>],
+    constrained: &'a [[bool; 3]],
+    damping: f64,
+    kinetic0: f64,
+    /// The last step.
+    h: f64,
+}
+
+/// `Explicit::energies_at`: the works summed to n+½ plus the half
+/// increment (x_{n+1} − x_n)/2 at the forces of n+1, the full-step kinetic
+/// energy with the part of the last contact force the node's other forces
+/// press it against.
+fn energies_at(inp: &EnergyInputs<'_>, state: &State, s: &Snapshot, sums: [f64; 8]) -> Energies {
+    let n = state.x.len();
+    let (mut kinetic, mut w_int, mut w_ext, mut w_damp, mut w_bc, mut w_c) =
+        (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for i in 0..n {
+        let half = state.v[i] * (0.5 * inp.h);
+        let (fi, fe, m) = (s.f_int[i], inp.weight[i], inp.mass[i]);
+        let f = s.contact_force[i];
+        let size = f.norm();
+        let contact = if size == 0.0 {
+            f
+        } else {
+            let push = -(fe - fi).dot(&f) / size;
+            f * (push.clamp(0.0, size) / size)
+        };
+        let mut v = state.v[i];
+        for k in 0..3 {
+            if inp.constrained[i][k] {
+                w_bc += (fi[k] - fe[k]) * half[k];
+            } else {
+                v[k] += 0.5 * inp.h * (fe[k] - fi[k] + contact[k]) / m;
+            }
+        }
+        kinetic += 0.5 * m * v.norm_squared();
+        w_int += fi.dot(&half);
+        w_ext += fe.dot(&half);
+        w_damp += inp.damping * m * state.v[i].dot(&half);
+        w_c += contact.dot(&half);
+    }
+    let mut e = Energies {
+        kinetic,
+        strain: inp.model_strain,
+        internal_work: sums[0] + w_int,
+        external_work: sums[1] + w_ext,
+        damping: sums[2] + w_damp,
+        boundary_work: sums[3] + w_bc,
+        contact_work: sums[4] + w_c,
+        friction_dissipation: sums[5],
+        ..Energies::default()
+    };
+    e.viscous = e.internal_work + e.confinement_work - e.strain;
+    e.balance_error = e.kinetic + e.internal_work + e.damping
+        - e.external_work
+        - e.boundary_work
+        - e.contact_work
+        - inp.kinetic0;
+    e
+}

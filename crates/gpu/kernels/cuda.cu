@@ -114,3 +114,58 @@ extern "C" __global__ void node_step(long n, const double *params, const double 
         atomicMin(fault + 2, (int)(4 * i + kind));
     }
 }
+
+/* The stable steps: each element's into the smallest of its batch, an
+ * integer minimum on the bits of a positive double (NaN, above +inf, is
+ * passed over as f64::min does). */
+#define DRAPE_MIN_STEP(out, dt) atomicMin((unsigned long long *)(out), \
+                                          (unsigned long long)__double_as_longlong(dt))
+
+extern "C" __global__ void truss_steps(long count, double wave_modulus, const unsigned *nodes,
+                                       const double *section, const double *share,
+                                       const double *x, long n, double *out)
+{
+    long e = DRAPE_INDEX;
+    if (e < count) {
+        DRAPE_MIN_STEP(out, drape_truss_step(e, wave_modulus, nodes, section, share, x, n));
+    }
+}
+
+extern "C" __global__ void bending_steps(long count, const unsigned *nodes,
+                                         const double *stiffness, const double *share,
+                                         const double *x, long n, double *out)
+{
+    long e = DRAPE_INDEX;
+    if (e < count) {
+        DRAPE_MIN_STEP(out, drape_bending_step(e, nodes, stiffness, share, x, n));
+    }
+}
+
+extern "C" __global__ void spring_steps(long count, const unsigned *nodes, const double *anchor,
+                                        const double *rest, const long *table_start,
+                                        const long *table_len, const double *extension,
+                                        const double *table_force, double max_stiffness,
+                                        const double *mass, const double *x, long n,
+                                        double *out)
+{
+    long e = DRAPE_INDEX;
+    if (e < count) {
+        DRAPE_MIN_STEP(out, drape_spring_step(e, nodes, anchor, rest, table_start, table_len,
+                                              extension, table_force, max_stiffness, count,
+                                              mass, x, n));
+    }
+}
+
+extern "C" __global__ void membrane_steps(long count, int nodes_per, int points,
+                                          const unsigned *nodes, const double *nodal_area,
+                                          const double *scale, double kappa, double rho_h,
+                                          const double *x, long n, double *out)
+{
+    long e = DRAPE_INDEX;
+    if (e < count) {
+        double dt = nodes_per == 4
+                        ? drape_membrane_step(e, 4, 4, nodes, nodal_area, kappa, rho_h, x, n)
+                        : drape_membrane_step(e, 3, 1, nodes, nodal_area, kappa, rho_h, x, n);
+        DRAPE_MIN_STEP(out, dt * scale[e]);
+    }
+}

@@ -95,3 +95,65 @@ long drape_host_node_step(long n, const double *params, const double *x, const d
     }
     return first;
 }
+
+/* The stable steps: the smallest of each batch (positive doubles; NaN
+ * passed over, as f64::min does), +inf for none. */
+double drape_host_truss_steps(long count, double wave_modulus, const unsigned *nodes,
+                              const double *section, const double *share, const double *x,
+                              long n)
+{
+    double best = 1.0 / 0.0;
+    for (long e = 0; e < count; e++) {
+        double dt = drape_truss_step(e, wave_modulus, nodes, section, share, x, n);
+        if (dt < best) {
+            best = dt;
+        }
+    }
+    return best;
+}
+
+double drape_host_bending_steps(long count, const unsigned *nodes, const double *stiffness,
+                                const double *share, const double *x, long n)
+{
+    double best = 1.0 / 0.0;
+    for (long e = 0; e < count; e++) {
+        double dt = drape_bending_step(e, nodes, stiffness, share, x, n);
+        if (dt < best) {
+            best = dt;
+        }
+    }
+    return best;
+}
+
+double drape_host_spring_steps(long count, const unsigned *nodes, const double *anchor,
+                               const double *rest, const long *table_start,
+                               const long *table_len, const double *extension,
+                               const double *table_force, double max_stiffness,
+                               const double *mass, const double *x, long n)
+{
+    double best = 1.0 / 0.0;
+    for (long e = 0; e < count; e++) {
+        double dt = drape_spring_step(e, nodes, anchor, rest, table_start, table_len, extension,
+                                      table_force, max_stiffness, count, mass, x, n);
+        if (dt < best) {
+            best = dt;
+        }
+    }
+    return best;
+}
+
+double drape_host_membrane_steps(long count, int nodes_per, int points, const unsigned *nodes,
+                                 const double *nodal_area, const double *scale, double kappa,
+                                 double rho_h, const double *x, long n)
+{
+    double best = 1.0 / 0.0;
+    for (long e = 0; e < count; e++) {
+        double dt = drape_membrane_step(e, nodes_per, points, nodes, nodal_area, kappa, rho_h, x,
+                                        n) *
+                    scale[e];
+        if (dt < best) {
+            best = dt;
+        }
+    }
+    return best;
+}

@@ -791,4 +791,164 @@ DRAPE_FN int drape_node_step(long i, long n, const double *params, const double 
     return fault;
 }
 
+/* ---- The stable step (Explicit::estimated_time_step): each element's,
+ * the smallest of a batch into its slot by an integer minimum on the
+ * bits (positive doubles order as their bits), the same whatever the
+ * order. ---- */
+
+/* TrussBatch::element_stable_time_step with the nodes' mass shares. */
+DRAPE_FN double drape_truss_step(long e, double wave_modulus, const unsigned *nodes,
+                                 const double *section, const double *share, const double *x,
+                                 long n)
+{
+    long i = nodes[2 * e], j = nodes[2 * e + 1];
+    double d0 = x[j] - x[i], d1 = x[n + j] - x[n + i], d2 = x[2 * n + j] - x[2 * n + i];
+    double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+    double k = wave_modulus * section[e] / l;
+    return 2.0 / sqrt(k * (1.0 / share[2 * e] + 1.0 / share[2 * e + 1]));
+}
+
+/* BendingBatch::element_stable_time_step. */
+DRAPE_FN double drape_bending_step(long e, const unsigned *nodes, const double *stiffness,
+                                   const double *share, const double *x, long n)
+{
+    long i = nodes[3 * e], j = nodes[3 * e + 1], k = nodes[3 * e + 2];
+    double a[3], b[3];
+    for (int c = 0; c < 3; c++) {
+        a[c] = x[c * n + j] - x[c * n + i];
+        b[c] = x[c * n + k] - x[c * n + j];
+    }
+    double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    double ga = 1.0 / la, gb = 1.0 / lb;
+    double sum = ga * ga / share[3 * e] + (ga + gb) * (ga + gb) / share[3 * e + 1] +
+                 gb * gb / share[3 * e + 2];
+    return 2.0 / sqrt(0.5 * stiffness[e] * sum);
+}
+
+/* SpringBatch::element_stable_time_step with the node's mass. */
+DRAPE_FN double drape_spring_step(long e, const unsigned *nodes, const double *anchor,
+                                  const double *rest, const long *table_start,
+                                  const long *table_len, const double *extension,
+                                  const double *table_force, double max_stiffness,
+                                  long springs, const double *mass, const double *x, long n)
+{
+    long i = nodes[e];
+    double d0 = x[i] - anchor[e];
+    double d1 = x[n + i] - anchor[springs + e];
+    double d2 = x[2 * n + i] - anchor[2 * springs + e];
+    double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+    double delta = l - rest[e];
+    const double *ext = extension + table_start[e];
+    const double *frc = table_force + table_start[e];
+    long last = table_len[e] - 2;
+    long seg = 0;
+    for (long q = 1; q <= last; q++) {
+        seg += ext[q] <= delta;
+    }
+    double slope = (frc[seg + 1] - frc[seg]) / (ext[seg + 1] - ext[seg]);
+    double f = frc[seg] + slope * (delta - ext[seg]);
+    double k = fabs(f) / l;
+    /* f64::max: the other where one is NaN. */
+    if (!(k >= max_stiffness)) {
+        k = max_stiffness;
+    }
+    if (k > 0.0) {
+        return 2.0 * sqrt(mass[i] / k);
+    }
+    return 1.0 / 0.0;
+}
+
+/* A membrane's stable step (MembraneBatch::element_stable_time_step for
+ * a resin-only quad or triangle; QuadLanes::block_stable_steps one lane):
+ * the Laplacian of its current shape's gradients, Gershgorin's bound on
+ * its mass-weighted eigenvalue; 0 for a degenerate or non-finite point. */
+DRAPE_FN double drape_membrane_step(long e, int nodes_per, int points, const unsigned *nodes,
+                                    const double *nodal_area, double kappa, double rho_h,
+                                    const double *x, long n)
+{
+    double xe[4][3];
+    for (int a = 0; a < nodes_per; a++) {
+        long i = nodes[nodes_per * e + a];
+        xe[a][0] = x[i];
+        xe[a][1] = x[n + i];
+        xe[a][2] = x[2 * n + i];
+    }
+    double lap[4][4];
+    for (int a = 0; a < 4; a++) {
+        for (int b = 0; b < 4; b++) {
+            lap[a][b] = 0.0;
+        }
+    }
+    for (int p = 0; p < points; p++) {
+        double d_xi[4], d_eta[4], weight;
+        if (nodes_per == 3) {
+            d_xi[0] = -1.0, d_xi[1] = 1.0, d_xi[2] = 0.0;
+            d_eta[0] = -1.0, d_eta[1] = 0.0, d_eta[2] = 1.0;
+            weight = 0.5;
+        } else {
+            const double gauss = 0.5773502691896258;
+            double xi = (p == 0 || p == 3) ? -gauss : gauss;
+            double eta = (p < 2) ? -gauss : gauss;
+            double xm = 1.0 - xi, xp = 1.0 + xi, em = 1.0 - eta, ep = 1.0 + eta;
+            d_xi[0] = -0.25 * em, d_xi[1] = 0.25 * em, d_xi[2] = 0.25 * ep, d_xi[3] = -0.25 * ep;
+            d_eta[0] = -0.25 * xm, d_eta[1] = -0.25 * xp, d_eta[2] = 0.25 * xp;
+            d_eta[3] = 0.25 * xm;
+            weight = 1.0;
+        }
+        double g1[3] = {0.0, 0.0, 0.0}, g2[3] = {0.0, 0.0, 0.0};
+        for (int a = 0; a < nodes_per; a++) {
+            for (int c = 0; c < 3; c++) {
+                g1[c] += xe[a][c] * d_xi[a];
+                g2[c] += xe[a][c] * d_eta[a];
+            }
+        }
+        double nv[3] = {g1[1] * g2[2] - g1[2] * g2[1], g1[2] * g2[0] - g1[0] * g2[2],
+                        g1[0] * g2[1] - g1[1] * g2[0]};
+        double size = sqrt(nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]);
+        double n1 = sqrt(g1[0] * g1[0] + g1[1] * g1[1] + g1[2] * g1[2]);
+        double n2 = sqrt(g2[0] * g2[0] + g2[1] * g2[1] + g2[2] * g2[2]);
+        if (!(size - size == 0.0) || size <= 1e-12 * n1 * n2) {
+            return 0.0;
+        }
+        double normal[3] = {nv[0] / size, nv[1] / size, nv[2] / size};
+        double e1[3] = {g1[0] / n1, g1[1] / n1, g1[2] / n1};
+        double e2[3] = {normal[1] * e1[2] - normal[2] * e1[1],
+                        normal[2] * e1[0] - normal[0] * e1[2],
+                        normal[0] * e1[1] - normal[1] * e1[0]};
+        double j00 = e1[0] * g1[0] + e1[1] * g1[1] + e1[2] * g1[2];
+        double j10 = e2[0] * g1[0] + e2[1] * g1[1] + e2[2] * g1[2];
+        double j01 = e1[0] * g2[0] + e1[1] * g2[1] + e1[2] * g2[2];
+        double j11 = e2[0] * g2[0] + e2[1] * g2[1] + e2[2] * g2[2];
+        double det_j = j00 * j11 - j10 * j01;
+        double t00 = j11 / det_j, t01 = -j10 / det_j, t10 = -j01 / det_j, t11 = j00 / det_j;
+        double grad[4][2];
+        for (int a = 0; a < nodes_per; a++) {
+            grad[a][0] = t00 * d_xi[a] + t01 * d_eta[a];
+            grad[a][1] = t10 * d_xi[a] + t11 * d_eta[a];
+        }
+        double area = det_j * weight;
+        for (int a = 0; a < nodes_per; a++) {
+            for (int b = a; b < nodes_per; b++) {
+                lap[a][b] += area * (grad[a][0] * grad[b][0] + grad[a][1] * grad[b][1]);
+            }
+        }
+    }
+    double lambda = 0.0;
+    for (int a = 0; a < nodes_per; a++) {
+        double sum = 0.0;
+        for (int b = 0; b < nodes_per; b++) {
+            double l = a <= b ? lap[a][b] : lap[b][a];
+            double ma = nodal_area[nodes_per * e + a], mb = nodal_area[nodes_per * e + b];
+            double s = a <= b ? rho_h * sqrt(ma * mb) : rho_h * sqrt(mb * ma);
+            sum += fabs(l) / s;
+        }
+        /* f64::max: a NaN sum is passed over. */
+        if (sum > lambda) {
+            lambda = sum;
+        }
+    }
+    return 2.0 / sqrt(kappa * lambda);
+}
+
 #endif

@@ -16,7 +16,7 @@ use nalgebra::Vector3;
 
 use crate::GpuError;
 use crate::layout::{Flat, SUMS, history_from_device, join, split};
-use crate::schedule::Snapshot;
+use crate::schedule::{BatchSteps, Snapshot};
 use crate::schedule::{Engine, StepParams};
 
 /// Threads per block of every kernel unless set otherwise (the results do
@@ -135,6 +135,8 @@ struct DevTrusses {
     has_dashpot: i32,
     dashpot: CudaSlice<f64>,
     first: i64,
+    wave_modulus: f64,
+    share: CudaSlice<f64>,
 }
 
 struct DevQuads {
@@ -147,6 +149,10 @@ struct DevQuads {
     history: CudaSlice<f64>,
     stride: i64,
     first: i64,
+    nodal_area: CudaSlice<f64>,
+    scale: CudaSlice<f64>,
+    kappa: f64,
+    rho_h: f64,
 }
 
 struct DevSprings {
@@ -159,6 +165,7 @@ struct DevSprings {
     extension: CudaSlice<f64>,
     force: CudaSlice<f64>,
     first: i64,
+    max_stiffness: f64,
 }
 
 struct DevBending {
@@ -166,6 +173,7 @@ struct DevBending {
     nodes: CudaSlice<u32>,
     stiffness: CudaSlice<f64>,
     first: i64,
+    share: CudaSlice<f64>,
 }
 
 struct Kernels {
@@ -176,6 +184,10 @@ struct Kernels {
     gather: CudaFunction,
     node_step: CudaFunction,
     bending: CudaFunction,
+    truss_steps: CudaFunction,
+    membrane_steps: CudaFunction,
+    spring_steps: CudaFunction,
+    bending_steps: CudaFunction,
 }
 
 /// The step of a model on a GPU.
@@ -210,6 +222,9 @@ pub struct CudaStep<'m> {
     status: CudaSlice<u8>,
     /// Each node's running sums (`DRAPE_SUMS`).
     sums: CudaSlice<f64>,
+    /// The smallest stable step of each batch: trusses, membranes,
+    /// springs, bending.
+    batch_steps: CudaSlice<f64>,
     /// Each step's `StepParams` of a block of up to `GRAPH_STEPS`.
     params: CudaSlice<f64>,
     block: u32,
@@ -227,12 +242,7 @@ impl<'m> CudaStep<'m> {
     /// masses, truss dashpots and contact settings.
     pub fn new(explicit: &Explicit<'m>) -> Result<Self, GpuError> {
         let model = explicit.model();
-        let flat = Flat::new(
-            model,
-            explicit.mass(),
-            explicit.fibre_dashpots(),
-            explicit.contact().map(|c| &c.settings),
-        )?;
+        let flat = Flat::new(explicit)?;
         probe()?;
         let ctx = CudaContext::new(0).map_err(|e| GpuError::NoDevice(e.to_string()))?;
         // One stream, ordered by itself: cudarc's per-buffer events are not
@@ -252,6 +262,10 @@ impl<'m> CudaStep<'m> {
             gather: load("gather")?,
             node_step: load("node_step")?,
             bending: load("bending_forces")?,
+            truss_steps: load("truss_steps")?,
+            membrane_steps: load("membrane_steps")?,
+            spring_steps: load("spring_steps")?,
+            bending_steps: load("bending_steps")?,
         };
         // A stream of its own: the legacy default stream cannot be captured
         // into a graph.
@@ -270,6 +284,8 @@ impl<'m> CudaStep<'m> {
                     has_dashpot: i32::from(!t.dashpot.is_empty()),
                     dashpot: upload(s, &t.dashpot)?,
                     first: t.first as i64,
+                    wave_modulus: t.wave_modulus,
+                    share: upload(s, &t.share)?,
                 })
             })
             .collect::<Result<_, GpuError>>()?;
@@ -287,6 +303,10 @@ impl<'m> CudaStep<'m> {
                     history: zeros(s, q.count() * q.points() * q.stride)?,
                     stride: q.stride as i64,
                     first: q.first as i64,
+                    nodal_area: upload(s, &q.nodal_area)?,
+                    scale: upload(s, &q.scale)?,
+                    kappa: q.kappa,
+                    rho_h: q.rho_h,
                 })
             })
             .collect::<Result<_, GpuError>>()?;
@@ -304,6 +324,7 @@ impl<'m> CudaStep<'m> {
                     extension: upload(s, &p.extension)?,
                     force: upload(s, &p.force)?,
                     first: p.first as i64,
+                    max_stiffness: p.max_stiffness,
                 })
             })
             .collect::<Result<_, GpuError>>()?;
@@ -316,6 +337,7 @@ impl<'m> CudaStep<'m> {
                     nodes: upload(s, &b.nodes)?,
                     stiffness: upload(s, &b.stiffness)?,
                     first: b.first as i64,
+                    share: upload(s, &b.share)?,
                 })
             })
             .collect::<Result<_, GpuError>>()?;
@@ -340,6 +362,10 @@ impl<'m> CudaStep<'m> {
             contact_force: zeros(s, 3 * n)?,
             status: zeros(s, n)?,
             sums: zeros(s, SUMS * n)?,
+            batch_steps: zeros(
+                s,
+                flat.trusses.len() + flat.quads.len() + flat.springs.len() + flat.bending.len(),
+            )?,
             params: zeros(s, PARAMS * GRAPH_STEPS as usize)?,
             block: BLOCK,
             fault: upload(s, &FAULTS)?,
@@ -657,6 +683,92 @@ impl Engine for CudaStep<'_> {
             *h = history_from_device(b, &values[..h.len()]);
         }
         Ok(())
+    }
+
+    fn batch_steps(&mut self) -> Result<BatchSteps, GpuError> {
+        let n = self.flat.nodes as i64;
+        let x = &self.x[self.parity];
+        let slots = self.trusses.len() + self.quads.len() + self.springs.len() + self.bending.len();
+        self.stream
+            .memcpy_htod(&vec![f64::INFINITY; slots.max(1)], &mut self.batch_steps)
+            .map_err(cuda)?;
+        let mut slot = 0;
+        for t in &self.trusses {
+            let out = self.batch_steps.slice(slot..slot + 1);
+            let mut b = self.stream.launch_builder(&self.kernels.truss_steps);
+            b.arg(&t.count)
+                .arg(&t.wave_modulus)
+                .arg(&t.nodes)
+                .arg(&t.section)
+                .arg(&t.share)
+                .arg(x)
+                .arg(&n)
+                .arg(&out);
+            // SAFETY: the arguments match `truss_steps` in cuda.cu.
+            unsafe { b.launch(grid(t.count as usize, self.block)) }.map_err(cuda)?;
+            slot += 1;
+        }
+        for q in &self.quads {
+            let out = self.batch_steps.slice(slot..slot + 1);
+            let (nodes_per, points) = if q.triangles { (3i32, 1i32) } else { (4, 4) };
+            let mut b = self.stream.launch_builder(&self.kernels.membrane_steps);
+            b.arg(&q.count)
+                .arg(&nodes_per)
+                .arg(&points)
+                .arg(&q.nodes)
+                .arg(&q.nodal_area)
+                .arg(&q.scale)
+                .arg(&q.kappa)
+                .arg(&q.rho_h)
+                .arg(x)
+                .arg(&n)
+                .arg(&out);
+            // SAFETY: the arguments match `membrane_steps` in cuda.cu.
+            unsafe { b.launch(grid(q.count as usize, self.block)) }.map_err(cuda)?;
+            slot += 1;
+        }
+        for p in &self.springs {
+            let out = self.batch_steps.slice(slot..slot + 1);
+            let mut b = self.stream.launch_builder(&self.kernels.spring_steps);
+            b.arg(&p.count)
+                .arg(&p.nodes)
+                .arg(&p.anchor)
+                .arg(&p.rest)
+                .arg(&p.table_start)
+                .arg(&p.table_len)
+                .arg(&p.extension)
+                .arg(&p.force)
+                .arg(&p.max_stiffness)
+                .arg(&self.mass)
+                .arg(x)
+                .arg(&n)
+                .arg(&out);
+            // SAFETY: the arguments match `spring_steps` in cuda.cu.
+            unsafe { b.launch(grid(p.count as usize, self.block)) }.map_err(cuda)?;
+            slot += 1;
+        }
+        for t in &self.bending {
+            let out = self.batch_steps.slice(slot..slot + 1);
+            let mut b = self.stream.launch_builder(&self.kernels.bending_steps);
+            b.arg(&t.count)
+                .arg(&t.nodes)
+                .arg(&t.stiffness)
+                .arg(&t.share)
+                .arg(x)
+                .arg(&n)
+                .arg(&out);
+            // SAFETY: the arguments match `bending_steps` in cuda.cu.
+            unsafe { b.launch(grid(t.count as usize, self.block)) }.map_err(cuda)?;
+            slot += 1;
+        }
+        let all = self.stream.clone_dtoh(&self.batch_steps).map_err(cuda)?;
+        let (nt, nq, ns) = (self.trusses.len(), self.quads.len(), self.springs.len());
+        Ok(BatchSteps {
+            trusses: all[..nt].to_vec(),
+            membranes: all[nt..nt + nq].to_vec(),
+            springs: all[nt + nq..nt + nq + ns].to_vec(),
+            bending: all[nt + nq + ns..slots].to_vec(),
+        })
     }
 
     fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError> {

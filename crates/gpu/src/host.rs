@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 
 use crate::GpuError;
 use crate::layout::{Flat, SUMS, history_from_device, join, split};
-use crate::schedule::Snapshot;
+use crate::schedule::{BatchSteps, Snapshot};
 use crate::schedule::{Engine, StepParams};
 
 #[repr(C)]
@@ -21,6 +21,49 @@ struct FibreLaw {
 }
 
 unsafe extern "C" {
+    fn drape_host_truss_steps(
+        count: i64,
+        wave_modulus: f64,
+        nodes: *const u32,
+        section: *const f64,
+        share: *const f64,
+        x: *const f64,
+        n: i64,
+    ) -> f64;
+    fn drape_host_bending_steps(
+        count: i64,
+        nodes: *const u32,
+        stiffness: *const f64,
+        share: *const f64,
+        x: *const f64,
+        n: i64,
+    ) -> f64;
+    fn drape_host_spring_steps(
+        count: i64,
+        nodes: *const u32,
+        anchor: *const f64,
+        rest: *const f64,
+        table_start: *const i64,
+        table_len: *const i64,
+        extension: *const f64,
+        table_force: *const f64,
+        max_stiffness: f64,
+        mass: *const f64,
+        x: *const f64,
+        n: i64,
+    ) -> f64;
+    fn drape_host_membrane_steps(
+        count: i64,
+        nodes_per: i32,
+        points: i32,
+        nodes: *const u32,
+        nodal_area: *const f64,
+        scale: *const f64,
+        kappa: f64,
+        rho_h: f64,
+        x: *const f64,
+        n: i64,
+    ) -> f64;
     fn drape_host_node_step(
         n: i64,
         params: *const f64,
@@ -138,12 +181,7 @@ impl<'m> HostStep<'m> {
     /// truss dashpots and contact settings.
     pub fn new(explicit: &Explicit<'m>) -> Result<Self, GpuError> {
         let model = explicit.model();
-        let flat = Flat::new(
-            model,
-            explicit.mass(),
-            explicit.fibre_dashpots(),
-            explicit.contact().map(|c| &c.settings),
-        )?;
+        let flat = Flat::new(explicit)?;
         let n = flat.nodes;
         Ok(Self {
             model,
@@ -360,6 +398,82 @@ impl Engine for HostStep<'_> {
 
     fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError> {
         Ok(join(&self.x))
+    }
+
+    fn batch_steps(&mut self) -> Result<BatchSteps, GpuError> {
+        let f = &self.flat;
+        let (x, n) = (self.x.as_ptr(), f.nodes as i64);
+        // SAFETY (every call): the arrays were built together in
+        // `Flat::new` with the lengths the loops read.
+        Ok(BatchSteps {
+            trusses: f
+                .trusses
+                .iter()
+                .map(|t| unsafe {
+                    drape_host_truss_steps(
+                        t.length.len() as i64,
+                        t.wave_modulus,
+                        t.nodes.as_ptr(),
+                        t.section.as_ptr(),
+                        t.share.as_ptr(),
+                        x,
+                        n,
+                    )
+                })
+                .collect(),
+            membranes: f
+                .quads
+                .iter()
+                .map(|q| unsafe {
+                    drape_host_membrane_steps(
+                        q.count() as i64,
+                        if q.triangles { 3 } else { 4 },
+                        q.points() as i32,
+                        q.nodes.as_ptr(),
+                        q.nodal_area.as_ptr(),
+                        q.scale.as_ptr(),
+                        q.kappa,
+                        q.rho_h,
+                        x,
+                        n,
+                    )
+                })
+                .collect(),
+            springs: f
+                .springs
+                .iter()
+                .map(|s| unsafe {
+                    drape_host_spring_steps(
+                        s.nodes.len() as i64,
+                        s.nodes.as_ptr(),
+                        s.anchor.as_ptr(),
+                        s.rest.as_ptr(),
+                        s.table_start.as_ptr(),
+                        s.table_len.as_ptr(),
+                        s.extension.as_ptr(),
+                        s.force.as_ptr(),
+                        s.max_stiffness,
+                        f.mass.as_ptr(),
+                        x,
+                        n,
+                    )
+                })
+                .collect(),
+            bending: f
+                .bending
+                .iter()
+                .map(|b| unsafe {
+                    drape_host_bending_steps(
+                        b.stiffness.len() as i64,
+                        b.nodes.as_ptr(),
+                        b.stiffness.as_ptr(),
+                        b.share.as_ptr(),
+                        x,
+                        n,
+                    )
+                })
+                .collect(),
+        })
     }
 
     fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError> {

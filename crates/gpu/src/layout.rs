@@ -5,6 +5,7 @@ use drape_constitutive::ResinLaw;
 use drape_contact::{ContactSettings, ProfileSegment, Surface, Tool};
 use drape_elements::{MembraneBatch, MembraneShape};
 use drape_model::{Model, Motion, State};
+use drape_time::Explicit;
 use nalgebra::Vector3;
 
 use crate::GpuError;
@@ -77,6 +78,10 @@ pub(crate) struct Trusses {
     /// Empty for a batch without dashpots.
     pub dashpot: Vec<f64>,
     pub first: usize,
+    /// The stable step's: the law's wave modulus and the nodes' mass
+    /// shares (2 per truss).
+    pub wave_modulus: f64,
+    pub share: Vec<f64>,
 }
 
 /// A resin-only membrane batch (quads or triangles).
@@ -92,6 +97,12 @@ pub(crate) struct Quads {
     pub area: Vec<f64>,
     pub stride: usize,
     pub first: usize,
+    /// The stable step's: the nodes' reference areas (per element, node),
+    /// each element's mass-scaling factor, the stiffness bound κ and ρh.
+    pub nodal_area: Vec<f64>,
+    pub scale: Vec<f64>,
+    pub kappa: f64,
+    pub rho_h: f64,
 }
 
 impl Quads {
@@ -126,6 +137,8 @@ pub(crate) struct Bending {
     pub nodes: Vec<u32>,
     pub stiffness: Vec<f64>,
     pub first: usize,
+    /// The nodes' mass shares (3 per triplet), for the stable step.
+    pub share: Vec<f64>,
 }
 
 /// A spring batch.
@@ -139,6 +152,8 @@ pub(crate) struct Springs {
     pub extension: Vec<f64>,
     pub force: Vec<f64>,
     pub first: usize,
+    /// The table's largest slope, for the stable step.
+    pub max_stiffness: f64,
 }
 
 /// The model as the kernels read it.
@@ -259,15 +274,13 @@ pub(crate) fn history_from_device(b: &MembraneBatch, d: &[f64]) -> Vec<f64> {
 }
 
 impl Flat {
-    /// `model` with the driver's (scaled) `mass`, truss `dashpots` and
-    /// contact settings (`drape_time::Explicit::mass`, `fibre_dashpots`,
-    /// `contact`).
-    pub fn new(
-        model: &Model,
-        mass: &[f64],
-        dashpots: &[Vec<f64>],
-        contact: Option<&ContactSettings>,
-    ) -> Result<Self, GpuError> {
+    /// The model `explicit` runs, with its (scaled) masses, truss dashpots,
+    /// contact settings and what its stable step reads.
+    pub fn new(explicit: &Explicit<'_>) -> Result<Self, GpuError> {
+        let model = explicit.model();
+        let (mass, dashpots) = (explicit.mass(), explicit.fibre_dashpots());
+        let contact: Option<&ContactSettings> = explicit.contact().map(|c| &c.settings);
+        let inputs = explicit.step_inputs();
         let missing = unsupported(model);
         if !missing.is_empty() {
             return Err(GpuError::Unsupported(missing));
@@ -291,13 +304,16 @@ impl Flat {
                 section: t.section.clone(),
                 dashpot: dashpots.get(b).cloned().unwrap_or_default(),
                 first,
+                wave_modulus: t.law.wave_modulus(),
+                share: inputs.truss_mass[b].iter().flatten().copied().collect(),
             })
             .collect();
         let quads = model
             .membranes
             .iter()
             .zip(&layout.membrane_offsets)
-            .map(|(m, &first)| {
+            .zip(inputs.membrane_scale)
+            .map(|((m, &first), scale)| {
                 let count = m.len();
                 let shape = m.shape();
                 let mut grad = Vec::with_capacity(count * 2 * shape.nodes() * shape.points());
@@ -334,6 +350,14 @@ impl Flat {
                     area,
                     stride: m.history_stride(),
                     first,
+                    nodal_area: (0..count)
+                        .flat_map(|e| m.nodal_areas(e).iter().copied())
+                        .collect(),
+                    scale: scale.clone(),
+                    // MembraneBatch's stiffness bound of a resin-only batch.
+                    kappa: material.resin.young / (1.0 - material.resin.poisson)
+                        * material.resin_thickness(),
+                    rho_h: material.areal_density(),
                 }
             })
             .collect();
@@ -353,6 +377,7 @@ impl Flat {
                     extension: points.iter().map(|p| p[0]).collect(),
                     force: points.iter().map(|p| p[1]).collect(),
                     first,
+                    max_stiffness: s.table.max_stiffness(),
                 }
             })
             .collect();
@@ -360,10 +385,12 @@ impl Flat {
             .bending
             .iter()
             .zip(&layout.bending_offsets)
-            .map(|(b, &first)| Bending {
+            .zip(inputs.bending_mass)
+            .map(|((b, &first), share)| Bending {
                 nodes: b.nodes.iter().flatten().copied().collect(),
                 stiffness: b.stiffnesses().to_vec(),
                 first,
+                share: share.iter().flatten().copied().collect(),
             })
             .collect();
         let (ptr, node_slots) = layout.node_slot_lists();

@@ -64,7 +64,7 @@ pub use cuda::{CudaStep, compile_kernels, kernel_source, probe};
 pub use driver::run;
 pub use host::HostStep;
 pub use layout::unsupported;
-pub use schedule::{Engine, Snapshot, StepParams, StepRun, run_steps};
+pub use schedule::{BatchSteps, Engine, Snapshot, StepParams, StepRun, run_steps};
 
 /// Why a model cannot be stepped on the GPU, or the GPU failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -91,6 +91,47 @@ pub struct Snapshot {
     pub sums: Vec<f64>,
 }
 
+/// The smallest stable step of each batch at the current positions, in
+/// the model's batch order (+∞ for an empty batch).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BatchSteps {
+    /// Per truss batch, before its dashpots' factor.
+    pub trusses: Vec<f64>,
+    /// Per membrane batch, with each element's mass-scaling factor.
+    pub membranes: Vec<f64>,
+    /// Per spring batch.
+    pub springs: Vec<f64>,
+    /// Per bending batch.
+    pub bending: Vec<f64>,
+}
+
+/// `Explicit::stable_time_step` from the batches' smallest steps: the kinds
+/// combined as 1/Δt² = Σ 1/Δt_kind², times the safety factor (a fixed
+/// step where the settings give one).
+fn stable_step(steps: &BatchSteps, factors: &[f64], explicit: &Explicit<'_>) -> f64 {
+    let settings = explicit.settings();
+    if let Some(dt) = settings.time_step {
+        return dt;
+    }
+    let mut inverse_square = 0.0;
+    let mut add = |dt: f64| {
+        if dt.is_finite() {
+            inverse_square += 1.0 / (dt * dt);
+        }
+    };
+    let smallest = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    add(steps
+        .trusses
+        .iter()
+        .zip(factors)
+        .map(|(dt, f)| dt * f)
+        .fold(f64::INFINITY, f64::min));
+    add(smallest(&steps.membranes));
+    add(smallest(&steps.springs));
+    add(smallest(&steps.bending));
+    settings.safety_factor / inverse_square.sqrt()
+}
+
 /// What runs the steps: the GPU ([`crate::CudaStep`]) or the kernels' CPU
 /// build ([`crate::HostStep`]).
 pub trait Engine {
@@ -101,6 +142,8 @@ pub trait Engine {
     fn store(&mut self, state: &mut State) -> Result<(), GpuError>;
     /// The current positions.
     fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError>;
+    /// The smallest stable step of each batch at the current positions.
+    fn batch_steps(&mut self) -> Result<BatchSteps, GpuError>;
     /// The state into `state` (as [`Self::store`]) and the rest of what an
     /// energy check and a frame read.
     fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError>;
@@ -124,8 +167,8 @@ pub struct StepRun {
     pub dt_range: (f64, f64),
     /// Blocks handed to the engine.
     pub blocks: u64,
-    /// Of `seconds`, the stable step's re-estimates on the host (the
-    /// positions fetched from the engine included).
+    /// Of `seconds`, the stable step's re-estimates (on the engine, the
+    /// batches' steps combined on the host).
     pub estimate_seconds: f64,
     /// Wall time of the steps (s), the stable-step estimates included.
     pub seconds: f64,
@@ -149,6 +192,8 @@ pub(crate) struct Stepper {
     pub dt_max: f64,
     /// Seconds spent re-estimating the stable step.
     pub estimate_seconds: f64,
+    /// Each truss batch's dashpot factor on its step.
+    truss_factor: Vec<f64>,
     block: Vec<StepParams>,
 }
 
@@ -192,6 +237,7 @@ impl Stepper {
             dt_min: f64::INFINITY,
             dt_max: 0.0,
             estimate_seconds: 0.0,
+            truss_factor: explicit.step_inputs().truss_factor,
             block: Vec::with_capacity(interval.min(4096) as usize),
         })
     }
@@ -219,7 +265,7 @@ impl Stepper {
         {
             if state.step > 0 && state.step % self.interval == 0 {
                 let started = Instant::now();
-                self.dt = explicit.stable_time_step(&engine.positions()?);
+                self.dt = stable_step(&engine.batch_steps()?, &self.truss_factor, explicit);
                 self.estimate_seconds += started.elapsed().as_secs_f64();
             }
             let dt = self.dt;

@@ -77,6 +77,19 @@ impl Default for ExplicitSettings {
     }
 }
 
+/// See [`Explicit::step_inputs`].
+#[derive(Debug, Clone)]
+pub struct StepInputs<'a> {
+    /// Per truss batch, per truss, its nodes' mass shares (t).
+    pub truss_mass: &'a [Vec<[f64; 2]>],
+    /// Per bending batch, per triplet, its nodes' mass shares (t).
+    pub bending_mass: &'a [Vec<[f64; 3]>],
+    /// Per membrane batch, per element, the factor on its stable step.
+    pub membrane_scale: &'a [Vec<f64>],
+    /// Per truss batch, the factor its dashpots put on its step.
+    pub truss_factor: Vec<f64>,
+}
+
 /// The explicit central-difference driver with its scratch buffers.
 pub struct Explicit<'m> {
     model: &'m Model,
@@ -488,6 +501,22 @@ impl<'m> Explicit<'m> {
     /// [`Self::run`] returns (a run stopped between frames) shows.
     pub fn contact(&self) -> Option<&ExplicitContact> {
         self.contact.as_ref()
+    }
+
+    /// What the stable step of each element reads besides the positions:
+    /// the trusses' and the bending triplets' shares of their nodes'
+    /// masses (per batch, per element), each membrane's mass-scaling
+    /// factor on its step, and each truss batch's factor for its dashpots
+    /// (1 without), as [`Self::stable_time_step`] takes them.
+    pub fn step_inputs(&self) -> StepInputs<'_> {
+        StepInputs {
+            truss_mass: &self.truss_mass,
+            bending_mass: &self.bending_mass,
+            membrane_scale: &self.membrane_scale,
+            truss_factor: (0..self.truss_damping.len())
+                .map(|b| self.damped_step_factor(b))
+                .collect(),
+        }
     }
 
     /// The model it runs.

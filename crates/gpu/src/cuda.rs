@@ -6,8 +6,8 @@
 use std::sync::Arc;
 
 use cudarc::driver::{
-    CudaContext, CudaFunction, CudaGraph, CudaSlice, CudaStream, DeviceRepr, LaunchConfig,
-    PushKernelArg, ValidAsZeroBits, sys,
+    CudaContext, CudaEvent, CudaFunction, CudaGraph, CudaSlice, CudaStream, DeviceRepr,
+    LaunchConfig, PushKernelArg, ValidAsZeroBits, sys,
 };
 use cudarc::nvrtc::{CompileOptions, Ptx, compile_ptx_with_opts};
 use drape_model::{Model, State};
@@ -116,6 +116,24 @@ fn zeros<T: DeviceRepr + ValidAsZeroBits>(
     len: usize,
 ) -> Result<CudaSlice<T>, GpuError> {
     stream.alloc_zeros(len.max(1)).map_err(cuda)
+}
+
+/// While profiling (`timing` is Some), an event on `stream` after the
+/// kernels of kind `kind`.
+fn mark(
+    timing: &mut Option<Vec<(usize, CudaEvent)>>,
+    stream: &Arc<CudaStream>,
+    kind: usize,
+) -> Result<(), GpuError> {
+    if let Some(t) = timing {
+        let event = stream
+            .context()
+            .new_event(Some(sys::CUevent_flags::CU_EVENT_DEFAULT))
+            .map_err(cuda)?;
+        event.record(stream).map_err(cuda)?;
+        t.push((kind, event));
+    }
+    Ok(())
 }
 
 fn grid(count: usize, block: u32) -> LaunchConfig {
@@ -233,6 +251,9 @@ pub struct CudaStep<'m> {
     parity: usize,
     /// The captured block of `GRAPH_STEPS` steps from parity 0.
     graph: Option<CudaGraph>,
+    /// While profiling: every kind on the main stream, and an event after
+    /// each kind's kernels (with the kind's index).
+    timing: Option<Vec<(usize, CudaEvent)>>,
     /// The GPU's name.
     pub device: String,
 }
@@ -371,6 +392,7 @@ impl<'m> CudaStep<'m> {
             fault: upload(s, &FAULTS)?,
             parity: 0,
             graph: None,
+            timing: None,
             device,
             trusses,
             quads,
@@ -414,6 +436,42 @@ impl<'m> CudaStep<'m> {
         Ok(self.block)
     }
 
+    /// The GPU time of each kind of kernel over `count` steps with
+    /// `params`, launched one after another on one stream (no graph, no
+    /// kinds side by side): µs per step of [node step (update, contact,
+    /// works), trusses, membranes, springs, bending, gather]. Small models
+    /// include the launches' gaps.
+    pub fn profile(&mut self, count: u64, params: StepParams) -> Result<[f64; 6], GpuError> {
+        self.set_resin(params.h)?;
+        let mut values = [0.0; PARAMS * GRAPH_STEPS as usize];
+        for p in values.chunks_exact_mut(PARAMS) {
+            p.copy_from_slice(&params.values());
+        }
+        self.stream
+            .memcpy_htod(&values, &mut self.params)
+            .map_err(cuda)?;
+        self.timing = Some(Vec::with_capacity(7 * count as usize + 1));
+        mark(&mut self.timing, &self.stream, 0)?;
+        let mut result = Ok(());
+        for _ in 0..count {
+            result = result.and_then(|()| {
+                self.launch_step(self.parity, 0)?;
+                self.parity = 1 - self.parity;
+                Ok(())
+            });
+        }
+        let events = self.timing.take().unwrap_or_default();
+        result?;
+        self.stream.synchronize().map_err(cuda)?;
+        let mut out = [0.0; 6];
+        for pair in events.windows(2) {
+            let ms = pair[0].1.elapsed_ms(&pair[1].1).map_err(cuda)?;
+            out[pair[1].0] += f64::from(ms) * 1e3 / count as f64;
+        }
+        self.check_faults(0)?;
+        Ok(out)
+    }
+
     /// Launches the forces at buffer `at` (positions and velocities), the
     /// histories advanced when `commit`, and the gather: the element kinds
     /// side by side (trusses, springs and bending on streams of their own,
@@ -424,11 +482,16 @@ impl<'m> CudaStep<'m> {
         let sc = self.flat.slot_count as i64;
         let commit = i32::from(commit);
         let (x, v) = (&self.x[at], &self.v[at]);
-        for side in &self.side {
-            side.join(&self.stream).map_err(cuda)?;
+        // Every kind on the main stream while profiling.
+        let serial = self.timing.is_some();
+        let lane = |k: usize| if serial { &self.stream } else { &self.side[k] };
+        if !serial {
+            for side in &self.side {
+                side.join(&self.stream).map_err(cuda)?;
+            }
         }
         for t in &self.trusses {
-            let mut b = self.side[0].launch_builder(&self.kernels.truss);
+            let mut b = lane(0).launch_builder(&self.kernels.truss);
             b.arg(&t.count)
                 .arg(&t.law[0])
                 .arg(&t.law[1])
@@ -449,6 +512,7 @@ impl<'m> CudaStep<'m> {
             // SAFETY: the arguments match `truss_forces` in cuda.cu.
             unsafe { b.launch(grid(t.count as usize, self.block)) }.map_err(cuda)?;
         }
+        mark(&mut self.timing, &self.stream, 1)?;
         for q in &mut self.quads {
             let kernel = if q.triangles {
                 &self.kernels.triangle
@@ -473,8 +537,9 @@ impl<'m> CudaStep<'m> {
             // SAFETY: the arguments match `quad_forces` in cuda.cu.
             unsafe { b.launch(grid(q.count as usize, self.block)) }.map_err(cuda)?;
         }
+        mark(&mut self.timing, &self.stream, 2)?;
         for p in &self.springs {
-            let mut b = self.side[1].launch_builder(&self.kernels.spring);
+            let mut b = lane(1).launch_builder(&self.kernels.spring);
             b.arg(&p.count)
                 .arg(&p.nodes)
                 .arg(&p.anchor)
@@ -491,8 +556,9 @@ impl<'m> CudaStep<'m> {
             // SAFETY: the arguments match `spring_forces` in cuda.cu.
             unsafe { b.launch(grid(p.count as usize, self.block)) }.map_err(cuda)?;
         }
+        mark(&mut self.timing, &self.stream, 3)?;
         for t in &self.bending {
-            let mut b = self.side[2].launch_builder(&self.kernels.bending);
+            let mut b = lane(2).launch_builder(&self.kernels.bending);
             b.arg(&t.count)
                 .arg(&t.nodes)
                 .arg(&t.stiffness)
@@ -505,8 +571,11 @@ impl<'m> CudaStep<'m> {
             // SAFETY: the arguments match `bending_forces` in cuda.cu.
             unsafe { b.launch(grid(t.count as usize, self.block)) }.map_err(cuda)?;
         }
-        for side in &self.side {
-            self.stream.join(side).map_err(cuda)?;
+        mark(&mut self.timing, &self.stream, 4)?;
+        if !serial {
+            for side in &self.side {
+                self.stream.join(side).map_err(cuda)?;
+            }
         }
         let mut b = self.stream.launch_builder(&self.kernels.gather);
         b.arg(&n)
@@ -517,7 +586,7 @@ impl<'m> CudaStep<'m> {
             .arg(&mut self.f_int);
         // SAFETY: the arguments match `gather` in cuda.cu.
         unsafe { b.launch(grid(n as usize, self.block)) }.map_err(cuda)?;
-        Ok(())
+        mark(&mut self.timing, &self.stream, 5)
     }
 
     /// One step from buffer `from` into the other, with the params of step
@@ -554,6 +623,7 @@ impl<'m> CudaStep<'m> {
             .arg(&mut self.fault);
         // SAFETY: the arguments match `node_step` in cuda.cu.
         unsafe { b.launch(grid(n as usize, self.block)) }.map_err(cuda)?;
+        mark(&mut self.timing, &self.stream, 0)?;
         self.launch_forces(to, true)
     }
 

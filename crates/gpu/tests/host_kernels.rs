@@ -258,3 +258,15 @@ fn a_whole_run_through_the_gpu_driver_gives_the_cpu_drivers_frames_and_energies(
     assert!(c.is_some_and(|f| *f > 0.0), "{c:?}");
     assert_eq!(c, g);
 }
+
+#[test]
+fn the_shipped_conforming_ply_steps_as_on_the_cpu_with_its_pinned_nodes() {
+    let s = Scene::from_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/hemisphere-conform.toml"),
+        &[],
+    )
+    .expect("the shipped scene");
+    let (cpu, gpu, touching) = both_counting_contacts(&s, 1500);
+    assert_same(&cpu, &gpu);
+    assert!(touching > 10, "{touching} nodes on the mould");
+}

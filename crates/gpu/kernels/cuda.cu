@@ -164,8 +164,8 @@ extern "C" __global__ void membrane_steps(long count, int nodes_per, int points,
     long e = DRAPE_INDEX;
     if (e < count) {
         double dt = nodes_per == 4
-                        ? drape_membrane_step(e, 4, 4, nodes, nodal_area, kappa, rho_h, x, n)
-                        : drape_membrane_step(e, 3, 1, nodes, nodal_area, kappa, rho_h, x, n);
+                        ? drape_membrane_step(e, count, 4, 4, nodes, nodal_area, kappa, rho_h, x, n)
+                        : drape_membrane_step(e, count, 3, 1, nodes, nodal_area, kappa, rho_h, x, n);
         DRAPE_MIN_STEP(out, dt * scale[e]);
     }
 }

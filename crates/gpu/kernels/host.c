@@ -148,8 +148,8 @@ double drape_host_membrane_steps(long count, int nodes_per, int points, const un
 {
     double best = 1.0 / 0.0;
     for (long e = 0; e < count; e++) {
-        double dt = drape_membrane_step(e, nodes_per, points, nodes, nodal_area, kappa, rho_h, x,
-                                        n) *
+        double dt = drape_membrane_step(e, count, nodes_per, points, nodes, nodal_area, kappa,
+                                        rho_h, x, n) *
                     scale[e];
         if (dt < best) {
             best = dt;

@@ -10,8 +10,11 @@
  * with -ffp-contract=off). On the CPU the results are the driver's bit for
  * bit; on the GPU only log, expm1 and sqrt's last bits may differ.
  *
- * Arrays of 3-vectors are component-major: component k of entry i of an
- * array of n entries is at [k*n + i]. A membrane batch's history is
+ * Arrays of 3-vectors are node-major: component k of entry i is at
+ * [3*i + k] (an element reads a node's three components in one memory
+ * sector). A membrane batch's reference gradients are element-minor:
+ * value v of element e at [v*count + e] (neighbouring threads, neighbouring
+ * addresses). A membrane batch's history is
  * value-major: value i of point p of element e, of a batch of `count`
  * elements with `stride` values per point, is at [(p*stride + i)*count + e].
  *
@@ -85,9 +88,9 @@ DRAPE_FN int drape_truss_force(long e, DrapeFibreLaw law, const unsigned *nodes,
                                long slot_count, long first)
 {
     long i = nodes[2 * e], j = nodes[2 * e + 1];
-    double d0 = x[j] - x[i];
-    double d1 = x[n + j] - x[n + i];
-    double d2 = x[2 * n + j] - x[2 * n + i];
+    double d0 = x[3 * j] - x[3 * i];
+    double d1 = x[3 * j + 1] - x[3 * i + 1];
+    double d2 = x[3 * j + 2] - x[3 * i + 2];
     double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
     double reference = length[e];
     /* l - l is 0 for a finite l and NaN otherwise. */
@@ -106,9 +109,9 @@ DRAPE_FN int drape_truss_force(long e, DrapeFibreLaw law, const unsigned *nodes,
         /* TrussBatch::piece_damping_into: the direction again from d. */
         if (l > 0.0) {
             double m0 = d0 / l, m1 = d1 / l, m2 = d2 / l;
-            double w0 = v[j] - v[i];
-            double w1 = v[n + j] - v[n + i];
-            double w2 = v[2 * n + j] - v[2 * n + i];
+            double w0 = v[3 * j] - v[3 * i];
+            double w1 = v[3 * j + 1] - v[3 * i + 1];
+            double w2 = v[3 * j + 2] - v[3 * i + 2];
             double c = dashpot[e] * (m0 * w0 + m1 * w1 + m2 * w2);
             double g0 = m0 * c, g1 = m1 * c, g2 = m2 * c;
             a0 -= g0;
@@ -120,12 +123,12 @@ DRAPE_FN int drape_truss_force(long e, DrapeFibreLaw law, const unsigned *nodes,
         }
     }
     long s = first + 2 * e;
-    slots[s] = a0;
-    slots[slot_count + s] = a1;
-    slots[2 * slot_count + s] = a2;
-    slots[s + 1] = b0;
-    slots[slot_count + s + 1] = b1;
-    slots[2 * slot_count + s + 1] = b2;
+    slots[3 * s] = a0;
+    slots[3 * s + 1] = a1;
+    slots[3 * s + 2] = a2;
+    slots[3 * (s + 1)] = b0;
+    slots[3 * (s + 1) + 1] = b1;
+    slots[3 * (s + 1) + 2] = b2;
     return 0;
 }
 
@@ -141,8 +144,8 @@ DRAPE_FN int drape_bending_force(long e, const unsigned *nodes, const double *st
     long i = nodes[3 * e], j = nodes[3 * e + 1], k = nodes[3 * e + 2];
     double a[3], b[3];
     for (int c = 0; c < 3; c++) {
-        a[c] = x[c * n + j] - x[c * n + i];
-        b[c] = x[c * n + k] - x[c * n + j];
+        a[c] = x[3 * j + c] - x[3 * i + c];
+        b[c] = x[3 * k + c] - x[3 * j + c];
     }
     double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
     double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
@@ -162,9 +165,9 @@ DRAPE_FN int drape_bending_force(long e, const unsigned *nodes, const double *st
     for (int c = 0; c < 3; c++) {
         double da = (a[c] * (gp * lb / la) + b[c] * gd) * kk;
         double db = (b[c] * (gp * la / lb) + a[c] * gd) * kk;
-        slots[c * slot_count + at] = -da;
-        slots[c * slot_count + at + 1] = da - db;
-        slots[c * slot_count + at + 2] = db;
+        slots[3 * at + c] = -da;
+        slots[3 * (at + 1) + c] = da - db;
+        slots[3 * (at + 2) + c] = db;
     }
     return 0;
 }
@@ -187,7 +190,8 @@ typedef struct {
  * one lane, which is the scalar path's arithmetic): its forces into slots
  * first + nodes_per*e + a, its history advanced in place when `commit`
  * (else read only, as a force evaluation from the committed history).
- * grad: dN/dX per (element, point, node, 2); area per (element, point).
+ * grad: dN/dX, value (point, node, 2) of element e at [value*count + e];
+ * area: point p's at [p*count + e].
  * Returns 0, or 1 where a point is degenerate or not finite (nothing
  * written). */
 DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
@@ -199,23 +203,23 @@ DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
     double xe[4][3];
     for (int a = 0; a < nodes_per; a++) {
         long i = nodes[nodes_per * e + a];
-        xe[a][0] = x[i];
-        xe[a][1] = x[n + i];
-        xe[a][2] = x[2 * n + i];
+        xe[a][0] = x[3 * i];
+        xe[a][1] = x[3 * i + 1];
+        xe[a][2] = x[3 * i + 2];
     }
     double f[4][3][2];
     double c[4][5];
     int ok = 1;
     for (int p = 0; p < points; p++) {
-        const double *g = grad + ((e * points + p) * nodes_per) * 2;
+        const double *g = grad + (p * nodes_per * 2) * count + e;
         for (int r = 0; r < 3; r++) {
             f[p][r][0] = 0.0;
             f[p][r][1] = 0.0;
         }
         for (int a = 0; a < nodes_per; a++) {
             for (int r = 0; r < 3; r++) {
-                f[p][r][0] += xe[a][r] * g[2 * a];
-                f[p][r][1] += xe[a][r] * g[2 * a + 1];
+                f[p][r][0] += xe[a][r] * g[(2 * a) * count];
+                f[p][r][1] += xe[a][r] * g[(2 * a + 1) * count];
             }
         }
         double c00 = f[p][0][0] * f[p][0][0] + f[p][1][0] * f[p][1][0] + f[p][2][0] * f[p][2][0];
@@ -240,7 +244,7 @@ DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
         force[a][2] = 0.0;
     }
     for (int p = 0; p < points; p++) {
-        const double *g = grad + ((e * points + p) * nodes_per) * 2;
+        const double *g = grad + (p * nodes_per * 2) * count + e;
         double c00 = c[p][0], c01 = c[p][1], c11 = c[p][2], det_c = c[p][3], tr_c = c[p][4];
         double det_u = sqrt(det_c);
         double s = sqrt(tr_c + 2.0 * det_u);
@@ -308,18 +312,18 @@ DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
             piola[r][0] = (f[p][r][0] * b00 + f[p][r][1] * b10) * h_m;
             piola[r][1] = (f[p][r][0] * b01 + f[p][r][1] * b11) * h_m;
         }
-        double w = area[e * points + p];
+        double w = area[p * count + e];
         for (int a = 0; a < nodes_per; a++) {
             for (int r = 0; r < 3; r++) {
-                force[a][r] += (piola[r][0] * g[2 * a] + piola[r][1] * g[2 * a + 1]) * w;
+                force[a][r] += (piola[r][0] * g[(2 * a) * count] + piola[r][1] * g[(2 * a + 1) * count]) * w;
             }
         }
     }
     for (int a = 0; a < nodes_per; a++) {
         long s = first + nodes_per * e + a;
-        slots[s] = force[a][0];
-        slots[slot_count + s] = force[a][1];
-        slots[2 * slot_count + s] = force[a][2];
+        slots[3 * s] = force[a][0];
+        slots[3 * s + 1] = force[a][1];
+        slots[3 * s + 2] = force[a][2];
     }
     return 0;
 }
@@ -357,9 +361,9 @@ DRAPE_FN void drape_spring_force(long e, const unsigned *nodes, const double *an
                                  long slot_count, long first)
 {
     long i = nodes[e];
-    double d0 = x[i] - anchor[e];
-    double d1 = x[n + i] - anchor[springs + e];
-    double d2 = x[2 * n + i] - anchor[2 * springs + e];
+    double d0 = x[3 * i] - anchor[3 * e];
+    double d1 = x[3 * i + 1] - anchor[3 * e + 1];
+    double d2 = x[3 * i + 2] - anchor[3 * e + 2];
     double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
     double s0 = 0.0, s1 = 0.0, s2 = 0.0;
     if (l > DRAPE_NO_DIRECTION) {
@@ -380,9 +384,9 @@ DRAPE_FN void drape_spring_force(long e, const unsigned *nodes, const double *an
         s2 = n2 * force;
     }
     long s = first + e;
-    slots[s] = s0;
-    slots[slot_count + s] = s1;
-    slots[2 * slot_count + s] = s2;
+    slots[3 * s] = s0;
+    slots[3 * s + 1] = s1;
+    slots[3 * s + 2] = s2;
 }
 
 /* Node i's internal force: its slots summed in the layout's order
@@ -394,13 +398,13 @@ DRAPE_FN void drape_gather(long i, const long *ptr, const unsigned *node_slots,
     double s0 = 0.0, s1 = 0.0, s2 = 0.0;
     for (long k = ptr[i]; k < ptr[i + 1]; k++) {
         long s = node_slots[k];
-        s0 += slots[s];
-        s1 += slots[slot_count + s];
-        s2 += slots[2 * slot_count + s];
+        s0 += slots[3 * s];
+        s1 += slots[3 * s + 1];
+        s2 += slots[3 * s + 2];
     }
-    f_int[i] = s0;
-    f_int[n + i] = s1;
-    f_int[2 * n + i] = s2;
+    f_int[3 * i] = s0;
+    f_int[3 * i + 1] = s1;
+    f_int[3 * i + 2] = s2;
 }
 
 /* Node i's central-difference update (Explicit's step): velocity to n+1/2
@@ -415,7 +419,7 @@ DRAPE_FN void drape_update(long i, long n, const double *x, const double *v,
 {
     double m = mass[i];
     for (int k = 0; k < 3; k++) {
-        long at = k * n + i;
+        long at = 3 * i + k;
         double a = (f_ext[at] - f_int[at]) / m;
         double vn = (v[at] * c1 + a * dt_avg) * c2;
         double xn = x[at] + vn * h;
@@ -614,9 +618,9 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
                            double *v, double *contact_force, unsigned char *status,
                            double *sums)
 {
-    contact_force[i] = 0.0;
-    contact_force[n + i] = 0.0;
-    contact_force[2 * n + i] = 0.0;
+    contact_force[3 * i] = 0.0;
+    contact_force[3 * i + 1] = 0.0;
+    contact_force[3 * i + 2] = 0.0;
     status[i] = DRAPE_OPEN;
     sums[7 * n + i] = 0.0;
     if (fixed[i] == 7) {
@@ -624,7 +628,7 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
     }
     double h = params[3], u = params[4], u_before = params[5], v_tool = params[6];
     double tau = params[7];
-    double xi0 = x[i], xi1 = x[n + i], xi2 = x[2 * n + i];
+    double xi0 = x[3 * i], xi1 = x[3 * i + 1], xi2 = x[3 * i + 2];
     double nrm[3];
     double gap = drape_tool_project(tool, u, xi0, xi1, xi2, nrm) - tool[DRAPE_TOOL_OFFSET];
     if (!(gap < 0.0)) {
@@ -634,7 +638,7 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
         return 0;
     }
     const double *axis = tool + DRAPE_TOOL_AXIS;
-    double vi0 = v[i], vi1 = v[n + i], vi2 = v[2 * n + i];
+    double vi0 = v[3 * i], vi1 = v[3 * i + 1], vi2 = v[3 * i + 2];
     double node_travel = sqrt(vi0 * vi0 + vi1 * vi1 + vi2 * vi2) * h;
     double axis_len = sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]);
     double tool_travel = fabs(u - u_before) * axis_len;
@@ -721,7 +725,7 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
         sums[5 * n + i] -= w * h;
     }
     for (int k = 0; k < 3; k++) {
-        long at = k * n + i;
+        long at = 3 * i + k;
         /* A partly constrained node keeps its prescribed components. */
         if (fixed[i] & (1 << k)) {
             xs[k] = x0[at] + 0.0;
@@ -747,7 +751,7 @@ DRAPE_FN void drape_works(long i, long n, const double *params, const double *ma
     double m = mass[i];
     double w_int = 0.0, w_ext = 0.0, w_damp = 0.0, w_bc = 0.0, w_c = 0.0;
     for (int k = 0; k < 3; k++) {
-        long at = k * n + i;
+        long at = 3 * i + k;
         double dx = v[at] * (0.5 * dt_prev) + (x_new[at] - x[at]) * 0.5;
         double v_mid = (v[at] + v_new[at]) * 0.5;
         double damp = (v[at] + v_new[at]) * 0.5 * (damping * m);
@@ -802,7 +806,7 @@ DRAPE_FN double drape_truss_step(long e, double wave_modulus, const unsigned *no
                                  long n)
 {
     long i = nodes[2 * e], j = nodes[2 * e + 1];
-    double d0 = x[j] - x[i], d1 = x[n + j] - x[n + i], d2 = x[2 * n + j] - x[2 * n + i];
+    double d0 = x[3 * j] - x[3 * i], d1 = x[3 * j + 1] - x[3 * i + 1], d2 = x[3 * j + 2] - x[3 * i + 2];
     double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
     double k = wave_modulus * section[e] / l;
     return 2.0 / sqrt(k * (1.0 / share[2 * e] + 1.0 / share[2 * e + 1]));
@@ -815,8 +819,8 @@ DRAPE_FN double drape_bending_step(long e, const unsigned *nodes, const double *
     long i = nodes[3 * e], j = nodes[3 * e + 1], k = nodes[3 * e + 2];
     double a[3], b[3];
     for (int c = 0; c < 3; c++) {
-        a[c] = x[c * n + j] - x[c * n + i];
-        b[c] = x[c * n + k] - x[c * n + j];
+        a[c] = x[3 * j + c] - x[3 * i + c];
+        b[c] = x[3 * k + c] - x[3 * j + c];
     }
     double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
     double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
@@ -834,9 +838,9 @@ DRAPE_FN double drape_spring_step(long e, const unsigned *nodes, const double *a
                                   long springs, const double *mass, const double *x, long n)
 {
     long i = nodes[e];
-    double d0 = x[i] - anchor[e];
-    double d1 = x[n + i] - anchor[springs + e];
-    double d2 = x[2 * n + i] - anchor[2 * springs + e];
+    double d0 = x[3 * i] - anchor[3 * e];
+    double d1 = x[3 * i + 1] - anchor[3 * e + 1];
+    double d2 = x[3 * i + 2] - anchor[3 * e + 2];
     double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
     double delta = l - rest[e];
     const double *ext = extension + table_start[e];
@@ -863,16 +867,16 @@ DRAPE_FN double drape_spring_step(long e, const unsigned *nodes, const double *a
  * a resin-only quad or triangle; QuadLanes::block_stable_steps one lane):
  * the Laplacian of its current shape's gradients, Gershgorin's bound on
  * its mass-weighted eigenvalue; 0 for a degenerate or non-finite point. */
-DRAPE_FN double drape_membrane_step(long e, int nodes_per, int points, const unsigned *nodes,
-                                    const double *nodal_area, double kappa, double rho_h,
-                                    const double *x, long n)
+DRAPE_FN double drape_membrane_step(long e, long count, int nodes_per, int points,
+                                    const unsigned *nodes, const double *nodal_area,
+                                    double kappa, double rho_h, const double *x, long n)
 {
     double xe[4][3];
     for (int a = 0; a < nodes_per; a++) {
         long i = nodes[nodes_per * e + a];
-        xe[a][0] = x[i];
-        xe[a][1] = x[n + i];
-        xe[a][2] = x[2 * n + i];
+        xe[a][0] = x[3 * i];
+        xe[a][1] = x[3 * i + 1];
+        xe[a][2] = x[3 * i + 2];
     }
     double lap[4][4];
     for (int a = 0; a < 4; a++) {
@@ -939,7 +943,7 @@ DRAPE_FN double drape_membrane_step(long e, int nodes_per, int points, const uns
         double sum = 0.0;
         for (int b = 0; b < nodes_per; b++) {
             double l = a <= b ? lap[a][b] : lap[b][a];
-            double ma = nodal_area[nodes_per * e + a], mb = nodal_area[nodes_per * e + b];
+            double ma = nodal_area[a * count + e], mb = nodal_area[b * count + e];
             double s = a <= b ? rho_h * sqrt(ma * mb) : rho_h * sqrt(mb * ma);
             sum += fabs(l) / s;
         }

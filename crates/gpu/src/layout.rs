@@ -91,13 +91,14 @@ pub(crate) struct Quads {
     pub resin: ResinLaw,
     pub constants: [f64; 5],
     pub nodes: Vec<u32>,
-    /// ∂N/∂X per (element, point, node, component).
+    /// ∂N/∂X, value (point, node, component) of element e at [v·count + e].
     pub grad: Vec<f64>,
-    /// Per (element, point).
+    /// Point p's area at [p·count + e].
     pub area: Vec<f64>,
     pub stride: usize,
     pub first: usize,
-    /// The stable step's: the nodes' reference areas (per element, node),
+    /// The stable step's: the nodes' reference areas (node a's at
+    /// [a·count + e]),
     /// each element's mass-scaling factor, the stiffness bound κ and ρh.
     pub nodal_area: Vec<f64>,
     pub scale: Vec<f64>,
@@ -226,23 +227,15 @@ pub(crate) fn encode_tool(tool: &Tool, offset: f64, slack: f64, max_travel: f64)
     t
 }
 
-/// Component-major copy of `v`.
+/// `v` as the kernels read 3-vectors: node-major, [3i + k].
 pub(crate) fn split(v: &[Vector3<f64>]) -> Vec<f64> {
-    let n = v.len();
-    let mut out = vec![0.0; 3 * n];
-    for (i, p) in v.iter().enumerate() {
-        for k in 0..3 {
-            out[k * n + i] = p[k];
-        }
-    }
-    out
+    v.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
 }
 
-/// The 3-vectors of a component-major array.
+/// The 3-vectors of a node-major array.
 pub(crate) fn join(a: &[f64]) -> Vec<Vector3<f64>> {
-    let n = a.len() / 3;
-    (0..n)
-        .map(|i| Vector3::new(a[i], a[n + i], a[2 * n + i]))
+    a.chunks_exact(3)
+        .map(|p| Vector3::new(p[0], p[1], p[2]))
         .collect()
 }
 
@@ -316,16 +309,19 @@ impl Flat {
             .map(|((m, &first), scale)| {
                 let count = m.len();
                 let shape = m.shape();
-                let mut grad = Vec::with_capacity(count * 2 * shape.nodes() * shape.points());
-                let mut area = Vec::with_capacity(count * shape.points());
-                let mut nodes = Vec::with_capacity(count * shape.nodes());
+                let (nn, np) = (shape.nodes(), shape.points());
+                // Element-minor: value v of element e at [v·count + e].
+                let mut grad = vec![0.0; count * 2 * nn * np];
+                let mut area = vec![0.0; count * np];
+                let mut nodes = Vec::with_capacity(count * nn);
                 for e in 0..count {
                     nodes.extend_from_slice(m.element_nodes(e));
-                    for p in 0..shape.points() {
-                        for g in m.point_gradients(e, p) {
-                            grad.extend([g.x, g.y]);
+                    for p in 0..np {
+                        for (a, g) in m.point_gradients(e, p).iter().enumerate() {
+                            grad[((p * nn + a) * 2) * count + e] = g.x;
+                            grad[((p * nn + a) * 2 + 1) * count + e] = g.y;
                         }
-                        area.push(m.point_weight(e, p));
+                        area[p * count + e] = m.point_weight(e, p);
                     }
                 }
                 let material = &m.section.material;
@@ -350,8 +346,8 @@ impl Flat {
                     area,
                     stride: m.history_stride(),
                     first,
-                    nodal_area: (0..count)
-                        .flat_map(|e| m.nodal_areas(e).iter().copied())
+                    nodal_area: (0..nn)
+                        .flat_map(|a| (0..count).map(move |e| m.nodal_areas(e)[a]))
                         .collect(),
                     scale: scale.clone(),
                     // MembraneBatch's stiffness bound of a resin-only batch.

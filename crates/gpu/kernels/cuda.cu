@@ -25,22 +25,6 @@ extern "C" __global__ void truss_forces(long count, double modulus, double crimp
     }
 }
 
-extern "C" __global__ void quad_forces(long count, const DrapeResinStep *resin,
-                                       const unsigned *nodes, const double *grad,
-                                       const double *area, double *history, long stride,
-                                       int commit, const double *x, long n, double *slots,
-                                       long slot_count, long first, int *fault)
-{
-    long e = DRAPE_INDEX;
-    if (e >= count) {
-        return;
-    }
-    if (drape_quad_force(e, count, resin, nodes, grad, area, history, stride, commit, x, n,
-                         slots, slot_count, first)) {
-        atomicMin(fault + 1, (int)e);
-    }
-}
-
 extern "C" __global__ void triangle_forces(long count, const DrapeResinStep *resin,
                                        const unsigned *nodes, const double *grad,
                                        const double *area, double *history, long stride,
@@ -167,5 +151,62 @@ extern "C" __global__ void membrane_steps(long count, int nodes_per, int points,
                         ? drape_membrane_step(e, count, 4, 4, nodes, nodal_area, kappa, rho_h, x, n)
                         : drape_membrane_step(e, count, 3, 1, nodes, nodal_area, kappa, rho_h, x, n);
         DRAPE_MIN_STEP(out, dt * scale[e]);
+    }
+}
+
+/* Resin-only quads, four threads a quad (one per integration point, the
+ * four lanes of a group in one warp): each lane its point's kinematics,
+ * stress update and shares of the nodal forces (kernels/step.h's
+ * functions); the quad refused as a whole if one point is degenerate;
+ * the shares summed from zero in point order on the lane of point 0, as
+ * drape_membrane_force sums them. Needs whole warps (threads per block a
+ * multiple of 32). */
+extern "C" __global__ void quad_point_forces(long count, const DrapeResinStep *resin,
+                                             const unsigned *nodes, const double *grad,
+                                             const double *area, double *history, long stride,
+                                             int commit, const double *x, long n, double *slots,
+                                             long slot_count, long first, int *fault)
+{
+    long t = DRAPE_INDEX;
+    long e = t >> 2;
+    int p = (int)(t & 3);
+    if (e >= count) {
+        return;
+    }
+    unsigned lane = threadIdx.x & 31u;
+    unsigned base = lane & ~3u;
+    unsigned group = 0xFu << base;
+    double xe[4][3];
+    drape_membrane_nodes(e, 4, nodes, x, xe);
+    double f[3][2], c[5];
+    int ok = drape_membrane_kinematics(e, 4, p, count, grad, xe, f, c);
+    if (!__all_sync(group, ok)) {
+        if (p == 0) {
+            atomicMin(fault + 1, (int)e);
+        }
+        return;
+    }
+    double share[4][3];
+    drape_membrane_point(e, 4, p, count, resin, grad, area, history, stride, commit, f, c, share);
+    for (int a = 0; a < 4; a++) {
+        for (int r = 0; r < 3; r++) {
+            double s1 = __shfl_sync(group, share[a][r], base + 1);
+            double s2 = __shfl_sync(group, share[a][r], base + 2);
+            double s3 = __shfl_sync(group, share[a][r], base + 3);
+            double sum = 0.0;
+            sum += share[a][r];
+            sum += s1;
+            sum += s2;
+            sum += s3;
+            share[a][r] = sum;
+        }
+    }
+    if (p == 0) {
+        for (int a = 0; a < 4; a++) {
+            long s = first + 4 * e + a;
+            slots[3 * s] = share[a][0];
+            slots[3 * s + 1] = share[a][1];
+            slots[3 * s + 2] = share[a][2];
+        }
     }
 }

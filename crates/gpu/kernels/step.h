@@ -185,15 +185,140 @@ typedef struct {
     double weight[DRAPE_MAX_PRONY];
 } DrapeResinStep;
 
+/* Point p of resin-only membrane e: its deformation gradient F (3 x 2)
+ * from the element's node positions xe, and C = F^T F's C11, C12, C22,
+ * det C and tr C as drape_kinematics::right_stretch forms them. Returns
+ * whether the point is sound (not degenerate, finite). grad: dN/dX,
+ * value (point, node, 2) of element e at [value*count + e]. */
+DRAPE_FN int drape_membrane_kinematics(long e, int nodes_per, int p, long count,
+                                       const double *grad, const double xe[4][3],
+                                       double f[3][2], double c[5])
+{
+    const double *g = grad + (p * nodes_per * 2) * count + e;
+    for (int r = 0; r < 3; r++) {
+        f[r][0] = 0.0;
+        f[r][1] = 0.0;
+    }
+    for (int a = 0; a < nodes_per; a++) {
+        for (int r = 0; r < 3; r++) {
+            f[r][0] += xe[a][r] * g[(2 * a) * count];
+            f[r][1] += xe[a][r] * g[(2 * a + 1) * count];
+        }
+    }
+    c[0] = f[0][0] * f[0][0] + f[1][0] * f[1][0] + f[2][0] * f[2][0];
+    c[1] = f[0][0] * f[0][1] + f[1][0] * f[1][1] + f[2][0] * f[2][1];
+    c[2] = f[0][1] * f[0][1] + f[1][1] * f[1][1] + f[2][1] * f[2][1];
+    c[3] = c[0] * c[2] - c[1] * c[1];
+    c[4] = c[0] + c[2];
+    return c[3] > DRAPE_DEGENERATE_DET_C * c[4] * c[4];
+}
+
+/* Point p's response (QuadLanes::block_forces_lanes, one lane and one
+ * point, which is the scalar path's arithmetic): U in closed form, the
+ * rotated strain increment from the committed U, the resin's stress
+ * update (its history advanced in place when `commit`), P = F U^-1 tau
+ * U^-1 h_m, and its share (P grad N_a) A of each node's force into
+ * share[a]. area: point p's at [p*count + e]; history: value i of point p
+ * at [(p*stride + i)*count + e]. */
+DRAPE_FN void drape_membrane_point(long e, int nodes_per, int p, long count,
+                                   const DrapeResinStep *resin, const double *grad,
+                                   const double *area, double *history, long stride,
+                                   int commit, const double f[3][2], const double c[5],
+                                   double share[4][3])
+{
+    const double *g = grad + (p * nodes_per * 2) * count + e;
+    double c00 = c[0], c01 = c[1], c11 = c[2], det_c = c[3], tr_c = c[4];
+    double det_u = sqrt(det_c);
+    double s = sqrt(tr_c + 2.0 * det_u);
+    double u00 = (c00 + det_u) / s, u01 = (c01 + 0.0) / s, u11 = (c11 + det_u) / s;
+    double tr_u = u00 + u11;
+    double ui00 = (tr_u - u00) / det_u, ui01 = (0.0 - u01) / det_u, ui11 = (tr_u - u11) / det_u;
+    double *h = history + (p * stride) * count + e;
+    double n00 = h[0], n11 = h[count], n01 = h[2 * count];
+    double m00 = (n00 + u00) * 0.5, m01 = (n01 + u01) * 0.5, m11 = (n11 + u11) * 0.5;
+    double det_m = m00 * m11 - m01 * m01;
+    double tr_m = m00 + m11;
+    double mi00 = (tr_m - m00) / det_m, mi01 = (0.0 - m01) / det_m, mi11 = (tr_m - m11) / det_m;
+    double d00 = u00 - n00, d01 = u01 - n01, d11 = u11 - n11;
+    double l00 = d00 * mi00 + d01 * mi01;
+    double l01 = d00 * mi01 + d01 * mi11;
+    double l10 = d01 * mi00 + d11 * mi01;
+    double l11 = d01 * mi01 + d11 * mi11;
+    double e00 = (l00 + l00) * 0.5;
+    double e11 = (l11 + l11) * 0.5;
+    double e01 = (l01 + l10) * 0.5;
+    double e10 = (l10 + l01) * 0.5;
+    double k = resin->wave_modulus, nu = resin->poisson;
+    double t00 = h[3 * count] + k * (e00 + nu * e11);
+    double t11 = h[4 * count] + k * (nu * e00 + e11);
+    double d_s0 = resin->shear_modulus * (e01 + e10);
+    double t01;
+    if (resin->prony_terms == 0) {
+        t01 = h[5 * count] + d_s0;
+    } else {
+        double s0 = h[6 * count] + d_s0;
+        double relaxing = 0.0;
+        for (int q = 0; q < resin->prony_terms; q++) {
+            double qk = resin->decay[q] * h[(7 + q) * count] + resin->weight[q] * d_s0;
+            relaxing += qk;
+            if (commit) {
+                h[(7 + q) * count] = qk;
+            }
+        }
+        if (commit) {
+            h[6 * count] = s0;
+        }
+        t01 = resin->long_term * s0 + relaxing;
+    }
+    if (commit) {
+        h[0] = u00;
+        h[count] = u11;
+        h[2 * count] = u01;
+        h[3 * count] = t00;
+        h[4 * count] = t11;
+        h[5 * count] = t01;
+    }
+    double a00 = ui00 * t00 + ui01 * t01;
+    double a01 = ui00 * t01 + ui01 * t11;
+    double a10 = ui01 * t00 + ui11 * t01;
+    double a11 = ui01 * t01 + ui11 * t11;
+    double b00 = a00 * ui00 + a01 * ui01;
+    double b01 = a00 * ui01 + a01 * ui11;
+    double b10 = a10 * ui00 + a11 * ui01;
+    double b11 = a10 * ui01 + a11 * ui11;
+    double h_m = resin->thickness;
+    double piola[3][2];
+    for (int r = 0; r < 3; r++) {
+        piola[r][0] = (f[r][0] * b00 + f[r][1] * b10) * h_m;
+        piola[r][1] = (f[r][0] * b01 + f[r][1] * b11) * h_m;
+    }
+    double w = area[p * count + e];
+    for (int a = 0; a < nodes_per; a++) {
+        for (int r = 0; r < 3; r++) {
+            share[a][r] = (piola[r][0] * g[(2 * a) * count] + piola[r][1] * g[(2 * a + 1) * count]) * w;
+        }
+    }
+}
+
+/* The node positions of membrane e. */
+DRAPE_FN void drape_membrane_nodes(long e, int nodes_per, const unsigned *nodes,
+                                   const double *x, double xe[4][3])
+{
+    for (int a = 0; a < nodes_per; a++) {
+        long i = nodes[nodes_per * e + a];
+        xe[a][0] = x[3 * i];
+        xe[a][1] = x[3 * i + 1];
+        xe[a][2] = x[3 * i + 2];
+    }
+}
+
 /* Resin-only membrane e of `nodes_per` nodes and `points` integration
- * points (quads 4 and 4, triangles 3 and 1; QuadLanes::block_forces_lanes,
- * one lane, which is the scalar path's arithmetic): its forces into slots
- * first + nodes_per*e + a, its history advanced in place when `commit`
- * (else read only, as a force evaluation from the committed history).
- * grad: dN/dX, value (point, node, 2) of element e at [value*count + e];
- * area: point p's at [p*count + e].
- * Returns 0, or 1 where a point is degenerate or not finite (nothing
- * written). */
+ * points (quads 4 and 4, triangles 3 and 1), its points one after another:
+ * its forces (each node's shares summed from zero in point order) into
+ * slots first + nodes_per*e + a, its history advanced in place when
+ * `commit` (else read only, as a force evaluation from the committed
+ * history). Returns 0, or 1 where a point is degenerate or not finite
+ * (nothing written). */
 DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
                                   const DrapeResinStep *resin, const unsigned *nodes,
                                   const double *grad, const double *area, double *history,
@@ -201,38 +326,12 @@ DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
                                   double *slots, long slot_count, long first)
 {
     double xe[4][3];
-    for (int a = 0; a < nodes_per; a++) {
-        long i = nodes[nodes_per * e + a];
-        xe[a][0] = x[3 * i];
-        xe[a][1] = x[3 * i + 1];
-        xe[a][2] = x[3 * i + 2];
-    }
+    drape_membrane_nodes(e, nodes_per, nodes, x, xe);
     double f[4][3][2];
     double c[4][5];
     int ok = 1;
     for (int p = 0; p < points; p++) {
-        const double *g = grad + (p * nodes_per * 2) * count + e;
-        for (int r = 0; r < 3; r++) {
-            f[p][r][0] = 0.0;
-            f[p][r][1] = 0.0;
-        }
-        for (int a = 0; a < nodes_per; a++) {
-            for (int r = 0; r < 3; r++) {
-                f[p][r][0] += xe[a][r] * g[(2 * a) * count];
-                f[p][r][1] += xe[a][r] * g[(2 * a + 1) * count];
-            }
-        }
-        double c00 = f[p][0][0] * f[p][0][0] + f[p][1][0] * f[p][1][0] + f[p][2][0] * f[p][2][0];
-        double c01 = f[p][0][0] * f[p][0][1] + f[p][1][0] * f[p][1][1] + f[p][2][0] * f[p][2][1];
-        double c11 = f[p][0][1] * f[p][0][1] + f[p][1][1] * f[p][1][1] + f[p][2][1] * f[p][2][1];
-        double det_c = c00 * c11 - c01 * c01;
-        double tr_c = c00 + c11;
-        c[p][0] = c00;
-        c[p][1] = c01;
-        c[p][2] = c11;
-        c[p][3] = det_c;
-        c[p][4] = tr_c;
-        ok &= det_c > DRAPE_DEGENERATE_DET_C * tr_c * tr_c;
+        ok &= drape_membrane_kinematics(e, nodes_per, p, count, grad, xe, f[p], c[p]);
     }
     if (!ok) {
         return 1;
@@ -244,78 +343,12 @@ DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
         force[a][2] = 0.0;
     }
     for (int p = 0; p < points; p++) {
-        const double *g = grad + (p * nodes_per * 2) * count + e;
-        double c00 = c[p][0], c01 = c[p][1], c11 = c[p][2], det_c = c[p][3], tr_c = c[p][4];
-        double det_u = sqrt(det_c);
-        double s = sqrt(tr_c + 2.0 * det_u);
-        double u00 = (c00 + det_u) / s, u01 = (c01 + 0.0) / s, u11 = (c11 + det_u) / s;
-        double tr_u = u00 + u11;
-        double ui00 = (tr_u - u00) / det_u, ui01 = (0.0 - u01) / det_u,
-               ui11 = (tr_u - u11) / det_u;
-        double *h = history + (p * stride) * count + e;
-        double n00 = h[0], n11 = h[count], n01 = h[2 * count];
-        double m00 = (n00 + u00) * 0.5, m01 = (n01 + u01) * 0.5, m11 = (n11 + u11) * 0.5;
-        double det_m = m00 * m11 - m01 * m01;
-        double tr_m = m00 + m11;
-        double mi00 = (tr_m - m00) / det_m, mi01 = (0.0 - m01) / det_m,
-               mi11 = (tr_m - m11) / det_m;
-        double d00 = u00 - n00, d01 = u01 - n01, d11 = u11 - n11;
-        double l00 = d00 * mi00 + d01 * mi01;
-        double l01 = d00 * mi01 + d01 * mi11;
-        double l10 = d01 * mi00 + d11 * mi01;
-        double l11 = d01 * mi01 + d11 * mi11;
-        double e00 = (l00 + l00) * 0.5;
-        double e11 = (l11 + l11) * 0.5;
-        double e01 = (l01 + l10) * 0.5;
-        double e10 = (l10 + l01) * 0.5;
-        double k = resin->wave_modulus, nu = resin->poisson;
-        double t00 = h[3 * count] + k * (e00 + nu * e11);
-        double t11 = h[4 * count] + k * (nu * e00 + e11);
-        double d_s0 = resin->shear_modulus * (e01 + e10);
-        double t01;
-        if (resin->prony_terms == 0) {
-            t01 = h[5 * count] + d_s0;
-        } else {
-            double s0 = h[6 * count] + d_s0;
-            double relaxing = 0.0;
-            for (int q = 0; q < resin->prony_terms; q++) {
-                double qk = resin->decay[q] * h[(7 + q) * count] + resin->weight[q] * d_s0;
-                relaxing += qk;
-                if (commit) {
-                    h[(7 + q) * count] = qk;
-                }
-            }
-            if (commit) {
-                h[6 * count] = s0;
-            }
-            t01 = resin->long_term * s0 + relaxing;
-        }
-        if (commit) {
-            h[0] = u00;
-            h[count] = u11;
-            h[2 * count] = u01;
-            h[3 * count] = t00;
-            h[4 * count] = t11;
-            h[5 * count] = t01;
-        }
-        double a00 = ui00 * t00 + ui01 * t01;
-        double a01 = ui00 * t01 + ui01 * t11;
-        double a10 = ui01 * t00 + ui11 * t01;
-        double a11 = ui01 * t01 + ui11 * t11;
-        double b00 = a00 * ui00 + a01 * ui01;
-        double b01 = a00 * ui01 + a01 * ui11;
-        double b10 = a10 * ui00 + a11 * ui01;
-        double b11 = a10 * ui01 + a11 * ui11;
-        double h_m = resin->thickness;
-        double piola[3][2];
-        for (int r = 0; r < 3; r++) {
-            piola[r][0] = (f[p][r][0] * b00 + f[p][r][1] * b10) * h_m;
-            piola[r][1] = (f[p][r][0] * b01 + f[p][r][1] * b11) * h_m;
-        }
-        double w = area[p * count + e];
+        double share[4][3];
+        drape_membrane_point(e, nodes_per, p, count, resin, grad, area, history, stride, commit,
+                             f[p], c[p], share);
         for (int a = 0; a < nodes_per; a++) {
             for (int r = 0; r < 3; r++) {
-                force[a][r] += (piola[r][0] * g[(2 * a) * count] + piola[r][1] * g[(2 * a + 1) * count]) * w;
+                force[a][r] += share[a][r];
             }
         }
     }

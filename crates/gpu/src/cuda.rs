@@ -277,7 +277,7 @@ impl<'m> CudaStep<'m> {
         let load = |name: &str| module.load_function(name).map_err(cuda);
         let kernels = Kernels {
             truss: load("truss_forces")?,
-            quad: load("quad_forces")?,
+            quad: load("quad_point_forces")?,
             triangle: load("triangle_forces")?,
             spring: load("spring_forces")?,
             gather: load("gather")?,
@@ -431,7 +431,8 @@ impl<'m> CudaStep<'m> {
         ] {
             most = most.min(f.max_threads_per_block().map_err(cuda)? as u32);
         }
-        self.block = threads.clamp(32, most);
+        // Whole warps: the quads' four points are lanes of one warp.
+        self.block = threads.clamp(32, most) / 32 * 32;
         self.graph = None;
         Ok(self.block)
     }
@@ -514,10 +515,11 @@ impl<'m> CudaStep<'m> {
         }
         mark(&mut self.timing, &self.stream, 1)?;
         for q in &mut self.quads {
-            let kernel = if q.triangles {
-                &self.kernels.triangle
+            // A quad's four points on four threads; a triangle's one.
+            let (kernel, threads) = if q.triangles {
+                (&self.kernels.triangle, q.count as usize)
             } else {
-                &self.kernels.quad
+                (&self.kernels.quad, 4 * q.count as usize)
             };
             let mut b = self.stream.launch_builder(kernel);
             b.arg(&q.count)
@@ -534,8 +536,9 @@ impl<'m> CudaStep<'m> {
                 .arg(&sc)
                 .arg(&q.first)
                 .arg(&mut self.fault);
-            // SAFETY: the arguments match `quad_forces` in cuda.cu.
-            unsafe { b.launch(grid(q.count as usize, self.block)) }.map_err(cuda)?;
+            // SAFETY: the arguments match `quad_point_forces` and
+            // `triangle_forces` in cuda.cu; the blocks are whole warps.
+            unsafe { b.launch(grid(threads, self.block)) }.map_err(cuda)?;
         }
         mark(&mut self.timing, &self.stream, 2)?;
         for p in &self.springs {

@@ -15,7 +15,7 @@ fn the_cuda_kernels_compile_with_nvrtc() {
                 let text = ptx.to_src();
                 for kernel in [
                     "truss_forces",
-                    "quad_forces",
+                    "quad_point_forces",
                     "triangle_forces",
                     "spring_forces",
                     "bending_forces",

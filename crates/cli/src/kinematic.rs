@@ -231,6 +231,7 @@ pub fn kinematic_scene(scene: &Scene, out: &Path) -> Result<KinematicReport, Kin
         energy: EnergySummary::default(),
         setup: None,
         run: RunInfo {
+            device: None,
             wall_s,
             steps: 0,
             threads: 1,
@@ -291,6 +292,7 @@ fn undraped_summary(
         draw_in_note: Some("no net was draped".to_owned()),
         max_fibre_tension_n: f64::NAN,
         run: RunInfo {
+            device: None,
             wall_s,
             steps: 0,
             threads: 1,

@@ -671,6 +671,8 @@ pub fn run_in(
     let mut end_tools = Vec::new();
     // The implicit driver's totals, a failed run's included.
     let mut implicit_totals = None;
+    // The GPU the steps ran on, if they did.
+    let mut gpu_name = None;
     // The scene's own (an imported file's units, repairs) first.
     let mut warnings = scene.warnings.clone();
     let outcome: Result<RunSummary, RunError> = match solver {
@@ -683,6 +685,7 @@ pub fn run_in(
                 // settings), the steps on the GPU.
                 match drape_gpu::CudaStep::new(&explicit) {
                     Ok(mut engine) => {
+                        gpu_name = Some(engine.device.clone());
                         drape_gpu::run(&explicit, &mut engine, &mut state, &mut recorder)
                     }
                     Err(e) => Err(drape_time::RunError::Setup(e.to_string())),
@@ -855,6 +858,7 @@ pub fn run_in(
         },
         setup,
         run: RunInfo {
+            device: gpu_name,
             wall_s,
             // Every step from the start, a resumed run's included.
             steps: state.step,

@@ -176,8 +176,12 @@ pub(super) fn print_summary(s: &Summary, out: &Path) {
         kinetic_share_text(&s.energy)
     );
     println!(
-        "run               {:.1} s wall, {} threads, {}",
-        s.run.wall_s, s.run.threads, s.run.solver
+        "run               {:.1} s wall, {}",
+        s.run.wall_s,
+        match &s.run.device {
+            Some(gpu) => format!("{} on the GPU ({gpu})", s.run.solver),
+            None => format!("{} threads, {}", s.run.threads, s.run.solver),
+        }
     );
     if let Some(i) = &s.run.implicit {
         println!(

@@ -195,6 +195,9 @@ pub struct RunInfo {
     pub threads: usize,
     /// "explicit" or "implicit".
     pub solver: String,
+    /// The GPU the explicit steps ran on (absent: the CPU's threads).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub device: Option<String>,
     /// What the implicit driver did (absent for explicit runs).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub implicit: Option<ImplicitRunInfo>,

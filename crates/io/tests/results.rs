@@ -463,6 +463,7 @@ fn writes_a_complete_results_directory() {
             ..RunSetup::default()
         }),
         run: RunInfo {
+            device: None,
             wall_s: 1.5,
             steps: 1000,
             threads: 2,

@@ -12,7 +12,6 @@ use cudarc::driver::{
 use cudarc::nvrtc::{CompileOptions, Ptx, compile_ptx_with_opts};
 use drape_model::{Model, State};
 use drape_time::Explicit;
-use nalgebra::Vector3;
 
 use crate::GpuError;
 use crate::layout::{Flat, SUMS, history_from_device, join, split};
@@ -842,12 +841,6 @@ impl Engine for CudaStep<'_> {
             springs: all[nt + nq..nt + nq + ns].to_vec(),
             bending: all[nt + nq + ns..slots].to_vec(),
         })
-    }
-
-    fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError> {
-        let n = self.flat.nodes;
-        let x = self.stream.clone_dtoh(&self.x[self.parity]).map_err(cuda)?;
-        Ok(join(&x[..3 * n]))
     }
 
     fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError> {

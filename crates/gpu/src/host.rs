@@ -4,7 +4,6 @@
 
 use drape_model::{Model, State};
 use drape_time::Explicit;
-use nalgebra::Vector3;
 
 use crate::GpuError;
 use crate::layout::{Flat, SUMS, history_from_device, join, split};
@@ -199,11 +198,6 @@ impl<'m> HostStep<'m> {
         })
     }
 
-    /// The internal forces of the last evaluation.
-    pub fn internal_forces(&self) -> Vec<Vector3<f64>> {
-        join(&self.f_int)
-    }
-
     fn forces(&mut self, dt: f64, commit: bool, step: u64) -> Result<(), GpuError> {
         let f = &self.flat;
         let (n, sc) = (f.nodes as i64, f.slot_count as i64);
@@ -394,10 +388,6 @@ impl Engine for HostStep<'_> {
             *h = history_from_device(b, d);
         }
         Ok(())
-    }
-
-    fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError> {
-        Ok(join(&self.x))
     }
 
     fn batch_steps(&mut self) -> Result<BatchSteps, GpuError> {

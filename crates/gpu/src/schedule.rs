@@ -140,8 +140,6 @@ pub trait Engine {
     /// Writes positions, velocities and histories into `state` (its time
     /// and step are the caller's).
     fn store(&mut self, state: &mut State) -> Result<(), GpuError>;
-    /// The current positions.
-    fn positions(&mut self) -> Result<Vec<Vector3<f64>>, GpuError>;
     /// The smallest stable step of each batch at the current positions.
     fn batch_steps(&mut self) -> Result<BatchSteps, GpuError>;
     /// The state into `state` (as [`Self::store`]) and the rest of what an

@@ -175,7 +175,11 @@ pub fn run(
         let at_end = stepper.at_end(state);
         let at_frame = state.time >= next_frame as f64 * frame_dt * (1.0 - 1e-12);
         let at_check = state.time >= next_check * check_dt * (1.0 - 1e-12);
-        let snapshot = engine.snapshot(state).map_err(|e| run_error(e, state))?;
+        let snapshot = engine.snapshot(state).map_err(|e| {
+            let e = run_error(e, state);
+            guard.fall_back(state);
+            e
+        })?;
         let unstable = |what| RunError::Unstable {
             step: state.step,
             time: state.time,

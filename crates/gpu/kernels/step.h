@@ -382,6 +382,19 @@ DRAPE_FN int drape_triangle_force(long e, long count, const DrapeResinStep *resi
                                 commit, x, n, slots, slot_count, first);
 }
 
+/* ForceTable::force_and_stiffness's force: F(delta) of the piecewise
+ * linear table of `len` points (ext, frc), its end segments extended. */
+DRAPE_FN double drape_spring_table(const double *ext, const double *frc, long len, double delta)
+{
+    /* ForceTable::segment: how many of ext[1..=len-2] are <= delta. */
+    long seg = 0;
+    for (long k = 1; k <= len - 2; k++) {
+        seg += ext[k] <= delta;
+    }
+    double slope = (frc[seg + 1] - frc[seg]) / (ext[seg + 1] - ext[seg]);
+    return frc[seg] + slope * (delta - ext[seg]);
+}
+
 /* Spring e's force on its node into slot first + e (SpringBatch::
  * element_force): F(|x - anchor| - L0) along the anchor-to-node direction.
  * table: the (extension, force) points from table_start[e] to
@@ -402,16 +415,8 @@ DRAPE_FN void drape_spring_force(long e, const unsigned *nodes, const double *an
     if (l > DRAPE_NO_DIRECTION) {
         double n0 = d0 / l, n1 = d1 / l, n2 = d2 / l;
         double delta = l - rest[e];
-        const double *ext = extension + table_start[e];
-        const double *frc = table_force + table_start[e];
-        long last = table_len[e] - 2;
-        /* ForceTable::segment: how many of ext[1..=last] are <= delta. */
-        long seg = 0;
-        for (long k = 1; k <= last; k++) {
-            seg += ext[k] <= delta;
-        }
-        double k = (frc[seg + 1] - frc[seg]) / (ext[seg + 1] - ext[seg]);
-        double force = frc[seg] + k * (delta - ext[seg]);
+        double force = drape_spring_table(extension + table_start[e],
+                                          table_force + table_start[e], table_len[e], delta);
         s0 = n0 * force;
         s1 = n1 * force;
         s2 = n2 * force;
@@ -876,15 +881,8 @@ DRAPE_FN double drape_spring_step(long e, const unsigned *nodes, const double *a
     double d2 = x[3 * i + 2] - anchor[3 * e + 2];
     double l = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
     double delta = l - rest[e];
-    const double *ext = extension + table_start[e];
-    const double *frc = table_force + table_start[e];
-    long last = table_len[e] - 2;
-    long seg = 0;
-    for (long q = 1; q <= last; q++) {
-        seg += ext[q] <= delta;
-    }
-    double slope = (frc[seg + 1] - frc[seg]) / (ext[seg + 1] - ext[seg]);
-    double f = frc[seg] + slope * (delta - ext[seg]);
+    double f = drape_spring_table(extension + table_start[e], table_force + table_start[e],
+                                  table_len[e], delta);
     double k = fabs(f) / l;
     /* f64::max: the other where one is NaN. */
     if (!(k >= max_stiffness)) {

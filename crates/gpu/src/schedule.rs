@@ -275,12 +275,7 @@ impl Stepper {
             }
             // The block: to the next re-estimate, while a step is a whole
             // Δt (the time summed step by step, as the CPU driver sums it).
-            let left = end - state.time;
-            let h = if left < 4.0 * dt {
-                left / (left / dt - 1e-6).ceil().max(1.0)
-            } else {
-                dt
-            };
+            let h = drape_time::step_length(end - state.time, dt);
             let limit = (self.interval - state.step % self.interval)
                 .min(max_steps.map_or(u64::MAX, |m| m - self.steps));
             let (mut count, mut time) = (1u64, state.time + h);

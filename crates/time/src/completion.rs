@@ -155,7 +155,7 @@ pub fn deepest_penetration(
 }
 
 /// The check at the end of a run that reached its end time, `state` at
-/// the end and the tools at `displacements`: a [`RunError::Penetration`]
+/// the end and the tools at `displacements`: a [`RunError::Penetration`](crate::RunError::Penetration)
 /// naming the deepest node, its tool and the setting to change. For an
 /// implicit run, `gap_tolerance` is its setting (the advice depends on it).
 pub fn check_at_end(

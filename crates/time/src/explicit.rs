@@ -77,6 +77,20 @@ impl Default for ExplicitSettings {
     }
 }
 
+/// The step to take with `left` seconds to go at a stable step `dt`: `dt`,
+/// or near the end the time left cut into equal steps no longer than `dt`,
+/// so that the run ends on its end time without a sliver of a last step (a
+/// tiny step turns an ordinary contact increment into a huge force). A
+/// millionth of a step over a whole number is round-off of the summed
+/// steps, not a step more.
+pub fn step_length(left: f64, dt: f64) -> f64 {
+    if left < 4.0 * dt {
+        left / (left / dt - 1e-6).ceil().max(1.0)
+    } else {
+        dt
+    }
+}
+
 /// See [`Explicit::step_inputs`].
 #[derive(Debug, Clone)]
 pub struct StepInputs<'a> {
@@ -719,17 +733,7 @@ impl<'m> Explicit<'m> {
                     state.step
                 )));
             }
-            // The time left is cut into equal steps no longer than Δt, so the
-            // run ends on end_time without a sliver of a last step (a tiny
-            // step turns an ordinary contact increment into a huge force).
-            let left = end - state.time;
-            // (A millionth of a step over a whole number is round-off of the
-            // summed steps, not a step more.)
-            let h = if left < 4.0 * dt {
-                left / (left / dt - 1e-6).ceil().max(1.0)
-            } else {
-                dt
-            };
+            let h = step_length(end - state.time, dt);
             let t_new = state.time + h;
             let dt_avg = 0.5 * (dt_prev + h);
             // Velocities to n+½ and positions to n+1 for free components;

@@ -69,7 +69,7 @@ pub mod tangent;
 
 pub use energy::Energies;
 pub use error::{CutbackReasons, ImplicitTotals, RunError, RunSummary};
-pub use explicit::{Explicit, ExplicitSettings, StepInputs};
+pub use explicit::{Explicit, ExplicitSettings, StepInputs, step_length};
 pub use guard::{Guard, GuardSettings, Instability};
 pub use implicit::{ContactSolver, ELASTIC_SLIP, Implicit, ImplicitSettings, NewtonRecord};
 pub use observer::{

@@ -240,8 +240,9 @@ pub struct CudaStep<'m> {
     /// Each node's running sums (`DRAPE_SUMS`).
     sums: CudaSlice<f64>,
     /// The smallest stable step of each batch: trusses, membranes,
-    /// springs, bending.
+    /// springs, bending; and its host copy (+∞ to reset it).
     batch_steps: CudaSlice<f64>,
+    batch_steps_host: Vec<f64>,
     /// Each step's `StepParams` of a block of up to `GRAPH_STEPS`.
     params: CudaSlice<f64>,
     block: u32,
@@ -386,6 +387,14 @@ impl<'m> CudaStep<'m> {
                 s,
                 flat.trusses.len() + flat.quads.len() + flat.springs.len() + flat.bending.len(),
             )?,
+            batch_steps_host: vec![
+                f64::INFINITY;
+                (flat.trusses.len()
+                    + flat.quads.len()
+                    + flat.springs.len()
+                    + flat.bending.len())
+                .max(1)
+            ],
             params: zeros(s, PARAMS * GRAPH_STEPS as usize)?,
             block: BLOCK,
             fault: upload(s, &FAULTS)?,
@@ -757,12 +766,12 @@ impl Engine for CudaStep<'_> {
         Ok(())
     }
 
-    fn batch_steps(&mut self) -> Result<BatchSteps, GpuError> {
+    fn batch_steps(&mut self, out: &mut BatchSteps) -> Result<(), GpuError> {
         let n = self.flat.nodes as i64;
         let x = &self.x[self.parity];
         let slots = self.trusses.len() + self.quads.len() + self.springs.len() + self.bending.len();
         self.stream
-            .memcpy_htod(&vec![f64::INFINITY; slots.max(1)], &mut self.batch_steps)
+            .memcpy_htod(&self.batch_steps_host, &mut self.batch_steps)
             .map_err(cuda)?;
         let mut slot = 0;
         for t in &self.trusses {
@@ -833,14 +842,20 @@ impl Engine for CudaStep<'_> {
             unsafe { b.launch(grid(t.count as usize, self.block)) }.map_err(cuda)?;
             slot += 1;
         }
-        let all = self.stream.clone_dtoh(&self.batch_steps).map_err(cuda)?;
+        let mut all = std::mem::take(&mut self.batch_steps_host);
+        self.stream
+            .memcpy_dtoh(&self.batch_steps, &mut all)
+            .map_err(cuda)?;
         let (nt, nq, ns) = (self.trusses.len(), self.quads.len(), self.springs.len());
-        Ok(BatchSteps {
-            trusses: all[..nt].to_vec(),
-            membranes: all[nt..nt + nq].to_vec(),
-            springs: all[nt + nq..nt + nq + ns].to_vec(),
-            bending: all[nt + nq + ns..slots].to_vec(),
-        })
+        out.set(
+            &all[..nt],
+            &all[nt..nt + nq],
+            &all[nt + nq..nt + nq + ns],
+            &all[nt + nq + ns..slots],
+        );
+        all.fill(f64::INFINITY);
+        self.batch_steps_host = all;
+        Ok(())
     }
 
     fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError> {

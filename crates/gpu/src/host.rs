@@ -390,12 +390,12 @@ impl Engine for HostStep<'_> {
         Ok(())
     }
 
-    fn batch_steps(&mut self) -> Result<BatchSteps, GpuError> {
+    fn batch_steps(&mut self, out: &mut BatchSteps) -> Result<(), GpuError> {
         let f = &self.flat;
         let (x, n) = (self.x.as_ptr(), f.nodes as i64);
         // SAFETY (every call): the arrays were built together in
         // `Flat::new` with the lengths the loops read.
-        Ok(BatchSteps {
+        let steps = BatchSteps {
             trusses: f
                 .trusses
                 .iter()
@@ -463,7 +463,10 @@ impl Engine for HostStep<'_> {
                     )
                 })
                 .collect(),
-        })
+        };
+        // (The CPU build is a check, not a fast path: it allocates.)
+        *out = steps;
+        Ok(())
     }
 
     fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError> {

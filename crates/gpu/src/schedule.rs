@@ -105,6 +105,22 @@ pub struct BatchSteps {
     pub bending: Vec<f64>,
 }
 
+impl BatchSteps {
+    /// Replaces the values (no allocation once the lists have their
+    /// lengths).
+    pub fn set(&mut self, trusses: &[f64], membranes: &[f64], springs: &[f64], bending: &[f64]) {
+        for (to, from) in [
+            (&mut self.trusses, trusses),
+            (&mut self.membranes, membranes),
+            (&mut self.springs, springs),
+            (&mut self.bending, bending),
+        ] {
+            to.clear();
+            to.extend_from_slice(from);
+        }
+    }
+}
+
 /// `Explicit::stable_time_step` from the batches' smallest steps: the kinds
 /// combined as 1/Δt² = Σ 1/Δt_kind², times the safety factor (a fixed
 /// step where the settings give one).
@@ -140,8 +156,9 @@ pub trait Engine {
     /// Writes positions, velocities and histories into `state` (its time
     /// and step are the caller's).
     fn store(&mut self, state: &mut State) -> Result<(), GpuError>;
-    /// The smallest stable step of each batch at the current positions.
-    fn batch_steps(&mut self) -> Result<BatchSteps, GpuError>;
+    /// The smallest stable step of each batch at the current positions,
+    /// into `out`.
+    fn batch_steps(&mut self, out: &mut BatchSteps) -> Result<(), GpuError>;
     /// The state into `state` (as [`Self::store`]) and the rest of what an
     /// energy check and a frame read.
     fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError>;
@@ -192,6 +209,8 @@ pub(crate) struct Stepper {
     pub estimate_seconds: f64,
     /// Each truss batch's dashpot factor on its step.
     truss_factor: Vec<f64>,
+    /// The batches' steps at the last re-estimate.
+    batch: BatchSteps,
     block: Vec<StepParams>,
 }
 
@@ -236,6 +255,7 @@ impl Stepper {
             dt_max: 0.0,
             estimate_seconds: 0.0,
             truss_factor: explicit.step_inputs().truss_factor,
+            batch: BatchSteps::default(),
             block: Vec::with_capacity(interval.min(4096) as usize),
         })
     }
@@ -263,7 +283,8 @@ impl Stepper {
         {
             if state.step > 0 && state.step % self.interval == 0 {
                 let started = Instant::now();
-                self.dt = stable_step(&engine.batch_steps()?, &self.truss_factor, explicit);
+                engine.batch_steps(&mut self.batch)?;
+                self.dt = stable_step(&self.batch, &self.truss_factor, explicit);
                 self.estimate_seconds += started.elapsed().as_secs_f64();
             }
             let dt = self.dt;

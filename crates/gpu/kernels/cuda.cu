@@ -80,25 +80,6 @@ extern "C" __global__ void gather(long n, const long *ptr, const unsigned *node_
     drape_gather(i, ptr, node_slots, slots, slot_count, f_int, n);
 }
 
-extern "C" __global__ void node_step(long n, const double *params, const double *x,
-                                     const double *v, const double *f_ext, const double *f_int,
-                                     const double *mass, const unsigned char *fixed,
-                                     const double *x0, int has_tool, const double *tool,
-                                     double *x_new, double *v_new, double *contact_force,
-                                     unsigned char *status, double *sums, int *fault)
-{
-    long i = DRAPE_INDEX;
-    if (i >= n) {
-        return;
-    }
-    int kind = drape_node_step(i, n, params, x, v, f_ext, f_int, mass, fixed, x0,
-                               has_tool ? tool : 0, x_new, v_new, contact_force, status, sums);
-    if (kind) {
-        /* The lowest node, with its kind in the low two bits. */
-        atomicMin(fault + 2, (int)(4 * i + kind));
-    }
-}
-
 /* The stable steps: each element's into the smallest of its batch, an
  * integer minimum on the bits of a positive double (NaN, above +inf, is
  * passed over as f64::min does). */
@@ -208,5 +189,30 @@ extern "C" __global__ void quad_point_forces(long count, const DrapeResinStep *r
             slots[3 * s + 1] = share[a][1];
             slots[3 * s + 2] = share[a][2];
         }
+    }
+}
+
+/* Node i's gather of the last step's element forces, then its next step
+ * (update, contact, works): one kernel where two would each wait for the
+ * whole grid, as node i's step reads node i's force alone. */
+extern "C" __global__ void gather_node_step(long n, const long *ptr, const unsigned *node_slots,
+                                            const double *slots, long slot_count,
+                                            const double *params, const double *x,
+                                            const double *v, const double *f_ext,
+                                            double *f_int, const double *mass,
+                                            const unsigned char *fixed, const double *x0,
+                                            int has_tool, const double *tool, double *x_new,
+                                            double *v_new, double *contact_force,
+                                            unsigned char *status, double *sums, int *fault)
+{
+    long i = DRAPE_INDEX;
+    if (i >= n) {
+        return;
+    }
+    drape_gather(i, ptr, node_slots, slots, slot_count, f_int, n);
+    int kind = drape_node_step(i, n, params, x, v, f_ext, f_int, mass, fixed, x0,
+                               has_tool ? tool : 0, x_new, v_new, contact_force, status, sums);
+    if (kind) {
+        atomicMin(fault + 2, (int)(4 * i + kind));
     }
 }

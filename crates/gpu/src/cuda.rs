@@ -199,7 +199,7 @@ struct Kernels {
     triangle: CudaFunction,
     spring: CudaFunction,
     gather: CudaFunction,
-    node_step: CudaFunction,
+    gather_node_step: CudaFunction,
     bending: CudaFunction,
     truss_steps: CudaFunction,
     membrane_steps: CudaFunction,
@@ -232,8 +232,9 @@ pub struct CudaStep<'m> {
     /// The tool (`DRAPE_TOOL_*`), when `has_tool`.
     tool: CudaSlice<f64>,
     has_tool: i32,
-    /// Streams the element kinds run on beside the main one, forked from
-    /// it after the node step and joined before the gather.
+    /// Streams the element kinds run on beside the main one (each truss
+    /// batch, the springs, bending), forked from it after the node step
+    /// and joined before the next.
     side: Vec<Arc<CudaStream>>,
     contact_force: CudaSlice<f64>,
     status: CudaSlice<u8>,
@@ -281,7 +282,7 @@ impl<'m> CudaStep<'m> {
             triangle: load("triangle_forces")?,
             spring: load("spring_forces")?,
             gather: load("gather")?,
-            node_step: load("node_step")?,
+            gather_node_step: load("gather_node_step")?,
             bending: load("bending_forces")?,
             truss_steps: load("truss_steps")?,
             membrane_steps: load("membrane_steps")?,
@@ -377,7 +378,8 @@ impl<'m> CudaStep<'m> {
             slots: zeros(s, 3 * flat.slot_count)?,
             tool: upload(s, &flat.tool)?,
             has_tool: i32::from(!flat.tool.is_empty()),
-            side: (0..3)
+            // One per truss batch, one for the springs, one for bending.
+            side: (0..flat.trusses.len() + 2)
                 .map(|_| ctx.new_stream().map_err(cuda))
                 .collect::<Result<_, _>>()?,
             contact_force: zeros(s, 3 * n)?,
@@ -434,7 +436,7 @@ impl<'m> CudaStep<'m> {
             &k.triangle,
             &k.spring,
             &k.gather,
-            &k.node_step,
+            &k.gather_node_step,
             &k.bending,
         ] {
             most = most.min(f.max_threads_per_block().map_err(cuda)? as u32);
@@ -447,9 +449,10 @@ impl<'m> CudaStep<'m> {
 
     /// The GPU time of each kind of kernel over `count` steps with
     /// `params`, launched one after another on one stream (no graph, no
-    /// kinds side by side): µs per step of [node step (update, contact,
-    /// works), trusses, membranes, springs, bending, gather]. Small models
-    /// include the launches' gaps.
+    /// kinds side by side): µs per step of [gather and node step (update,
+    /// contact, works), trusses, membranes, springs, bending, a separate
+    /// gather (none: the step's is fused)]. Small models include the
+    /// launches' gaps.
     pub fn profile(&mut self, count: u64, params: StepParams) -> Result<[f64; 6], GpuError> {
         self.set_resin(params.h)?;
         let mut values = [0.0; PARAMS * GRAPH_STEPS as usize];
@@ -486,7 +489,7 @@ impl<'m> CudaStep<'m> {
     /// side by side (trusses, springs and bending on streams of their own,
     /// the quads on the main one), each into its own slots, joined before
     /// the gather.
-    fn launch_forces(&mut self, at: usize, commit: bool) -> Result<(), GpuError> {
+    fn launch_forces(&mut self, at: usize, commit: bool, gather: bool) -> Result<(), GpuError> {
         let n = self.flat.nodes as i64;
         let sc = self.flat.slot_count as i64;
         let commit = i32::from(commit);
@@ -499,8 +502,9 @@ impl<'m> CudaStep<'m> {
                 side.join(&self.stream).map_err(cuda)?;
             }
         }
-        for t in &self.trusses {
-            let mut b = lane(0).launch_builder(&self.kernels.truss);
+        let nt = self.trusses.len();
+        for (k, t) in self.trusses.iter().enumerate() {
+            let mut b = lane(k).launch_builder(&self.kernels.truss);
             b.arg(&t.count)
                 .arg(&t.law[0])
                 .arg(&t.law[1])
@@ -550,7 +554,7 @@ impl<'m> CudaStep<'m> {
         }
         mark(&mut self.timing, &self.stream, 2)?;
         for p in &self.springs {
-            let mut b = lane(1).launch_builder(&self.kernels.spring);
+            let mut b = lane(nt).launch_builder(&self.kernels.spring);
             b.arg(&p.count)
                 .arg(&p.nodes)
                 .arg(&p.anchor)
@@ -569,7 +573,7 @@ impl<'m> CudaStep<'m> {
         }
         mark(&mut self.timing, &self.stream, 3)?;
         for t in &self.bending {
-            let mut b = lane(2).launch_builder(&self.kernels.bending);
+            let mut b = lane(nt + 1).launch_builder(&self.kernels.bending);
             b.arg(&t.count)
                 .arg(&t.nodes)
                 .arg(&t.stiffness)
@@ -588,6 +592,18 @@ impl<'m> CudaStep<'m> {
                 self.stream.join(side).map_err(cuda)?;
             }
         }
+        if gather {
+            self.launch_gather()?;
+        }
+        Ok(())
+    }
+
+    /// Each node's internal force from the element slots (the step's
+    /// fused kernel gathers before its update; this one is for the start
+    /// and for the host to read the forces).
+    fn launch_gather(&mut self) -> Result<(), GpuError> {
+        let n = self.flat.nodes as i64;
+        let sc = self.flat.slot_count as i64;
         let mut b = self.stream.launch_builder(&self.kernels.gather);
         b.arg(&n)
             .arg(&self.ptr)
@@ -614,13 +630,18 @@ impl<'m> CudaStep<'m> {
             (&*x1, x0, &*v1, v0)
         };
         let params = self.params.slice(PARAMS * k..PARAMS * (k + 1));
-        let mut b = self.stream.launch_builder(&self.kernels.node_step);
+        let sc = self.flat.slot_count as i64;
+        let mut b = self.stream.launch_builder(&self.kernels.gather_node_step);
         b.arg(&n)
+            .arg(&self.ptr)
+            .arg(&self.node_slots)
+            .arg(&self.slots)
+            .arg(&sc)
             .arg(&params)
             .arg(x)
             .arg(v)
             .arg(&self.f_ext)
-            .arg(&self.f_int)
+            .arg(&mut self.f_int)
             .arg(&self.mass)
             .arg(&self.fixed)
             .arg(&self.x0)
@@ -632,10 +653,10 @@ impl<'m> CudaStep<'m> {
             .arg(&mut self.status)
             .arg(&mut self.sums)
             .arg(&mut self.fault);
-        // SAFETY: the arguments match `node_step` in cuda.cu.
+        // SAFETY: the arguments match `gather_node_step` in cuda.cu.
         unsafe { b.launch(grid(n as usize, self.block)) }.map_err(cuda)?;
         mark(&mut self.timing, &self.stream, 0)?;
-        self.launch_forces(to, true)
+        self.launch_forces(to, true, false)
     }
 
     /// The fault words, reset; an element error if one is set.
@@ -859,6 +880,8 @@ impl Engine for CudaStep<'_> {
     }
 
     fn snapshot(&mut self, state: &mut State) -> Result<Snapshot, GpuError> {
+        // The last step's elements are not gathered until the next step.
+        self.launch_gather()?;
         self.store(state)?;
         let n = self.flat.nodes;
         let get =
@@ -879,7 +902,7 @@ impl Engine for CudaStep<'_> {
 
     fn start_forces(&mut self, dt: f64) -> Result<(), GpuError> {
         self.set_resin(dt)?;
-        self.launch_forces(self.parity, false)?;
+        self.launch_forces(self.parity, false, true)?;
         self.check_faults(0)
     }
 

@@ -20,7 +20,7 @@ fn the_cuda_kernels_compile_with_nvrtc() {
                     "spring_forces",
                     "bending_forces",
                     "gather",
-                    "node_step",
+                    "gather_node_step",
                 ] {
                     assert!(
                         text.contains(&format!(".entry {kernel}")),

@@ -132,6 +132,19 @@ DRAPE_FN int drape_truss_force(long e, DrapeFibreLaw law, const unsigned *nodes,
     return 0;
 }
 
+/* Triplet e's edges a = x_j - x_i and b = x_k - x_j and their lengths. */
+DRAPE_FN void drape_bending_edges(long e, const unsigned *nodes, const double *x, double a[3],
+                                  double b[3], double *la, double *lb)
+{
+    long i = nodes[3 * e], j = nodes[3 * e + 1], k = nodes[3 * e + 2];
+    for (int c = 0; c < 3; c++) {
+        a[c] = x[3 * j + c] - x[3 * i + c];
+        b[c] = x[3 * k + c] - x[3 * j + c];
+    }
+    *la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    *lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+}
+
 /* Yarn bending triplet e, nodes (i, j, k) with j in the middle
  * (BendingBatch::element_force): E = K (p - d)/(p + d) with a = x_j - x_i,
  * b = x_k - x_j, p = |a||b|, d = a.b; its three forces into slots
@@ -141,14 +154,8 @@ DRAPE_FN int drape_bending_force(long e, const unsigned *nodes, const double *st
                                  const double *x, long n, double *slots, long slot_count,
                                  long first)
 {
-    long i = nodes[3 * e], j = nodes[3 * e + 1], k = nodes[3 * e + 2];
-    double a[3], b[3];
-    for (int c = 0; c < 3; c++) {
-        a[c] = x[3 * j + c] - x[3 * i + c];
-        b[c] = x[3 * k + c] - x[3 * j + c];
-    }
-    double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    double a[3], b[3], la, lb;
+    drape_bending_edges(e, nodes, x, a, b, &la, &lb);
     if (!(la - la == 0.0 && lb - lb == 0.0 && la > 0.0 && lb > 0.0)) {
         return 1;
     }
@@ -854,14 +861,8 @@ DRAPE_FN double drape_truss_step(long e, double wave_modulus, const unsigned *no
 DRAPE_FN double drape_bending_step(long e, const unsigned *nodes, const double *stiffness,
                                    const double *share, const double *x, long n)
 {
-    long i = nodes[3 * e], j = nodes[3 * e + 1], k = nodes[3 * e + 2];
-    double a[3], b[3];
-    for (int c = 0; c < 3; c++) {
-        a[c] = x[3 * j + c] - x[3 * i + c];
-        b[c] = x[3 * k + c] - x[3 * j + c];
-    }
-    double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    double a[3], b[3], la, lb;
+    drape_bending_edges(e, nodes, x, a, b, &la, &lb);
     double ga = 1.0 / la, gb = 1.0 / lb;
     double sum = ga * ga / share[3 * e] + (ga + gb) * (ga + gb) / share[3 * e + 1] +
                  gb * gb / share[3 * e + 2];

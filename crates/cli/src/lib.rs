@@ -680,20 +680,31 @@ pub fn run_in(
             if let Some(d) = driver {
                 explicit.resume_from(d);
             }
+            // On the GPU, the contact at the end is the GPU run's (the
+            // CPU driver's stays at its start).
+            let mut gpu_contact = None;
             let outcome = if scene.spec.simulation.device == Device::Gpu {
                 // The CPU driver's set-up (masses, dashpots, contact
                 // settings), the steps on the GPU.
                 match drape_gpu::CudaStep::new(&explicit) {
                     Ok(mut engine) => {
                         gpu_name = Some(engine.device.clone());
-                        drape_gpu::run(&explicit, &mut engine, &mut state, &mut recorder)
+                        drape_gpu::run(&explicit, &mut engine, &mut state, &mut recorder).map(
+                            |(summary, contact)| {
+                                gpu_contact = Some(contact);
+                                summary
+                            },
+                        )
                     }
                     Err(e) => Err(drape_time::RunError::Setup(e.to_string())),
                 }
             } else {
                 explicit.run(&mut state, &mut recorder)
             };
-            let contact = explicit.contact().map(drape_contact::ExplicitContact::view);
+            let contact = match &gpu_contact {
+                Some(c) => c.view(&model.tools),
+                None => explicit.contact().map(drape_contact::ExplicitContact::view),
+            };
             // A failed run's state is its last frame's; the tools are there too.
             end_tools = if outcome.is_err() {
                 recorder.frame_tools.clone()

@@ -21,8 +21,11 @@ use nalgebra::Vector3;
 use crate::schedule::{Snapshot, Stepper};
 use crate::{Engine, GpuError};
 
-/// What the last snapshot's contact looks like, as a frame shows it.
-struct ContactRecord {
+/// The contact at the last state the host read (the tools' state, each
+/// node's force and status), as a frame shows it: what a caller writes a
+/// run's last frame and picture with.
+#[derive(Debug, Clone)]
+pub struct RunContact {
     tool_state: Vec<ToolState>,
     force: Vec<Vector3<f64>>,
     status: Vec<ContactStatus>,
@@ -31,9 +34,9 @@ struct ContactRecord {
     friction_dissipation: f64,
 }
 
-impl ContactRecord {
-    /// The record as a frame takes it, for a model with a tool.
-    fn view<'a>(&'a self, tools: &'a [drape_contact::Tool]) -> Option<ContactView<'a>> {
+impl RunContact {
+    /// The contact as a frame takes it (None for a model without tools).
+    pub fn view<'a>(&'a self, tools: &'a [drape_contact::Tool]) -> Option<ContactView<'a>> {
         (!tools.is_empty()).then_some(ContactView {
             tools,
             tool_state: &self.tool_state,
@@ -81,14 +84,15 @@ fn totals(s: &Snapshot, n: usize) -> [f64; 8] {
 
 /// Runs `explicit`'s model from `state` (at its start) to its end time with
 /// the steps on `engine`, handing `observer` the frames and progress the
-/// CPU driver would. On an error `state` holds the last frame that passed
-/// every check (or the start).
+/// CPU driver would; returns the summary and the contact at the end. On an
+/// error `state` holds the last frame that passed every check (or the
+/// start).
 pub fn run(
     explicit: &Explicit<'_>,
     engine: &mut dyn Engine,
     state: &mut State,
     observer: &mut dyn Observer,
-) -> Result<RunSummary, RunError> {
+) -> Result<(RunSummary, RunContact), RunError> {
     let started = Instant::now();
     let model = explicit.model();
     let settings = explicit.settings();
@@ -124,7 +128,7 @@ pub fn run(
         .map(|i| 0.5 * mass[i] * state.v[i].norm_squared())
         .sum();
     guard.begin(state);
-    let mut record = ContactRecord {
+    let mut record = RunContact {
         tool_state: explicit
             .contact()
             .map_or_else(Vec::new, |c| c.tool_state.clone()),
@@ -271,7 +275,7 @@ pub fn run(
         let u: Vec<f64> = record.tool_state.iter().map(|t| t.displacement).collect();
         drape_time::completion::check_at_end(model, state, &u, None)?;
     }
-    Ok(RunSummary {
+    let summary = RunSummary {
         steps: stepper.steps,
         dt_range: (stepper.dt_min, stepper.dt_max),
         added_mass: explicit.added_mass(),
@@ -282,7 +286,8 @@ pub fn run(
         threads: 1,
         warnings: explicit.warnings().to_vec(),
         implicit: None,
-    })
+    };
+    Ok((summary, record))
 }
 
 /// What [`energies_at`] reads besides the snapshot.

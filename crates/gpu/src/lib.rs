@@ -61,7 +61,7 @@ impl GpuError {
 }
 
 pub use cuda::{CudaStep, compile_kernels, kernel_source, probe};
-pub use driver::run;
+pub use driver::{RunContact, run};
 pub use host::HostStep;
 pub use layout::unsupported;
 pub use schedule::{BatchSteps, Engine, Snapshot, StepParams, StepRun, run_steps};

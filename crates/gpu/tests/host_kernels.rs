@@ -220,15 +220,26 @@ fn a_whole_run_through_the_gpu_driver_gives_the_cpu_drivers_frames_and_energies(
     let model = &s.model;
     let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
     let (mut cpu_frames, mut gpu_frames) = (Frames::default(), Frames::default());
-    let mut explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
-    let cpu_run = explicit
+    let mut cpu_explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
+    let cpu_run = cpu_explicit
         .run(&mut cpu, &mut cpu_frames)
         .expect("the CPU run");
     let explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
     let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
-    let gpu_run = drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("run");
+    let (gpu_run, gpu_contact) =
+        drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("run");
     assert_eq!(cpu_run.steps, gpu_run.steps);
     assert_same(&cpu, &gpu);
+    // The contact at the end, as the run's last frame and picture take it:
+    // the tool where the CPU driver's is, the nodes' forces and statuses.
+    let (c, g) = (
+        cpu_explicit.contact().expect("a tool").view(),
+        gpu_contact.view(&model.tools).expect("a tool"),
+    );
+    assert_eq!(c.tool_state[0].displacement, g.tool_state[0].displacement);
+    assert!(g.tool_state[0].displacement > 10.0);
+    assert_eq!(c.force, g.force);
+    assert_eq!(c.status, g.status);
     assert_eq!(cpu_frames.times, gpu_frames.times);
     for (c, g) in cpu_frames.energies.iter().zip(&gpu_frames.energies) {
         // The same states; the works summed node by node over the steps

@@ -14,7 +14,8 @@ use drape_elements::{ElementError, KinematicsError};
 use drape_model::State;
 use drape_time::guard::{Guard, MIN_ENERGY_CHECKS};
 use drape_time::{
-    Control, Energies, Explicit, Frame, Observer, Progress, RunError, RunSummary, strain_energy,
+    Control, Energies, Explicit, Frame, NodeAtStep, Observer, Progress, RunError, RunSummary,
+    node_energy_terms, strain_energy,
 };
 use nalgebra::Vector3;
 
@@ -109,17 +110,7 @@ pub fn run(
     let n = model.node_count();
     let end = settings.end_time;
     let mass = explicit.mass();
-    let constrained: Vec<[bool; 3]> = {
-        let mut c = vec![[false; 3]; n];
-        for bc in &model.boundary {
-            for &i in &bc.nodes {
-                for (held, &by) in c[i as usize].iter_mut().zip(&bc.components) {
-                    *held |= by;
-                }
-            }
-        }
-        c
-    };
+    let constrained = drape_time::constrained_components(model);
     let movable: Vec<bool> = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
     let weight: Vec<Vector3<f64>> = model.mass.iter().map(|m| model.gravity * *m).collect();
     let mut guard = Guard::new(model, settings.guard.clone(), end);
@@ -302,39 +293,30 @@ struct EnergyInputs<'a> {
     h: f64,
 }
 
-/// `Explicit::energies_at`: the works summed to n+½ plus the half
-/// increment (x_{n+1} − x_n)/2 at the forces of n+1, the full-step kinetic
-/// energy with the part of the last contact force the node's other forces
-/// press it against.
+/// `Explicit::energies_at`: the works summed to n+½ plus each node's half
+/// increment at the forces of n+1 ([`node_energy_terms`], the CPU
+/// driver's own), summed node by node.
 fn energies_at(inp: &EnergyInputs<'_>, state: &State, s: &Snapshot, sums: [f64; 8]) -> Energies {
     let n = state.x.len();
-    let (mut kinetic, mut w_int, mut w_ext, mut w_damp, mut w_bc, mut w_c) =
-        (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let mut sum = [0.0; 6];
     for i in 0..n {
-        let half = state.v[i] * (0.5 * inp.h);
-        let (fi, fe, m) = (s.f_int[i], inp.weight[i], inp.mass[i]);
-        let f = s.contact_force[i];
-        let size = f.norm();
-        let contact = if size == 0.0 {
-            f
-        } else {
-            let push = -(fe - fi).dot(&f) / size;
-            f * (push.clamp(0.0, size) / size)
-        };
-        let mut v = state.v[i];
-        for k in 0..3 {
-            if inp.constrained[i][k] {
-                w_bc += (fi[k] - fe[k]) * half[k];
-            } else {
-                v[k] += 0.5 * inp.h * (fe[k] - fi[k] + contact[k]) / m;
-            }
+        let terms = node_energy_terms(
+            &NodeAtStep {
+                v: &state.v[i],
+                f_int: &s.f_int[i],
+                f_ext: &inp.weight[i],
+                last_contact: &s.contact_force[i],
+                mass: inp.mass[i],
+                constrained: inp.constrained[i],
+            },
+            inp.damping,
+            inp.h,
+        );
+        for (total, t) in sum.iter_mut().zip(terms) {
+            *total += t;
         }
-        kinetic += 0.5 * m * v.norm_squared();
-        w_int += fi.dot(&half);
-        w_ext += fe.dot(&half);
-        w_damp += inp.damping * m * state.v[i].dot(&half);
-        w_c += contact.dot(&half);
     }
+    let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = sum;
     let mut e = Energies {
         kinetic,
         strain: inp.model_strain,

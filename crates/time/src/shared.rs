@@ -22,6 +22,12 @@ pub(crate) struct Constraint {
     pub bc: u32,
 }
 
+/// Per node, which of its components the model's boundary conditions
+/// prescribe (for a driver stepped elsewhere, e.g. drape-gpu).
+pub fn constrained_components(model: &Model) -> Vec<[bool; 3]> {
+    Constraints::new(model).constrained
+}
+
 /// The constrained components of a model: where conditions overlap, the
 /// later one wins for the components it names.
 #[derive(Debug, Clone)]

@@ -158,6 +158,8 @@ fn main() {
         ("hemisphere-0-90", shipped("hemisphere-0-90"), 1000),
         ("hemisphere-45", shipped("hemisphere-45"), 1000),
         ("hemisphere-conform", shipped("hemisphere-conform"), 1000),
+        ("picture-frame", shipped("picture-frame"), 1000),
+        ("bias-extension", shipped("bias-extension"), 1000),
         (
             "glass sheet, clamped edge",
             Scene::parse(SHEET, Path::new("sheet.toml"), &[]).expect("scene"),

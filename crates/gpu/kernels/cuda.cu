@@ -201,6 +201,7 @@ extern "C" __global__ void gather_node_step(long n, const long *ptr, const unsig
                                             const double *v, const double *f_ext,
                                             double *f_int, const double *mass,
                                             const unsigned char *fixed, const double *x0,
+                                            const int *moving, const double *held,
                                             int has_tool, const double *tool, double *x_new,
                                             double *v_new, double *contact_force,
                                             unsigned char *status, double *sums, int *fault)
@@ -210,7 +211,7 @@ extern "C" __global__ void gather_node_step(long n, const long *ptr, const unsig
         return;
     }
     drape_gather(i, ptr, node_slots, slots, slot_count, f_int, n);
-    int kind = drape_node_step(i, n, params, x, v, f_ext, f_int, mass, fixed, x0,
+    int kind = drape_node_step(i, n, params, x, v, f_ext, f_int, mass, fixed, x0, moving, held,
                                has_tool ? tool : 0, x_new, v_new, contact_force, status, sums);
     if (kind) {
         atomicMin(fault + 2, (int)(4 * i + kind));

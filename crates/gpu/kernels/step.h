@@ -452,14 +452,33 @@ DRAPE_FN void drape_gather(long i, const long *ptr, const unsigned *node_slots,
     f_int[3 * i + 2] = s2;
 }
 
+/* Where a constrained component k of node i (bit k of fixed[i]) is at
+ * the end of the step: at its reference coordinate, or, where a boundary
+ * motion moves it (bit 3 + k), at the step's prescribed coordinate
+ * held[moving[i] + the node's moving components before k]
+ * (drape_time::PrescribedMotions, in node and component order). */
+DRAPE_FN double drape_held(long i, int k, const unsigned char *fixed, const double *x0,
+                           const int *moving, const double *held)
+{
+    unsigned f = fixed[i];
+    if (f & (8u << k)) {
+        long j = moving[i];
+        for (int c = 0; c < k; c++) {
+            j += (f >> (3 + c)) & 1u;
+        }
+        return held[j];
+    }
+    return x0[3 * i + k] + 0.0;
+}
+
 /* Node i's central-difference update (Explicit's step): velocity to n+1/2
  * with mass-proportional damping at the mid-step velocity, position to
- * n+1; a fixed component (bit k of fixed[i]) stays at x0. */
+ * n+1; a constrained component where drape_held puts it. */
 DRAPE_FN void drape_update(long i, long n, const double *x, const double *v,
                            const double *f_ext, const double *f_int,
                            const double *mass, const unsigned char *fixed,
-                           const double *x0, double c1, double c2,
-                           double dt_avg, double h, double *x_new,
+                           const double *x0, const int *moving, const double *held,
+                           double c1, double c2, double dt_avg, double h, double *x_new,
                            double *v_new)
 {
     double m = mass[i];
@@ -469,7 +488,7 @@ DRAPE_FN void drape_update(long i, long n, const double *x, const double *v,
         double vn = (v[at] * c1 + a * dt_avg) * c2;
         double xn = x[at] + vn * h;
         if (fixed[i] & (1 << k)) {
-            xn = x0[at] + 0.0;
+            xn = drape_held(i, k, fixed, x0, moving, held);
             vn = (xn - x[at]) / h;
         }
         v_new[at] = vn;
@@ -659,7 +678,8 @@ DRAPE_FN double drape_tool_project(const double *tool, double u, double x0, doub
  * jumped more than the step explains (ContactFault: nothing corrected). */
 DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *params,
                            const double *mass, const unsigned char *fixed,
-                           const double *x0, const double *x_old, double *x,
+                           const double *x0, const int *moving, const double *held,
+                           const double *x_old, double *x,
                            double *v, double *contact_force, unsigned char *status,
                            double *sums)
 {
@@ -668,7 +688,7 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
     contact_force[3 * i + 2] = 0.0;
     status[i] = DRAPE_OPEN;
     sums[7 * n + i] = 0.0;
-    if (fixed[i] == 7) {
+    if ((fixed[i] & 7u) == 7u) {
         return 0;
     }
     double h = params[3], u = params[4], u_before = params[5], v_tool = params[6];
@@ -773,7 +793,7 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
         long at = 3 * i + k;
         /* A partly constrained node keeps its prescribed components. */
         if (fixed[i] & (1 << k)) {
-            xs[k] = x0[at] + 0.0;
+            xs[k] = drape_held(i, k, fixed, x0, moving, held);
             vs[k] = (xs[k] - x_old[at]) / h;
         }
         x[at] = xs[k];
@@ -819,19 +839,21 @@ DRAPE_FN void drape_works(long i, long n, const double *params, const double *ma
 }
 
 /* Node i's whole step: the update, the contact when there is a tool
- * (`tool` not null), the works. Returns the contact's fault (0: none). */
+ * (`tool` not null), the works. `held`: the step's prescribed coordinates
+ * (drape_held). Returns the contact's fault (0: none). */
 DRAPE_FN int drape_node_step(long i, long n, const double *params, const double *x,
                              const double *v, const double *f_ext, const double *f_int,
                              const double *mass, const unsigned char *fixed, const double *x0,
-                             const double *tool, double *x_new, double *v_new,
-                             double *contact_force, unsigned char *status, double *sums)
+                             const int *moving, const double *held, const double *tool,
+                             double *x_new, double *v_new, double *contact_force,
+                             unsigned char *status, double *sums)
 {
-    drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, params[0], params[1], params[2],
-                 params[3], x_new, v_new);
+    drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, moving, held, params[0], params[1],
+                 params[2], params[3], x_new, v_new);
     int fault = 0;
     if (tool) {
-        fault = drape_contact(i, n, tool, params, mass, fixed, x0, x, x_new, v_new,
-                              contact_force, status, sums);
+        fault = drape_contact(i, n, tool, params, mass, fixed, x0, moving, held, x, x_new,
+                              v_new, contact_force, status, sums);
     }
     if (fault == 0) {
         drape_works(i, n, params, mass, fixed, x, v, x_new, v_new, f_int, f_ext,

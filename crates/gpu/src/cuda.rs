@@ -221,6 +221,9 @@ pub struct CudaStep<'m> {
     node_slots: CudaSlice<u32>,
     mass: CudaSlice<f64>,
     fixed: CudaSlice<u8>,
+    /// step.h's `drape_held`: per node, its first moving component's
+    /// index in a step's prescribed coordinates.
+    moving: CudaSlice<i32>,
     x0: CudaSlice<f64>,
     f_ext: CudaSlice<f64>,
     /// Positions and velocities: [0] current, [1] the other buffer
@@ -246,6 +249,9 @@ pub struct CudaStep<'m> {
     batch_steps_host: Vec<f64>,
     /// Each step's `StepParams` of a block of up to `GRAPH_STEPS`.
     params: CudaSlice<f64>,
+    /// ... and its prescribed coordinates (`Engine::steps`' `held`; one
+    /// unread value for a model without moving components).
+    held: CudaSlice<f64>,
     block: u32,
     fault: CudaSlice<i32>,
     /// Whether the current state is in buffer 1.
@@ -370,6 +376,7 @@ impl<'m> CudaStep<'m> {
             node_slots: upload(s, &flat.node_slots)?,
             mass: upload(s, &flat.mass)?,
             fixed: upload(s, &flat.fixed)?,
+            moving: upload(s, &flat.moving)?,
             x0: upload(s, &flat.x0)?,
             f_ext: upload(s, &flat.f_ext)?,
             x: [zeros(s, 3 * n)?, zeros(s, 3 * n)?],
@@ -398,6 +405,7 @@ impl<'m> CudaStep<'m> {
                 .max(1)
             ],
             params: zeros(s, PARAMS * GRAPH_STEPS as usize)?,
+            held: zeros(s, (flat.prescribed.len() * GRAPH_STEPS as usize).max(1))?,
             block: BLOCK,
             fault: upload(s, &FAULTS)?,
             parity: 0,
@@ -455,13 +463,8 @@ impl<'m> CudaStep<'m> {
     /// launches' gaps.
     pub fn profile(&mut self, count: u64, params: StepParams) -> Result<[f64; 6], GpuError> {
         self.set_resin(params.h)?;
-        let mut values = [0.0; PARAMS * GRAPH_STEPS as usize];
-        for p in values.chunks_exact_mut(PARAMS) {
-            p.copy_from_slice(&params.values());
-        }
-        self.stream
-            .memcpy_htod(&values, &mut self.params)
-            .map_err(cuda)?;
+        let held = self.held_at_rest(1);
+        self.write_block(&[params], &held)?;
         self.timing = Some(Vec::with_capacity(7 * count as usize + 1));
         mark(&mut self.timing, &self.stream, 0)?;
         let mut result = Ok(());
@@ -630,6 +633,8 @@ impl<'m> CudaStep<'m> {
             (&*x1, x0, &*v1, v0)
         };
         let params = self.params.slice(PARAMS * k..PARAMS * (k + 1));
+        let m = self.flat.prescribed.len();
+        let held = self.held.slice(m * k..m * k + m.max(1));
         let sc = self.flat.slot_count as i64;
         let mut b = self.stream.launch_builder(&self.kernels.gather_node_step);
         b.arg(&n)
@@ -645,6 +650,8 @@ impl<'m> CudaStep<'m> {
             .arg(&self.mass)
             .arg(&self.fixed)
             .arg(&self.x0)
+            .arg(&self.moving)
+            .arg(&held)
             .arg(&self.has_tool)
             .arg(&self.tool)
             .arg(x_new)
@@ -685,35 +692,62 @@ impl<'m> CudaStep<'m> {
         Ok(())
     }
 
-    /// `count` steps with `params` and their resin step, none of them
+    /// `count` steps with `params` and their resin step (the moving
+    /// components held at their reference coordinates), none of them
     /// checked until the end: for timing the step alone. Returns the
     /// seconds the GPU took (the stream synchronised before and after).
     pub fn time_steps(&mut self, count: u64, params: StepParams) -> Result<f64, GpuError> {
         self.set_resin(params.h)?;
         let block = vec![params; count as usize];
+        let held = self.held_at_rest(block.len());
         self.stream.synchronize().map_err(cuda)?;
         let started = std::time::Instant::now();
-        self.run_block(&block)?;
+        self.run_block(&block, &held)?;
         self.stream.synchronize().map_err(cuda)?;
         let seconds = started.elapsed().as_secs_f64();
         self.check_faults(0)?;
         Ok(seconds)
     }
 
-    /// A step of each of `steps`, in chunks of `GRAPH_STEPS`: each chunk's
-    /// params written to the device (in stream order, so after the chunk
-    /// before has run), then the captured graph where the chunk is whole
-    /// and starts at parity 0, single launches otherwise.
-    fn run_block(&mut self, steps: &[StepParams]) -> Result<(), GpuError> {
-        for part in steps.chunks(GRAPH_STEPS as usize) {
+    /// The moving components at their reference coordinates for `steps`
+    /// steps (`held` for timing).
+    fn held_at_rest(&self, steps: usize) -> Vec<f64> {
+        let f = &self.flat;
+        let rest: Vec<f64> = f
+            .prescribed
+            .components()
+            .map(|(i, k)| f.x0[3 * i + k])
+            .collect();
+        rest.repeat(steps)
+    }
+
+    /// Writes a chunk's params and prescribed coordinates to the device (in
+    /// stream order, so after the chunk before has run).
+    fn write_block(&mut self, part: &[StepParams], held: &[f64]) -> Result<(), GpuError> {
+        let mut params = [0.0; PARAMS * GRAPH_STEPS as usize];
+        for (p, s) in params.chunks_exact_mut(PARAMS).zip(part) {
+            p.copy_from_slice(&s.values());
+        }
+        self.stream
+            .memcpy_htod(&params, &mut self.params)
+            .map_err(cuda)?;
+        if !held.is_empty() {
+            let mut to = self.held.slice_mut(0..held.len());
+            self.stream.memcpy_htod(held, &mut to).map_err(cuda)?;
+        }
+        Ok(())
+    }
+
+    /// A step of each of `steps` (with `held`, as `Engine::steps`), in
+    /// chunks of `GRAPH_STEPS`: each chunk written to the device, then the
+    /// captured graph where the chunk is whole and starts at parity 0,
+    /// single launches otherwise.
+    fn run_block(&mut self, steps: &[StepParams], held: &[f64]) -> Result<(), GpuError> {
+        let m = self.flat.prescribed.len();
+        for (c, part) in steps.chunks(GRAPH_STEPS as usize).enumerate() {
             let chunk = part.len();
-            let mut params = [0.0; PARAMS * GRAPH_STEPS as usize];
-            for (p, s) in params.chunks_exact_mut(PARAMS).zip(part) {
-                p.copy_from_slice(&s.values());
-            }
-            self.stream
-                .memcpy_htod(&params, &mut self.params)
-                .map_err(cuda)?;
+            let first = c * GRAPH_STEPS as usize;
+            self.write_block(part, &held[first * m..(first + chunk) * m])?;
             if self.parity == 0 && chunk == GRAPH_STEPS as usize {
                 if self.graph.is_none() {
                     self.capture()?;
@@ -906,10 +940,10 @@ impl Engine for CudaStep<'_> {
         self.check_faults(0)
     }
 
-    fn steps(&mut self, params: &[StepParams], step: u64) -> Result<(), GpuError> {
+    fn steps(&mut self, params: &[StepParams], held: &[f64], step: u64) -> Result<(), GpuError> {
         // Every step of a block has the same h, so one resin step.
         self.set_resin(params[0].h)?;
-        self.run_block(params)?;
+        self.run_block(params, held)?;
         self.check_faults(step)
     }
 }

@@ -73,6 +73,8 @@ unsafe extern "C" {
         mass: *const f64,
         fixed: *const u8,
         x0: *const f64,
+        moving: *const i32,
+        held: *const f64,
         tool: *const f64,
         x_new: *mut f64,
         v_new: *mut f64,
@@ -329,7 +331,7 @@ impl<'m> HostStep<'m> {
         Ok(())
     }
 
-    fn update(&mut self, p: StepParams, step: u64) -> Result<(), GpuError> {
+    fn update(&mut self, p: StepParams, held: &[f64], step: u64) -> Result<(), GpuError> {
         let f = &self.flat;
         let params = p.values();
         let tool = if f.tool.is_empty() {
@@ -337,8 +339,14 @@ impl<'m> HostStep<'m> {
         } else {
             f.tool.as_ptr()
         };
-        // SAFETY: every node array has 3n entries (fixed and mass n, the
-        // sums SUMS·n), the params 10, the tool as step.h reads it.
+        assert_eq!(
+            held.len(),
+            f.prescribed.len(),
+            "a step's prescribed coordinates"
+        );
+        // SAFETY: every node array has 3n entries (fixed, moving and mass
+        // n, the sums SUMS·n), the params 10, the tool as step.h reads it,
+        // `held` one per moving component (`moving` indexes it).
         let fault = unsafe {
             drape_host_node_step(
                 f.nodes as i64,
@@ -350,6 +358,8 @@ impl<'m> HostStep<'m> {
                 f.mass.as_ptr(),
                 f.fixed.as_ptr(),
                 f.x0.as_ptr(),
+                f.moving.as_ptr(),
+                held.as_ptr(),
                 tool,
                 self.x_new.as_mut_ptr(),
                 self.v_new.as_mut_ptr(),
@@ -483,10 +493,11 @@ impl Engine for HostStep<'_> {
         self.forces(dt, false, 0)
     }
 
-    fn steps(&mut self, params: &[StepParams], step: u64) -> Result<(), GpuError> {
+    fn steps(&mut self, params: &[StepParams], held: &[f64], step: u64) -> Result<(), GpuError> {
+        let m = self.flat.prescribed.len();
         for (k, p) in params.iter().enumerate() {
             let at = step + k as u64 + 1;
-            self.update(*p, at)?;
+            self.update(*p, &held[k * m..(k + 1) * m], at)?;
             self.forces(p.h, true, at)?;
         }
         Ok(())

@@ -5,8 +5,8 @@
 use drape_constitutive::ResinLaw;
 use drape_contact::{ContactSettings, ProfileSegment, Surface, Tool};
 use drape_elements::{MembraneBatch, MembraneShape};
-use drape_model::{Model, Motion, State};
-use drape_time::Explicit;
+use drape_model::{Model, State};
+use drape_time::{Explicit, PrescribedMotions};
 use nalgebra::Vector3;
 
 use crate::GpuError;
@@ -47,10 +47,6 @@ pub fn unsupported(model: &Model) -> Vec<String> {
     );
     no(f.loads, "nodal loads ([[loads]])");
     no(f.pressure, "pressure ([[pressure]])");
-    no(
-        f.prescribed_motion,
-        "prescribed motions (a boundary motion other than fixed)",
-    );
     no(model.plies.len() > 1, "a stack of plies ([[plies]])");
     no(
         model
@@ -169,8 +165,14 @@ pub(crate) struct Flat {
     pub ptr: Vec<i64>,
     pub node_slots: Vec<u32>,
     pub mass: Vec<f64>,
-    /// Bit k: component k fixed.
+    /// Bit k: component k constrained; bit 3 + k: moved by a boundary
+    /// motion (step.h's `drape_held`).
     pub fixed: Vec<u8>,
+    /// Per node with a moving component, its first one's index in
+    /// `prescribed` (0 for the others, which never read it).
+    pub moving: Vec<i32>,
+    /// The moving components, whose coordinates each step is handed.
+    pub prescribed: PrescribedMotions,
     pub x0: Vec<f64>,
     pub f_ext: Vec<f64>,
     /// The tool as `kernels/step.h` reads it (`DRAPE_TOOL_*`); empty for a
@@ -391,17 +393,19 @@ impl Flat {
             })
             .collect();
         let (ptr, node_slots) = layout.node_slot_lists();
-        let mut fixed = vec![0u8; n];
-        for bc in &model.boundary {
-            if matches!(bc.motion, Motion::Fixed) {
-                for &i in &bc.nodes {
-                    for k in 0..3 {
-                        if bc.components[k] {
-                            fixed[i as usize] |= 1 << k;
-                        }
-                    }
-                }
+        let mut fixed: Vec<u8> = drape_time::constrained_components(model)
+            .iter()
+            .map(|c| (0..3).filter(|&k| c[k]).fold(0, |bits, k| bits | 1 << k))
+            .collect();
+        // step.h's drape_held: bit 3 + k for a moving component, the node's
+        // first in the step's list of prescribed coordinates.
+        let mut moving = vec![0i32; n];
+        let prescribed = PrescribedMotions::new(model);
+        for (j, (i, k)) in prescribed.components().enumerate() {
+            if fixed[i] >> 3 == 0 {
+                moving[i] = j as i32;
             }
+            fixed[i] |= 8 << k;
         }
         // Weight from the physical mass (drape-time's external forces).
         let weight: Vec<Vector3<f64>> = model.mass.iter().map(|m| model.gravity * *m).collect();
@@ -416,6 +420,8 @@ impl Flat {
             node_slots: node_slots.to_vec(),
             mass: mass.to_vec(),
             fixed,
+            moving,
+            prescribed,
             x0: split(&model.x0),
             f_ext: split(&weight),
             tool: match (model.tools.first(), contact) {

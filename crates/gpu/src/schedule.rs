@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use drape_model::State;
-use drape_time::Explicit;
+use drape_time::{Explicit, PrescribedMotions};
 use nalgebra::Vector3;
 
 use crate::GpuError;
@@ -168,9 +168,11 @@ pub trait Engine {
     fn start_forces(&mut self, dt: f64) -> Result<(), GpuError>;
     /// A step of each of `params` (the same h): each the update, the
     /// contact, then the forces at the new positions with the histories
-    /// advanced. `step` is the state's step count before them, to name a
-    /// failure.
-    fn steps(&mut self, params: &[StepParams], step: u64) -> Result<(), GpuError>;
+    /// advanced. `held`: each step's coordinates of the components a
+    /// boundary motion moves (`drape_time::PrescribedMotions`' order),
+    /// step k's at `[k·m, (k + 1)·m)`. `step` is the state's step count
+    /// before them, to name a failure.
+    fn steps(&mut self, params: &[StepParams], held: &[f64], step: u64) -> Result<(), GpuError>;
 }
 
 /// What [`run_steps`] did.
@@ -212,6 +214,11 @@ pub(crate) struct Stepper {
     /// The batches' steps at the last re-estimate.
     batch: BatchSteps,
     block: Vec<StepParams>,
+    /// The components a boundary motion moves, their coordinates after
+    /// the last step, and the block's (`Engine::steps`' `held`).
+    prescribed: PrescribedMotions,
+    held_now: Vec<f64>,
+    held: Vec<f64>,
 }
 
 impl Stepper {
@@ -237,6 +244,12 @@ impl Stepper {
         let dt = explicit.stable_time_step(&state.x);
         let interval = settings.time_step_interval.max(1);
         let tool = explicit.contact().and_then(|c| c.tool_state.first());
+        let prescribed = PrescribedMotions::new(model);
+        let held_now: Vec<f64> = prescribed
+            .components()
+            .map(|(i, k)| state.x[i][k])
+            .collect();
+        let block = interval.min(4096) as usize;
         Ok(Self {
             end: settings.end_time,
             interval,
@@ -252,7 +265,10 @@ impl Stepper {
             estimate_seconds: 0.0,
             truss_factor: explicit.step_inputs().truss_factor,
             batch: BatchSteps::default(),
-            block: Vec::with_capacity(interval.min(4096) as usize),
+            block: Vec::with_capacity(block),
+            held: Vec::with_capacity(block * held_now.len()),
+            prescribed,
+            held_now,
         })
     }
 
@@ -301,6 +317,7 @@ impl Stepper {
                 count += 1;
             }
             self.block.clear();
+            self.held.clear();
             for k in 0..count {
                 let before = if k == 0 { self.dt_prev } else { h };
                 let mut p = StepParams::new(self.damping, before, h);
@@ -313,9 +330,13 @@ impl Stepper {
                     self.tool_velocity = p.tool_velocity;
                 }
                 self.block.push(p);
+                // As the CPU driver's step: from the coordinate before it.
+                self.prescribed
+                    .advance(explicit.model(), &mut self.held_now, state.time, h);
+                self.held.extend_from_slice(&self.held_now);
                 state.time = t_new;
             }
-            engine.steps(&self.block, state.step)?;
+            engine.steps(&self.block, &self.held, state.step)?;
             state.step += count;
             self.steps += count;
             self.blocks += 1;

@@ -204,6 +204,36 @@ impl drape_time::Observer for Frames {
     }
 }
 
+/// The frames at the same times with the same energies: the same states;
+/// the works summed node by node over the steps instead of over the nodes
+/// at each step, so round-off apart.
+fn assert_same_energies(cpu: &Frames, gpu: &Frames) {
+    assert_eq!(cpu.times, gpu.times);
+    for (c, g) in cpu.energies.iter().zip(&gpu.energies) {
+        let scale = c
+            .external_work
+            .abs()
+            .max(c.boundary_work.abs())
+            .max(c.kinetic)
+            .max(1e-12);
+        for (what, a, b) in [
+            ("kinetic", c.kinetic, g.kinetic),
+            ("strain", c.strain, g.strain),
+            ("internal work", c.internal_work, g.internal_work),
+            ("external work", c.external_work, g.external_work),
+            ("boundary work", c.boundary_work, g.boundary_work),
+            ("contact work", c.contact_work, g.contact_work),
+            ("friction", c.friction_dissipation, g.friction_dissipation),
+            ("balance", c.balance_error, g.balance_error),
+        ] {
+            assert!(
+                (a - b).abs() <= 1e-9 * scale,
+                "{what}: CPU {a:e}, GPU {b:e}"
+            );
+        }
+    }
+}
+
 #[test]
 fn a_whole_run_through_the_gpu_driver_gives_the_cpu_drivers_frames_and_energies() {
     let overrides = [
@@ -240,26 +270,7 @@ fn a_whole_run_through_the_gpu_driver_gives_the_cpu_drivers_frames_and_energies(
     assert!(g.tool_state[0].displacement > 10.0);
     assert_eq!(c.force, g.force);
     assert_eq!(c.status, g.status);
-    assert_eq!(cpu_frames.times, gpu_frames.times);
-    for (c, g) in cpu_frames.energies.iter().zip(&gpu_frames.energies) {
-        // The same states; the works summed node by node over the steps
-        // instead of over the nodes at each step: round-off apart.
-        let scale = c.external_work.abs().max(c.kinetic).max(1e-12);
-        for (what, a, b) in [
-            ("kinetic", c.kinetic, g.kinetic),
-            ("strain", c.strain, g.strain),
-            ("internal work", c.internal_work, g.internal_work),
-            ("external work", c.external_work, g.external_work),
-            ("contact work", c.contact_work, g.contact_work),
-            ("friction", c.friction_dissipation, g.friction_dissipation),
-            ("balance", c.balance_error, g.balance_error),
-        ] {
-            assert!(
-                (a - b).abs() <= 1e-9 * scale,
-                "{what}: CPU {a:e}, GPU {b:e}"
-            );
-        }
-    }
+    assert_same_energies(&cpu_frames, &gpu_frames);
     // The punch carries the blank at the end, and the frame says with
     // what force (summed node by node in both drivers' order).
     let (c, g) = (
@@ -280,4 +291,124 @@ fn the_shipped_conforming_ply_steps_as_on_the_cpu_with_its_pinned_nodes() {
     let (cpu, gpu, touching) = both_counting_contacts(&s, 1500);
     assert_same(&cpu, &gpu);
     assert!(touching > 10, "{touching} nodes on the mould");
+}
+
+/// A shipped scene by its file name, with `overrides`.
+fn shipped(name: &str, overrides: &[(&str, &str)]) -> Scene {
+    let overrides: Vec<(String, String)> = overrides
+        .iter()
+        .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
+        .collect();
+    Scene::from_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenes")
+            .join(name),
+        &overrides,
+    )
+    .expect("the shipped scene")
+}
+
+#[test]
+fn the_shipped_picture_frame_runs_to_its_end_as_on_the_cpu() {
+    // The frame's arms: a trajectory of every edge node, from a closure.
+    let s = shipped("picture-frame.toml", &[]);
+    assert!(unsupported(&s.model).is_empty());
+    let (cpu, gpu) = both(&s, u64::MAX / 2);
+    assert!(cpu.time >= s.settings.end_time * (1.0 - 1e-9), "to its end");
+    // Sheared: the frame's far corner has swung round its pin.
+    let moved = cpu
+        .x
+        .iter()
+        .zip(&s.model.x0)
+        .map(|(x, x0)| (x - x0).norm())
+        .fold(0.0, f64::max);
+    assert!(moved > 10.0, "the nodes moved up to {moved} mm");
+    assert_same(&cpu, &gpu);
+}
+
+#[test]
+fn the_shipped_bias_extension_runs_to_its_end_as_on_the_cpu() {
+    // One end fixed, the other pulled by a smooth-step displacement.
+    let s = shipped("bias-extension.toml", &[]);
+    let (cpu, gpu) = both(&s, u64::MAX / 2);
+    assert!(cpu.time >= s.settings.end_time * (1.0 - 1e-9), "to its end");
+    let right = s.model.node_set("right").expect("the pulled end")[0] as usize;
+    let pulled = cpu.x[right].x - s.model.x0[right].x;
+    assert!((pulled - 25.0).abs() < 1e-9, "pulled {pulled} mm");
+    assert_same(&cpu, &gpu);
+}
+
+#[test]
+fn velocity_conditions_and_part_held_nodes_on_a_tool_step_as_on_the_cpu() {
+    // An edge over the punch driven by a velocity in x only (free in y
+    // and z, so the punch's contact moves it there), the opposite edge by
+    // a table in z only: each constrained component where the CPU
+    // driver's step puts it, through contact.
+    let s = scene(
+        r#"
+gravity = [0, 0, -9810]
+[simulation]
+end_time = 0.04
+mass_scaling_dt = 2e-5
+[fabric]
+material = "carbon-prepreg-2x2"
+fibres = "trusses"
+blank = { width = 40, height = 120, cells = [4, 12] }
+[[tools]]
+name = "punch"
+geometry = { kind = "hemispherical_punch", pole = [-15, 0, -1], radius = 40, shank = 50 }
+motion = { kind = "displacement", direction = [0, 0, 1], distance = 20, amplitude = { kind = "smooth_step", duration = 0.04 } }
+friction = 0.2
+[[boundary]]
+nodes = "left"
+components = "x"
+motion = { kind = "velocity", value = [-50, 0, 0], amplitude = { kind = "ramp", duration = 0.02 } }
+[[boundary]]
+nodes = "right"
+components = "z"
+motion = { kind = "displacement", value = [0, 0, 5], amplitude = { kind = "table", points = [[0, 0], [0.02, 1], [0.04, 0.5]] } }
+"#,
+    );
+    // To t = 0.02 s (1 000 steps of 2e-5 s): the punch halfway up.
+    let (cpu, gpu, touching) = both_counting_contacts(&s, 1000);
+    assert!(touching >= 3, "{touching} nodes on the punch");
+    let lifted = s.model.node_set("left").expect("an edge").iter();
+    assert!(
+        lifted.filter(|&&i| cpu.x[i as usize].z > 5.0).count() >= 3,
+        "the edge on the punch"
+    );
+    let left = s.model.node_set("left").expect("an edge")[3] as usize;
+    let right = s.model.node_set("right").expect("an edge")[3] as usize;
+    // x moved by ∫v dt = −50·t²/(2·0.02) mm (midpoint sums of a ramp are
+    // exact); z by the table, 5·t/0.02 mm.
+    let t = cpu.time;
+    assert!(t > 0.019, "at {t} s");
+    let pulled = cpu.x[left].x - s.model.x0[left].x;
+    assert!(
+        (pulled + 50.0 * t * t / 0.04).abs() < 1e-9,
+        "pulled {pulled} mm"
+    );
+    assert!((cpu.x[right].z - s.model.x0[right].z - 5.0 * t / 0.02).abs() < 1e-9);
+    assert_same(&cpu, &gpu);
+}
+
+#[test]
+fn a_whole_bias_extension_through_the_gpu_driver_gives_the_cpu_drivers_energies() {
+    // The pulled end's work is the boundary work: the energies of a run
+    // that only a prescribed motion drives.
+    let s = shipped("bias-extension.toml", &[("simulation.frames", "3")]);
+    let model = &s.model;
+    let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
+    let (mut cpu_frames, mut gpu_frames) = (Frames::default(), Frames::default());
+    Explicit::new(model, s.settings.clone())
+        .expect("a driver")
+        .run(&mut cpu, &mut cpu_frames)
+        .expect("the CPU run");
+    let explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
+    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
+    drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("run");
+    assert_same(&cpu, &gpu);
+    let last = cpu_frames.energies.last().expect("frames");
+    assert!(last.boundary_work > 0.0 && last.strain > 0.0, "{last:?}");
+    assert_same_energies(&cpu_frames, &gpu_frames);
 }

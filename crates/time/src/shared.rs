@@ -28,6 +28,55 @@ pub fn constrained_components(model: &Model) -> Vec<[bool; 3]> {
     Constraints::new(model).constrained
 }
 
+/// The constrained components that a boundary motion other than `Fixed`
+/// moves (a displacement, a velocity, a picture frame's arms), in node and
+/// component order, with their coordinates step by step as the explicit
+/// driver prescribes them: for a driver stepped elsewhere (drape-gpu),
+/// which is handed each step's coordinates.
+#[derive(Debug, Clone)]
+pub struct PrescribedMotions {
+    list: Vec<Constraint>,
+}
+
+impl PrescribedMotions {
+    /// The moving components of `model`'s boundary conditions (where
+    /// conditions overlap, the later one wins, as in the drivers).
+    pub fn new(model: &Model) -> Self {
+        let list = Constraints::new(model)
+            .list
+            .into_iter()
+            .filter(|c| !matches!(model.boundary[c.bc as usize].motion, Motion::Fixed))
+            .collect();
+        Self { list }
+    }
+
+    /// How many components move.
+    pub fn len(&self) -> usize {
+        self.list.len()
+    }
+
+    /// Whether none does.
+    pub fn is_empty(&self) -> bool {
+        self.list.is_empty()
+    }
+
+    /// Each moving component's node and component (0 x, 1 y, 2 z).
+    pub fn components(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.list
+            .iter()
+            .map(|c| (c.node as usize, c.component as usize))
+    }
+
+    /// Each component's coordinate at `t + h` into `at`, which holds its
+    /// coordinate at `t` (a velocity condition moves from it), as the
+    /// explicit driver's step prescribes it.
+    pub fn advance(&self, model: &Model, at: &mut [f64], t: f64, h: f64) {
+        for (c, x) in self.list.iter().zip(at) {
+            *x = Constraints::position(model, c, *x, t, h);
+        }
+    }
+}
+
 /// The constrained components of a model: where conditions overlap, the
 /// later one wins for the components it names.
 #[derive(Debug, Clone)]

@@ -193,6 +193,8 @@ struct Frames {
     energies: Vec<drape_time::Energies>,
     times: Vec<f64>,
     contact_force: Vec<f64>,
+    /// Σ|r_x| of the reactions (twice a bias extension's force).
+    reaction_x: Vec<f64>,
 }
 
 impl drape_time::Observer for Frames {
@@ -201,6 +203,7 @@ impl drape_time::Observer for Frames {
         self.times.push(f.state.time);
         self.contact_force
             .push(f.contact.map_or(0.0, |c| c.tool_force.iter().sum()));
+        self.reaction_x.push(f.reactions.iter().map(|r| r.x.abs()).sum());
     }
 }
 
@@ -411,4 +414,8 @@ fn a_whole_bias_extension_through_the_gpu_driver_gives_the_cpu_drivers_energies(
     let last = cpu_frames.energies.last().expect("frames");
     assert!(last.boundary_work > 0.0 && last.strain > 0.0, "{last:?}");
     assert_same_energies(&cpu_frames, &gpu_frames);
+    // The force the machine measures, from the same forces in the same
+    // order: the same bits.
+    assert!(cpu_frames.reaction_x.last().is_some_and(|f| f.abs() > 1.0));
+    assert_eq!(cpu_frames.reaction_x, gpu_frames.reaction_x);
 }

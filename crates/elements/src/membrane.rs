@@ -1165,7 +1165,7 @@ impl MembraneBatch {
     /// ε:C:ε·h ≤ κ·|∇u|², κ = E_m·h_m/(1 − ν) (+ E_f·t_f if embedded). The
     /// plane-stress bound uses (tr ε)² ≤ 2|ε|²; the two fibre families load
     /// orthogonal strain components.
-    fn stiffness_bound(&self) -> f64 {
+    pub fn stiffness_bound(&self) -> f64 {
         let m = &self.section.material;
         let mut kappa = m.resin.young / (1.0 - m.resin.poisson) * m.resin_thickness();
         if self.section.embedded_fibres {

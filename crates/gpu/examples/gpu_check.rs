@@ -160,6 +160,7 @@ fn main() {
         ("hemisphere-conform", shipped("hemisphere-conform"), 1000),
         ("picture-frame", shipped("picture-frame"), 1000),
         ("bias-extension", shipped("bias-extension"), 1000),
+        ("imported-plate", shipped("imported-plate"), 1000),
         (
             "glass sheet, clamped edge",
             Scene::parse(SHEET, Path::new("sheet.toml"), &[]).expect("scene"),

@@ -160,7 +160,7 @@ extern "C" __global__ void quad_point_forces(long count, const DrapeResinStep *r
     double xe[4][3];
     drape_membrane_nodes(e, 4, nodes, x, xe);
     double f[3][2], c[5];
-    int ok = drape_membrane_kinematics(e, 4, p, count, grad, xe, f, c);
+    int ok = drape_membrane_kinematics(e, 4, p, count, grad, resin->embedded != 0.0, xe, f, c);
     if (!__all_sync(group, ok)) {
         if (p == 0) {
             atomicMin(fault + 1, (int)e);

@@ -5,6 +5,12 @@
 
 #include "step.h"
 
+/* Bytes of a DrapeResinStep: what layout.rs's step() fills. */
+long drape_host_resin_step_size(void)
+{
+    return (long)sizeof(DrapeResinStep);
+}
+
 long drape_host_truss_forces(long count, DrapeFibreLaw law, const unsigned *nodes,
                              const double *length, const double *section,
                              const double *dashpot, const double *x, const double *v,

@@ -190,16 +190,34 @@ typedef struct {
     /* (e^(-dt/tau_k), g_k * phi_k) per term. */
     double decay[DRAPE_MAX_PRONY];
     double weight[DRAPE_MAX_PRONY];
+    /* Fibres embedded in the membrane (MembraneSection::embedded_fibres:
+     * 1, else 0): each family's thickness t_f and the fibres' law. */
+    double embedded;
+    double fibre_thickness;
+    DrapeFibreLaw fibre;
 } DrapeResinStep;
 
-/* Point p of resin-only membrane e: its deformation gradient F (3 x 2)
- * from the element's node positions xe, and C = F^T F's C11, C12, C22,
- * det C and tr C as drape_kinematics::right_stretch forms them. Returns
- * whether the point is sound (not degenerate, finite). grad: dN/dX,
- * value (point, node, 2) of element e at [value*count + e]. */
+/* Fibre family k's vector F N_k in a membrane point (N_k the k-th local
+ * axis, onto which the gradients were turned), as
+ * drape_kinematics::fibre_stretch forms it, and its length. */
+DRAPE_FN double drape_fibre_vector(const double f[3][2], int k, double v[3])
+{
+    double n0 = k == 0 ? 1.0 : 0.0, n1 = k == 0 ? 0.0 : 1.0;
+    for (int r = 0; r < 3; r++) {
+        v[r] = f[r][0] * n0 + f[r][1] * n1;
+    }
+    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+/* Point p of membrane e: its deformation gradient F (3 x 2) from the
+ * element's node positions xe, and C = F^T F's C11, C12, C22, det C and
+ * tr C as drape_kinematics::right_stretch forms them. Returns whether the
+ * point is sound (not degenerate, finite; with `embedded` fibres, each
+ * family's vector finite and longer than 1e-12 as FibreKinematics asks).
+ * grad: dN/dX, value (point, node, 2) of element e at [value*count + e]. */
 DRAPE_FN int drape_membrane_kinematics(long e, int nodes_per, int p, long count,
-                                       const double *grad, const double xe[4][3],
-                                       double f[3][2], double c[5])
+                                       const double *grad, int embedded,
+                                       const double xe[4][3], double f[3][2], double c[5])
 {
     const double *g = grad + (p * nodes_per * 2) * count + e;
     for (int r = 0; r < 3; r++) {
@@ -217,15 +235,23 @@ DRAPE_FN int drape_membrane_kinematics(long e, int nodes_per, int p, long count,
     c[2] = f[0][1] * f[0][1] + f[1][1] * f[1][1] + f[2][1] * f[2][1];
     c[3] = c[0] * c[2] - c[1] * c[1];
     c[4] = c[0] + c[2];
-    return c[3] > DRAPE_DEGENERATE_DET_C * c[4] * c[4];
+    int ok = c[3] > DRAPE_DEGENERATE_DET_C * c[4] * c[4];
+    for (int k = 0; embedded && k < 2; k++) {
+        double v[3];
+        double length = drape_fibre_vector(f, k, v);
+        /* Finite (inf - inf and NaN are not 0) and not crushed. */
+        ok &= (length - length) == 0.0 && length > 1e-12;
+    }
+    return ok;
 }
 
 /* Point p's response (QuadLanes::block_forces_lanes, one lane and one
  * point, which is the scalar path's arithmetic): U in closed form, the
  * rotated strain increment from the committed U, the resin's stress
  * update (its history advanced in place when `commit`), P = F U^-1 tau
- * U^-1 h_m, and its share (P grad N_a) A of each node's force into
- * share[a]. area: point p's at [p*count + e]; history: value i of point p
+ * U^-1 h_m, with embedded fibres plus t_f tau_f/lambda n (x) N_k for each
+ * family (MembraneBatch::point_response), and its share (P grad N_a) A
+ * of each node's force into share[a]. area: point p's at [p*count + e]; history: value i of point p
  * at [(p*stride + i)*count + e]. */
 DRAPE_FN void drape_membrane_point(long e, int nodes_per, int p, long count,
                                    const DrapeResinStep *resin, const double *grad,
@@ -299,6 +325,16 @@ DRAPE_FN void drape_membrane_point(long e, int nodes_per, int p, long count,
         piola[r][0] = (f[r][0] * b00 + f[r][1] * b10) * h_m;
         piola[r][1] = (f[r][0] * b01 + f[r][1] * b11) * h_m;
     }
+    for (int q = 0; resin->embedded != 0.0 && q < 2; q++) {
+        double v[3];
+        double length = drape_fibre_vector(f, q, v);
+        double stretch = length / 1.0;
+        double tau_f = drape_fibre_stress(resin->fibre, log(stretch));
+        double scale = resin->fibre_thickness * tau_f / stretch;
+        for (int r = 0; r < 3; r++) {
+            piola[r][q] += v[r] / length * scale;
+        }
+    }
     double w = area[p * count + e];
     for (int a = 0; a < nodes_per; a++) {
         for (int r = 0; r < 3; r++) {
@@ -338,7 +374,8 @@ DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
     double c[4][5];
     int ok = 1;
     for (int p = 0; p < points; p++) {
-        ok &= drape_membrane_kinematics(e, nodes_per, p, count, grad, xe, f[p], c[p]);
+        ok &= drape_membrane_kinematics(e, nodes_per, p, count, grad, resin->embedded != 0.0, xe,
+                                        f[p], c[p]);
     }
     if (!ok) {
         return 1;
@@ -918,7 +955,8 @@ DRAPE_FN double drape_spring_step(long e, const unsigned *nodes, const double *a
 }
 
 /* A membrane's stable step (MembraneBatch::element_stable_time_step for
- * a resin-only quad or triangle; QuadLanes::block_stable_steps one lane):
+ * a quad or triangle without shear locking, kappa its stiffness bound;
+ * QuadLanes::block_stable_steps one lane):
  * the Laplacian of its current shape's gradients, Gershgorin's bound on
  * its mass-weighted eigenvalue; 0 for a degenerate or non-finite point. */
 DRAPE_FN double drape_membrane_step(long e, long count, int nodes_per, int points,

@@ -6,7 +6,7 @@ use drape_model::{Model, State};
 use drape_time::Explicit;
 
 use crate::GpuError;
-use crate::layout::{Flat, SUMS, history_from_device, join, split};
+use crate::layout::{Flat, RESIN_STEP, SUMS, history_from_device, join, split};
 use crate::schedule::{BatchSteps, Snapshot};
 use crate::schedule::{Engine, StepParams};
 
@@ -63,6 +63,7 @@ unsafe extern "C" {
         x: *const f64,
         n: i64,
     ) -> f64;
+    fn drape_host_resin_step_size() -> i64;
     fn drape_host_node_step(
         n: i64,
         params: *const f64,
@@ -184,6 +185,9 @@ impl<'m> HostStep<'m> {
         let model = explicit.model();
         let flat = Flat::new(explicit)?;
         let n = flat.nodes;
+        // SAFETY: no arguments; the C struct the resin steps are read as.
+        let bytes = unsafe { drape_host_resin_step_size() } as usize;
+        assert_eq!(bytes, RESIN_STEP * std::mem::size_of::<f64>());
         Ok(Self {
             model,
             x: vec![0.0; 3 * n],

@@ -13,6 +13,8 @@ use crate::GpuError;
 
 /// The most Prony terms the kernels carry (`DRAPE_MAX_PRONY`).
 pub(crate) const MAX_PRONY: usize = 8;
+/// Doubles of a `DrapeResinStep` ([`Quads::step`]).
+pub(crate) const RESIN_STEP: usize = 28;
 /// Running sums per node (`DRAPE_SUMS`).
 pub(crate) const SUMS: usize = 8;
 
@@ -40,10 +42,6 @@ pub fn unsupported(model: &Model) -> Vec<String> {
             .iter()
             .any(|t| matches!(t.surface, Surface::Mesh(_))),
         "a triangle-mesh tool (geometry from an STL or OBJ file)",
-    );
-    no(
-        f.embedded_fibres,
-        "embedded fibres (fabric.fibres = \"embedded\")",
     );
     no(f.loads, "nodal loads ([[loads]])");
     no(f.pressure, "pressure ([[pressure]])");
@@ -81,12 +79,16 @@ pub(crate) struct Trusses {
     pub share: Vec<f64>,
 }
 
-/// A resin-only membrane batch (quads or triangles).
+/// A membrane batch (quads or triangles; resin only, or with embedded
+/// fibres).
 pub(crate) struct Quads {
     /// Whether its elements are triangles (3 nodes, 1 point), else quads.
     pub triangles: bool,
     pub resin: ResinLaw,
     pub constants: [f64; 5],
+    /// Embedded fibres (1 or 0), each family's thickness t_f and the
+    /// fibres' law [E_f, ε_sh, c_c, σ_b]: zeros without.
+    pub fibres: [f64; 6],
     pub nodes: Vec<u32>,
     /// ∂N/∂X, value (point, node, component) of element e at [v·count + e].
     pub grad: Vec<f64>,
@@ -113,14 +115,15 @@ impl Quads {
         if self.triangles { 1 } else { 4 }
     }
 
-    /// The kernels' `DrapeResinStep` for a step `dt`, as 22 doubles (the
+    /// The kernels' `DrapeResinStep` for a step `dt`, as its doubles (the
     /// prony count in the low bytes of the sixth).
-    pub fn step(&self, dt: f64) -> [f64; 22] {
+    pub fn step(&self, dt: f64) -> [f64; RESIN_STEP] {
         let mut factors = [(0.0, 0.0); MAX_PRONY];
         let terms = self.resin.prony.len();
         self.resin.prony_factors(dt, &mut factors[..terms]);
-        let mut out = [0.0; 22];
+        let mut out = [0.0; RESIN_STEP];
         out[..5].copy_from_slice(&self.constants);
+        out[6 + 2 * MAX_PRONY..].copy_from_slice(&self.fibres);
         out[5] = f64::from_bits(terms as u64);
         for (q, (decay, weight)) in factors.iter().enumerate() {
             out[6 + q] = *decay;
@@ -344,6 +347,19 @@ impl Flat {
                         material.resin_thickness(),
                     ],
                     resin,
+                    fibres: if m.section.embedded_fibres {
+                        let law = &material.fibre;
+                        [
+                            1.0,
+                            material.family_thickness(),
+                            law.modulus,
+                            law.crimp_strain,
+                            law.compression_factor,
+                            law.buckling_stress,
+                        ]
+                    } else {
+                        [0.0; 6]
+                    },
                     nodes,
                     grad,
                     area,
@@ -353,9 +369,7 @@ impl Flat {
                         .flat_map(|a| (0..count).map(move |e| m.nodal_areas(e)[a]))
                         .collect(),
                     scale: scale.clone(),
-                    // MembraneBatch's stiffness bound of a resin-only batch.
-                    kappa: material.resin.young / (1.0 - material.resin.poisson)
-                        * material.resin_thickness(),
+                    kappa: m.stiffness_bound(),
                     rho_h: material.areal_density(),
                 }
             })

@@ -18,17 +18,17 @@
 //! source compiles, both without a GPU.
 //!
 //! What it covers: the paper's element (fibre trusses with the crimp law,
-//! the buckled column and their dashpots, resin-only quads with Prony
-//! relaxation), yarn bending, holding springs, gravity, boundary
+//! the buckled column and their dashpots, resin quads and triangles with
+//! Prony relaxation, or membranes with the fibres embedded), yarn bending, holding springs, gravity, boundary
 //! conditions (fixed, or moved by a displacement, a velocity or a picture
 //! frame: the host works out each step's prescribed coordinates as the CPU
 //! driver does, [`drape_time::PrescribedMotions`], and hands them over
 //! with the step's constants), mass-proportional damping, and contact with
 //! one rigid tool (plane, sphere or surface of revolution, moved by a
 //! prescribed displacement) with Coulomb friction: the shipped hemisphere,
-//! picture-frame and bias-extension scenes. A model with anything else is
-//! refused by [`unsupported`], naming what (a second tool, a force-driven
-//! or a mesh tool, embedded fibres, shear locking, loads, pressure,
+//! picture-frame, bias-extension and imported-plate scenes. A model with
+//! anything else is refused by [`unsupported`], naming what (a second
+//! tool, a force-driven or a mesh tool, shear locking, loads, pressure,
 //! plies).
 //!
 //! ```

@@ -203,7 +203,8 @@ impl drape_time::Observer for Frames {
         self.times.push(f.state.time);
         self.contact_force
             .push(f.contact.map_or(0.0, |c| c.tool_force.iter().sum()));
-        self.reaction_x.push(f.reactions.iter().map(|r| r.x.abs()).sum());
+        self.reaction_x
+            .push(f.reactions.iter().map(|r| r.x.abs()).sum());
     }
 }
 
@@ -418,4 +419,23 @@ fn a_whole_bias_extension_through_the_gpu_driver_gives_the_cpu_drivers_energies(
     // order: the same bits.
     assert!(cpu_frames.reaction_x.last().is_some_and(|f| f.abs() > 1.0));
     assert_eq!(cpu_frames.reaction_x, gpu_frames.reaction_x);
+}
+
+#[test]
+fn the_shipped_imported_plate_with_embedded_fibres_runs_to_its_end_as_on_the_cpu() {
+    // A gmsh blank, the fibres at 30° embedded in its membranes, a rising
+    // sphere with friction, corner springs.
+    let s = shipped("imported-plate.toml", &[]);
+    assert!(s.model.features().embedded_fibres);
+    assert!(
+        unsupported(&s.model).is_empty(),
+        "{:?}",
+        unsupported(&s.model)
+    );
+    let (cpu, gpu) = both(&s, u64::MAX / 2);
+    assert!(cpu.time >= s.settings.end_time * (1.0 - 1e-9), "to its end");
+    // The sphere's top rose from z = -0.5 to 34.5 mm, carrying the plate.
+    let top = cpu.x.iter().map(|x| x.z).fold(f64::MIN, f64::max);
+    assert!(top > 30.0, "the plate's top at z = {top} mm");
+    assert_same(&cpu, &gpu);
 }

@@ -159,6 +159,15 @@ fn main() {
         ("hemisphere-45", shipped("hemisphere-45"), 1000),
         ("hemisphere-conform", shipped("hemisphere-conform"), 1000),
         ("picture-frame", shipped("picture-frame"), 1000),
+        (
+            "picture-frame of twintex-plain (shear locking)",
+            Scene::from_file(
+                Path::new("scenes/picture-frame.toml"),
+                &[("fabric.material".into(), "\"twintex-plain\"".into())],
+            )
+            .expect("a shipped scene"),
+            1000,
+        ),
         ("bias-extension", shipped("bias-extension"), 1000),
         ("imported-plate", shipped("imported-plate"), 1000),
         (

@@ -123,14 +123,16 @@ extern "C" __global__ void spring_steps(long count, const unsigned *nodes, const
 
 extern "C" __global__ void membrane_steps(long count, int nodes_per, int points,
                                           const unsigned *nodes, const double *nodal_area,
+                                          const DrapeResinStep *resin, const double *grad,
                                           const double *scale, double kappa, double rho_h,
                                           const double *x, long n, double *out)
 {
     long e = DRAPE_INDEX;
     if (e < count) {
-        double dt = nodes_per == 4
-                        ? drape_membrane_step(e, count, 4, 4, nodes, nodal_area, kappa, rho_h, x, n)
-                        : drape_membrane_step(e, count, 3, 1, nodes, nodal_area, kappa, rho_h, x, n);
+        double dt = nodes_per == 4 ? drape_membrane_step(e, count, 4, 4, nodes, nodal_area, resin,
+                                                         grad, kappa, rho_h, x, n)
+                                   : drape_membrane_step(e, count, 3, 1, nodes, nodal_area, resin,
+                                                         grad, kappa, rho_h, x, n);
         DRAPE_MIN_STEP(out, dt * scale[e]);
     }
 }
@@ -160,7 +162,7 @@ extern "C" __global__ void quad_point_forces(long count, const DrapeResinStep *r
     double xe[4][3];
     drape_membrane_nodes(e, 4, nodes, x, xe);
     double f[3][2], c[5];
-    int ok = drape_membrane_kinematics(e, 4, p, count, grad, resin->embedded != 0.0, xe, f, c);
+    int ok = drape_membrane_kinematics(e, 4, p, count, grad, resin, xe, f, c);
     if (!__all_sync(group, ok)) {
         if (p == 0) {
             atomicMin(fault + 1, (int)e);

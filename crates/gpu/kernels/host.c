@@ -150,13 +150,14 @@ double drape_host_spring_steps(long count, const unsigned *nodes, const double *
 }
 
 double drape_host_membrane_steps(long count, int nodes_per, int points, const unsigned *nodes,
-                                 const double *nodal_area, const double *scale, double kappa,
+                                 const double *nodal_area, const DrapeResinStep *resin,
+                                 const double *grad, const double *scale, double kappa,
                                  double rho_h, const double *x, long n)
 {
     double best = 1.0 / 0.0;
     for (long e = 0; e < count; e++) {
-        double dt = drape_membrane_step(e, count, nodes_per, points, nodes, nodal_area, kappa,
-                                        rho_h, x, n) *
+        double dt = drape_membrane_step(e, count, nodes_per, points, nodes, nodal_area, resin,
+                                        grad, kappa, rho_h, x, n) *
                     scale[e];
         if (dt < best) {
             best = dt;

@@ -42,6 +42,8 @@
 #define DRAPE_NO_DIRECTION 1e-12
 /* The most Prony terms a step carries (the lanes' factor table). */
 #define DRAPE_MAX_PRONY 8
+/* The most coefficients of a shear-locking law the kernels carry. */
+#define DRAPE_MAX_LOCKING 8
 
 /* A fibre law (drape_constitutive::FibreLaw) without confinement. */
 typedef struct {
@@ -195,7 +197,70 @@ typedef struct {
     double embedded;
     double fibre_thickness;
     DrapeFibreLaw fibre;
+    /* The shear-locking law (resin.shear_locking) when `locking` is 1:
+     * the fabric's thickness h, the odd polynomial's coefficients
+     * [c1, c3, ...] (`locking_terms` of them) and, when `locking_friction`
+     * is 1, the friction term's [tau_f, gamma_f]. */
+    double locking;
+    double fabric_thickness;
+    double locking_terms;
+    double locking_coefficients[DRAPE_MAX_LOCKING];
+    double locking_friction;
+    double friction_term[2];
 } DrapeResinStep;
+
+/* ShearLocking::stress: tau_s(gamma) (MPa). */
+DRAPE_FN double drape_locking_stress(const DrapeResinStep *r, double gamma)
+{
+    double g2 = gamma * gamma;
+    double acc = 0.0;
+    for (int k = (int)r->locking_terms - 1; k >= 0; k--) {
+        acc = acc * g2 + r->locking_coefficients[k];
+    }
+    double poly = acc * gamma;
+    if (r->locking_friction != 0.0) {
+        return poly + r->friction_term[0] * tanh(gamma / r->friction_term[1]);
+    }
+    return poly;
+}
+
+/* ShearLocking::tangent: d tau_s / d gamma (MPa). */
+DRAPE_FN double drape_locking_tangent(const DrapeResinStep *r, double gamma)
+{
+    double g2 = gamma * gamma;
+    double power = 1.0, sum = 0.0;
+    for (int k = 0; k < (int)r->locking_terms; k++) {
+        sum += (double)(2 * k + 1) * r->locking_coefficients[k] * power;
+        power *= g2;
+    }
+    if (r->locking_friction != 0.0) {
+        double t = tanh(gamma / r->friction_term[1]);
+        return sum + r->friction_term[0] / r->friction_term[1] * (1.0 - t * t);
+    }
+    return sum;
+}
+
+/* The fibres of a membrane point for the shear-locking law (membrane/
+ * locking.rs's kinematics): the columns of F, their unit directions u and
+ * lengths, c = u1.u2 = sin gamma. Returns 0 where a fibre has collapsed
+ * or the two families have closed onto each other. */
+DRAPE_FN int drape_locking_fibres(const double f[3][2], double u[2][3], double len[2],
+                                  double *c)
+{
+    for (int k = 0; k < 2; k++) {
+        len[k] = sqrt(f[0][k] * f[0][k] + f[1][k] * f[1][k] + f[2][k] * f[2][k]);
+    }
+    if (len[0] != len[0] || len[1] != len[1] || len[0] <= 0.0 || len[1] <= 0.0) {
+        return 0;
+    }
+    for (int k = 0; k < 2; k++) {
+        for (int r = 0; r < 3; r++) {
+            u[k][r] = f[r][k] / len[k];
+        }
+    }
+    *c = u[0][0] * u[1][0] + u[0][1] * u[1][1] + u[0][2] * u[1][2];
+    return !(*c != *c || fabs(*c) >= 1.0 - 5e-13);
+}
 
 /* Fibre family k's vector F N_k in a membrane point (N_k the k-th local
  * axis, onto which the gradients were turned), as
@@ -216,7 +281,7 @@ DRAPE_FN double drape_fibre_vector(const double f[3][2], int k, double v[3])
  * family's vector finite and longer than 1e-12 as FibreKinematics asks).
  * grad: dN/dX, value (point, node, 2) of element e at [value*count + e]. */
 DRAPE_FN int drape_membrane_kinematics(long e, int nodes_per, int p, long count,
-                                       const double *grad, int embedded,
+                                       const double *grad, const DrapeResinStep *resin,
                                        const double xe[4][3], double f[3][2], double c[5])
 {
     const double *g = grad + (p * nodes_per * 2) * count + e;
@@ -236,11 +301,15 @@ DRAPE_FN int drape_membrane_kinematics(long e, int nodes_per, int p, long count,
     c[3] = c[0] * c[2] - c[1] * c[1];
     c[4] = c[0] + c[2];
     int ok = c[3] > DRAPE_DEGENERATE_DET_C * c[4] * c[4];
-    for (int k = 0; embedded && k < 2; k++) {
+    for (int k = 0; resin->embedded != 0.0 && k < 2; k++) {
         double v[3];
         double length = drape_fibre_vector(f, k, v);
         /* Finite (inf - inf and NaN are not 0) and not crushed. */
         ok &= (length - length) == 0.0 && length > 1e-12;
+    }
+    if (resin->locking != 0.0) {
+        double u[2][3], len[2], cos_gamma;
+        ok &= drape_locking_fibres(f, u, len, &cos_gamma);
     }
     return ok;
 }
@@ -335,6 +404,22 @@ DRAPE_FN void drape_membrane_point(long e, int nodes_per, int p, long count,
             piola[r][q] += v[r] / length * scale;
         }
     }
+    if (resin->locking != 0.0) {
+        /* LockingPoint::add_stress: dW/da_k = phi g_k, phi = h tau_s /
+         * cos gamma, g_k = (u_other - c u_k)/|a_k|. */
+        /* The point passed drape_membrane_kinematics, so the fibres are
+         * sound. */
+        double u[2][3], len[2], c = 0.0;
+        drape_locking_fibres(f, u, len, &c);
+        double gamma = asin(c);
+        double cos_gamma = sqrt(1.0 - c * c);
+        double phi = resin->fabric_thickness * drape_locking_stress(resin, gamma) / cos_gamma;
+        for (int k = 0; k < 2; k++) {
+            for (int r = 0; r < 3; r++) {
+                piola[r][k] += (u[1 - k][r] - u[k][r] * c) / len[k] * phi;
+            }
+        }
+    }
     double w = area[p * count + e];
     for (int a = 0; a < nodes_per; a++) {
         for (int r = 0; r < 3; r++) {
@@ -374,8 +459,7 @@ DRAPE_FN int drape_membrane_force(long e, int nodes_per, int points, long count,
     double c[4][5];
     int ok = 1;
     for (int p = 0; p < points; p++) {
-        ok &= drape_membrane_kinematics(e, nodes_per, p, count, grad, resin->embedded != 0.0, xe,
-                                        f[p], c[p]);
+        ok &= drape_membrane_kinematics(e, nodes_per, p, count, grad, resin, xe, f[p], c[p]);
     }
     if (!ok) {
         return 1;
@@ -954,13 +1038,15 @@ DRAPE_FN double drape_spring_step(long e, const unsigned *nodes, const double *a
     return 1.0 / 0.0;
 }
 
-/* A membrane's stable step (MembraneBatch::element_stable_time_step for
- * a quad or triangle without shear locking, kappa its stiffness bound;
- * QuadLanes::block_stable_steps one lane):
+/* A membrane's stable step (MembraneBatch::element_stable_time_step,
+ * kappa its stiffness bound; QuadLanes::block_stable_steps one lane):
  * the Laplacian of its current shape's gradients, Gershgorin's bound on
- * its mass-weighted eigenvalue; 0 for a degenerate or non-finite point. */
+ * its mass-weighted eigenvalue; 0 for a degenerate or non-finite point.
+ * With the shear-locking law, kappa stiffened by 2 h tau_s' at the
+ * element's largest shear (F from the reference gradients `grad`). */
 DRAPE_FN double drape_membrane_step(long e, long count, int nodes_per, int points,
                                     const unsigned *nodes, const double *nodal_area,
+                                    const DrapeResinStep *resin, const double *grad,
                                     double kappa, double rho_h, const double *x, long n)
 {
     double xe[4][3];
@@ -1043,6 +1129,29 @@ DRAPE_FN double drape_membrane_step(long e, long count, int nodes_per, int point
         if (sum > lambda) {
             lambda = sum;
         }
+    }
+    if (resin->locking != 0.0) {
+        double worst = 0.0;
+        for (int p = 0; p < points; p++) {
+            const double *g = grad + (p * nodes_per * 2) * count + e;
+            double f[3][2] = {{0.0, 0.0}, {0.0, 0.0}, {0.0, 0.0}};
+            for (int a = 0; a < nodes_per; a++) {
+                for (int r = 0; r < 3; r++) {
+                    f[r][0] += xe[a][r] * g[(2 * a) * count];
+                    f[r][1] += xe[a][r] * g[(2 * a + 1) * count];
+                }
+            }
+            double u[2][3], len[2], c;
+            double t = 1.0 / 0.0;
+            if (drape_locking_fibres(f, u, len, &c)) {
+                t = drape_locking_tangent(resin, fabs(asin(c)));
+            }
+            /* f64::max: a NaN is passed over. */
+            if (t > worst) {
+                worst = t;
+            }
+        }
+        kappa += 2.0 * resin->fabric_thickness * worst;
     }
     return 2.0 / sqrt(kappa * lambda);
 }

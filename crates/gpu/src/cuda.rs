@@ -853,6 +853,8 @@ impl Engine for CudaStep<'_> {
                 .arg(&points)
                 .arg(&q.nodes)
                 .arg(&q.nodal_area)
+                .arg(&q.resin)
+                .arg(&q.grad)
                 .arg(&q.scale)
                 .arg(&q.kappa)
                 .arg(&q.rho_h)

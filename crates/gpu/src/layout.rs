@@ -13,8 +13,10 @@ use crate::GpuError;
 
 /// The most Prony terms the kernels carry (`DRAPE_MAX_PRONY`).
 pub(crate) const MAX_PRONY: usize = 8;
+/// The most shear-locking coefficients they carry (`DRAPE_MAX_LOCKING`).
+pub(crate) const MAX_LOCKING: usize = 8;
 /// Doubles of a `DrapeResinStep` ([`Quads::step`]).
-pub(crate) const RESIN_STEP: usize = 28;
+pub(crate) const RESIN_STEP: usize = 42;
 /// Running sums per node (`DRAPE_SUMS`).
 pub(crate) const SUMS: usize = 8;
 
@@ -47,11 +49,15 @@ pub fn unsupported(model: &Model) -> Vec<String> {
     no(f.pressure, "pressure ([[pressure]])");
     no(model.plies.len() > 1, "a stack of plies ([[plies]])");
     no(
-        model
-            .membranes
-            .iter()
-            .any(|b| b.section.material.resin.shear_locking.is_some()),
-        "the shear-locking law (resin.shear_locking)",
+        model.membranes.iter().any(|b| {
+            b.section
+                .material
+                .resin
+                .shear_locking
+                .as_ref()
+                .is_some_and(|l| l.coefficients.len() > MAX_LOCKING)
+        }),
+        "a shear-locking law of more than 8 coefficients",
     );
     no(
         model
@@ -89,6 +95,10 @@ pub(crate) struct Quads {
     /// Embedded fibres (1 or 0), each family's thickness t_f and the
     /// fibres' law [E_f, ε_sh, c_c, σ_b]: zeros without.
     pub fibres: [f64; 6],
+    /// The shear-locking law as `DrapeResinStep` holds it (1 or 0, the
+    /// fabric's thickness, the number of coefficients, the coefficients,
+    /// whether a friction term, its τ_f and γ_f): zeros without.
+    pub locking: [f64; 6 + MAX_LOCKING],
     pub nodes: Vec<u32>,
     /// ∂N/∂X, value (point, node, component) of element e at [v·count + e].
     pub grad: Vec<f64>,
@@ -123,7 +133,8 @@ impl Quads {
         self.resin.prony_factors(dt, &mut factors[..terms]);
         let mut out = [0.0; RESIN_STEP];
         out[..5].copy_from_slice(&self.constants);
-        out[6 + 2 * MAX_PRONY..].copy_from_slice(&self.fibres);
+        out[6 + 2 * MAX_PRONY..12 + 2 * MAX_PRONY].copy_from_slice(&self.fibres);
+        out[12 + 2 * MAX_PRONY..].copy_from_slice(&self.locking);
         out[5] = f64::from_bits(terms as u64);
         for (q, (decay, weight)) in factors.iter().enumerate() {
             out[6 + q] = *decay;
@@ -131,6 +142,21 @@ impl Quads {
         }
         out
     }
+}
+
+/// `Quads::locking` of a resin.
+fn locking(resin: &ResinLaw, thickness: f64) -> [f64; 6 + MAX_LOCKING] {
+    let mut out = [0.0; 6 + MAX_LOCKING];
+    if let Some(law) = &resin.shear_locking {
+        out[0] = 1.0;
+        out[1] = thickness;
+        out[2] = law.coefficients.len() as f64;
+        out[3..3 + law.coefficients.len()].copy_from_slice(&law.coefficients);
+        if let Some([tau, gamma]) = law.friction {
+            out[3 + MAX_LOCKING..].copy_from_slice(&[1.0, tau, gamma]);
+        }
+    }
+    out
 }
 
 /// A bending batch.
@@ -360,6 +386,7 @@ impl Flat {
                     } else {
                         [0.0; 6]
                     },
+                    locking: locking(&material.resin, material.thickness),
                     nodes,
                     grad,
                     area,

@@ -439,3 +439,31 @@ fn the_shipped_imported_plate_with_embedded_fibres_runs_to_its_end_as_on_the_cpu
     assert!(top > 30.0, "the plate's top at z = {top} mm");
     assert_same(&cpu, &gpu);
 }
+
+#[test]
+fn the_benchmark_fabrics_shear_locking_law_runs_as_on_the_cpu() {
+    // `twintex-plain` (Cao et al. 2008's plain weave) carries the law: the
+    // picture frame takes it to 60°, past locking, where the law's
+    // stiffening also sets the stable step.
+    let twintex = ("fabric.material", "\"twintex-plain\"");
+    let s = shipped("picture-frame.toml", &[twintex]);
+    let law = &s.model.membranes[0].section.material.resin.shear_locking;
+    assert!(law.as_ref().is_some_and(|l| l.coefficients.len() >= 2));
+    assert!(unsupported(&s.model).is_empty());
+    let (cpu, gpu) = both(&s, u64::MAX / 2);
+    assert!(cpu.time >= s.settings.end_time * (1.0 - 1e-9), "to its end");
+    assert_same(&cpu, &gpu);
+    // With embedded fibres, which are the law's fibres too, and a friction
+    // term (a dry fabric's, as `drape fit` gives it).
+    let mut s = shipped(
+        "bias-extension.toml",
+        &[twintex, ("fabric.fibres", "\"embedded\"")],
+    );
+    for b in &mut s.model.membranes {
+        if let Some(law) = &mut b.section.material.resin.shear_locking {
+            law.friction = Some([0.003, 0.02]);
+        }
+    }
+    let (cpu, gpu) = both(&s, u64::MAX / 2);
+    assert_same(&cpu, &gpu);
+}

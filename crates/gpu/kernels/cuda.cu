@@ -200,7 +200,9 @@ extern "C" __global__ void quad_point_forces(long count, const DrapeResinStep *r
 extern "C" __global__ void gather_node_step(long n, const long *ptr, const unsigned *node_slots,
                                             const double *slots, long slot_count,
                                             const double *params, const double *x,
-                                            const double *v, const double *f_ext,
+                                            const double *v, const double *weight,
+                                            const long *load_ptr, const unsigned *load_of,
+                                            int has_loads, const double *loads,
                                             double *f_int, const double *mass,
                                             const unsigned char *fixed, const double *x0,
                                             const int *moving, const double *held,
@@ -213,7 +215,8 @@ extern "C" __global__ void gather_node_step(long n, const long *ptr, const unsig
         return;
     }
     drape_gather(i, ptr, node_slots, slots, slot_count, f_int, n);
-    int kind = drape_node_step(i, n, params, x, v, f_ext, f_int, mass, fixed, x0, moving, held,
+    int kind = drape_node_step(i, n, params, x, v, weight, load_ptr, load_of,
+                               has_loads ? loads : 0, f_int, mass, fixed, x0, moving, held,
                                has_tool ? tool : 0, x_new, v_new, contact_force, status, sums);
     if (kind) {
         atomicMin(fault + 2, (int)(4 * i + kind));

@@ -594,9 +594,10 @@ DRAPE_FN double drape_held(long i, int k, const unsigned char *fixed, const doub
 
 /* Node i's central-difference update (Explicit's step): velocity to n+1/2
  * with mass-proportional damping at the mid-step velocity, position to
- * n+1; a constrained component where drape_held puts it. */
+ * n+1; a constrained component where drape_held puts it. f_ext: the
+ * node's external force at step n. */
 DRAPE_FN void drape_update(long i, long n, const double *x, const double *v,
-                           const double *f_ext, const double *f_int,
+                           const double f_ext[3], const double *f_int,
                            const double *mass, const unsigned char *fixed,
                            const double *x0, const int *moving, const double *held,
                            double c1, double c2, double dt_avg, double h, double *x_new,
@@ -605,7 +606,7 @@ DRAPE_FN void drape_update(long i, long n, const double *x, const double *v,
     double m = mass[i];
     for (int k = 0; k < 3; k++) {
         long at = 3 * i + k;
-        double a = (f_ext[at] - f_int[at]) / m;
+        double a = (f_ext[k] - f_int[at]) / m;
         double vn = (v[at] * c1 + a * dt_avg) * c2;
         double xn = x[at] + vn * h;
         if (fixed[i] & (1 << k)) {
@@ -931,7 +932,7 @@ DRAPE_FN int drape_contact(long i, long n, const double *tool, const double *par
 DRAPE_FN void drape_works(long i, long n, const double *params, const double *mass,
                           const unsigned char *fixed, const double *x, const double *v,
                           const double *x_new, const double *v_new, const double *f_int,
-                          const double *f_ext, const double *contact_force, double *sums)
+                          const double f_ext[3], const double *contact_force, double *sums)
 {
     double dt_avg = params[2], dt_prev = params[8], damping = params[9];
     double m = mass[i];
@@ -943,12 +944,12 @@ DRAPE_FN void drape_works(long i, long n, const double *params, const double *ma
         double damp = (v[at] + v_new[at]) * 0.5 * (damping * m);
         if ((fixed[i] & (1 << k)) && dt_avg > 0.0) {
             double inertia = (v_new[at] - v[at]) * (m / dt_avg);
-            double r = inertia - (f_ext[at] - f_int[at] - damp + contact_force[at]);
+            double r = inertia - (f_ext[k] - f_int[at] - damp + contact_force[at]);
             double dx_inertia = dt_prev > 0.0 ? dx : v_mid * dt_avg;
             w_bc += r * dx + inertia * (dx_inertia - dx);
         }
         w_int += f_int[at] * dx;
-        w_ext += f_ext[at] * dx;
+        w_ext += f_ext[k] * dx;
         w_damp += damp * dx;
         w_c += contact_force[at] * dx;
     }
@@ -961,14 +962,29 @@ DRAPE_FN void drape_works(long i, long n, const double *params, const double *ma
 
 /* Node i's whole step: the update, the contact when there is a tool
  * (`tool` not null), the works. `held`: the step's prescribed coordinates
- * (drape_held). Returns the contact's fault (0: none). */
+ * (drape_held); `weight`: each node's weight; `loads` (null for none):
+ * each nodal load's force at the step's start, node i's loads
+ * load_of[load_ptr[i] .. load_ptr[i + 1]] (drape_time::external_forces:
+ * the weight, then the loads in their order). Returns the contact's fault
+ * (0: none). */
 DRAPE_FN int drape_node_step(long i, long n, const double *params, const double *x,
-                             const double *v, const double *f_ext, const double *f_int,
-                             const double *mass, const unsigned char *fixed, const double *x0,
-                             const int *moving, const double *held, const double *tool,
-                             double *x_new, double *v_new, double *contact_force,
-                             unsigned char *status, double *sums)
+                             const double *v, const double *weight, const long *load_ptr,
+                             const unsigned *load_of, const double *loads,
+                             const double *f_int, const double *mass,
+                             const unsigned char *fixed, const double *x0, const int *moving,
+                             const double *held, const double *tool, double *x_new,
+                             double *v_new, double *contact_force, unsigned char *status,
+                             double *sums)
 {
+    double f_ext[3] = {weight[3 * i], weight[3 * i + 1], weight[3 * i + 2]};
+    if (loads) {
+        for (long q = load_ptr[i]; q < load_ptr[i + 1]; q++) {
+            long l = load_of[q];
+            f_ext[0] += loads[3 * l];
+            f_ext[1] += loads[3 * l + 1];
+            f_ext[2] += loads[3 * l + 2];
+        }
+    }
     drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, moving, held, params[0], params[1],
                  params[2], params[3], x_new, v_new);
     int fault = 0;

@@ -225,7 +225,11 @@ pub struct CudaStep<'m> {
     /// index in a step's prescribed coordinates.
     moving: CudaSlice<i32>,
     x0: CudaSlice<f64>,
-    f_ext: CudaSlice<f64>,
+    weight: CudaSlice<f64>,
+    /// Node i's nodal loads, `load_of[load_ptr[i]..load_ptr[i + 1]]`.
+    load_ptr: CudaSlice<i64>,
+    load_of: CudaSlice<u32>,
+    has_loads: i32,
     /// Positions and velocities: [0] current, [1] the other buffer
     /// (swapped by `parity`).
     x: [CudaSlice<f64>; 2],
@@ -249,9 +253,10 @@ pub struct CudaStep<'m> {
     batch_steps_host: Vec<f64>,
     /// Each step's `StepParams` of a block of up to `GRAPH_STEPS`.
     params: CudaSlice<f64>,
-    /// ... and its prescribed coordinates (`Engine::steps`' `held`; one
-    /// unread value for a model without moving components).
-    held: CudaSlice<f64>,
+    /// ... and its values (`Engine::steps`' `values`, `Flat::step_width`
+    /// a step, and one unread value, so that a step's prescribed
+    /// coordinates and loads are each a slice of at least one).
+    values: CudaSlice<f64>,
     block: u32,
     fault: CudaSlice<i32>,
     /// Whether the current state is in buffer 1.
@@ -378,7 +383,10 @@ impl<'m> CudaStep<'m> {
             fixed: upload(s, &flat.fixed)?,
             moving: upload(s, &flat.moving)?,
             x0: upload(s, &flat.x0)?,
-            f_ext: upload(s, &flat.f_ext)?,
+            weight: upload(s, &flat.weight)?,
+            load_ptr: upload(s, &flat.load_ptr)?,
+            load_of: upload(s, &flat.load_of)?,
+            has_loads: i32::from(flat.loads > 0),
             x: [zeros(s, 3 * n)?, zeros(s, 3 * n)?],
             v: [zeros(s, 3 * n)?, zeros(s, 3 * n)?],
             f_int: zeros(s, 3 * n)?,
@@ -405,7 +413,7 @@ impl<'m> CudaStep<'m> {
                 .max(1)
             ],
             params: zeros(s, PARAMS * GRAPH_STEPS as usize)?,
-            held: zeros(s, (flat.prescribed.len() * GRAPH_STEPS as usize).max(1))?,
+            values: zeros(s, flat.step_width() * GRAPH_STEPS as usize + 1)?,
             block: BLOCK,
             fault: upload(s, &FAULTS)?,
             parity: 0,
@@ -463,8 +471,8 @@ impl<'m> CudaStep<'m> {
     /// launches' gaps.
     pub fn profile(&mut self, count: u64, params: StepParams) -> Result<[f64; 6], GpuError> {
         self.set_resin(params.h)?;
-        let held = self.held_at_rest(1);
-        self.write_block(&[params], &held)?;
+        let values = self.values_at_rest(1);
+        self.write_block(&[params], &values)?;
         self.timing = Some(Vec::with_capacity(7 * count as usize + 1));
         mark(&mut self.timing, &self.stream, 0)?;
         let mut result = Ok(());
@@ -633,8 +641,9 @@ impl<'m> CudaStep<'m> {
             (&*x1, x0, &*v1, v0)
         };
         let params = self.params.slice(PARAMS * k..PARAMS * (k + 1));
-        let m = self.flat.prescribed.len();
-        let held = self.held.slice(m * k..m * k + m.max(1));
+        let (m, w) = (self.flat.prescribed.len(), self.flat.step_width());
+        let held = self.values.slice(w * k..w * k + 1.max(m));
+        let loads = self.values.slice(w * k + m..w * (k + 1) + 1);
         let sc = self.flat.slot_count as i64;
         let mut b = self.stream.launch_builder(&self.kernels.gather_node_step);
         b.arg(&n)
@@ -645,7 +654,11 @@ impl<'m> CudaStep<'m> {
             .arg(&params)
             .arg(x)
             .arg(v)
-            .arg(&self.f_ext)
+            .arg(&self.weight)
+            .arg(&self.load_ptr)
+            .arg(&self.load_of)
+            .arg(&self.has_loads)
+            .arg(&loads)
             .arg(&mut self.f_int)
             .arg(&self.mass)
             .arg(&self.fixed)
@@ -693,37 +706,38 @@ impl<'m> CudaStep<'m> {
     }
 
     /// `count` steps with `params` and their resin step (the moving
-    /// components held at their reference coordinates), none of them
+    /// components held at their reference coordinates, no loads), none of them
     /// checked until the end: for timing the step alone. Returns the
     /// seconds the GPU took (the stream synchronised before and after).
     pub fn time_steps(&mut self, count: u64, params: StepParams) -> Result<f64, GpuError> {
         self.set_resin(params.h)?;
         let block = vec![params; count as usize];
-        let held = self.held_at_rest(block.len());
+        let values = self.values_at_rest(block.len());
         self.stream.synchronize().map_err(cuda)?;
         let started = std::time::Instant::now();
-        self.run_block(&block, &held)?;
+        self.run_block(&block, &values)?;
         self.stream.synchronize().map_err(cuda)?;
         let seconds = started.elapsed().as_secs_f64();
         self.check_faults(0)?;
         Ok(seconds)
     }
 
-    /// The moving components at their reference coordinates for `steps`
-    /// steps (`held` for timing).
-    fn held_at_rest(&self, steps: usize) -> Vec<f64> {
+    /// The moving components at their reference coordinates and no loads
+    /// for `steps` steps (`values` for timing).
+    fn values_at_rest(&self, steps: usize) -> Vec<f64> {
         let f = &self.flat;
-        let rest: Vec<f64> = f
+        let mut rest: Vec<f64> = f
             .prescribed
             .components()
             .map(|(i, k)| f.x0[3 * i + k])
             .collect();
+        rest.resize(f.step_width(), 0.0);
         rest.repeat(steps)
     }
 
-    /// Writes a chunk's params and prescribed coordinates to the device (in
-    /// stream order, so after the chunk before has run).
-    fn write_block(&mut self, part: &[StepParams], held: &[f64]) -> Result<(), GpuError> {
+    /// Writes a chunk's params and values to the device (in stream order,
+    /// so after the chunk before has run).
+    fn write_block(&mut self, part: &[StepParams], values: &[f64]) -> Result<(), GpuError> {
         let mut params = [0.0; PARAMS * GRAPH_STEPS as usize];
         for (p, s) in params.chunks_exact_mut(PARAMS).zip(part) {
             p.copy_from_slice(&s.values());
@@ -731,23 +745,23 @@ impl<'m> CudaStep<'m> {
         self.stream
             .memcpy_htod(&params, &mut self.params)
             .map_err(cuda)?;
-        if !held.is_empty() {
-            let mut to = self.held.slice_mut(0..held.len());
-            self.stream.memcpy_htod(held, &mut to).map_err(cuda)?;
+        if !values.is_empty() {
+            let mut to = self.values.slice_mut(0..values.len());
+            self.stream.memcpy_htod(values, &mut to).map_err(cuda)?;
         }
         Ok(())
     }
 
-    /// A step of each of `steps` (with `held`, as `Engine::steps`), in
+    /// A step of each of `steps` (with `values`, as `Engine::steps`), in
     /// chunks of `GRAPH_STEPS`: each chunk written to the device, then the
     /// captured graph where the chunk is whole and starts at parity 0,
     /// single launches otherwise.
-    fn run_block(&mut self, steps: &[StepParams], held: &[f64]) -> Result<(), GpuError> {
-        let m = self.flat.prescribed.len();
+    fn run_block(&mut self, steps: &[StepParams], values: &[f64]) -> Result<(), GpuError> {
+        let w = self.flat.step_width();
         for (c, part) in steps.chunks(GRAPH_STEPS as usize).enumerate() {
             let chunk = part.len();
             let first = c * GRAPH_STEPS as usize;
-            self.write_block(part, &held[first * m..(first + chunk) * m])?;
+            self.write_block(part, &values[first * w..(first + chunk) * w])?;
             if self.parity == 0 && chunk == GRAPH_STEPS as usize {
                 if self.graph.is_none() {
                     self.capture()?;
@@ -942,10 +956,10 @@ impl Engine for CudaStep<'_> {
         self.check_faults(0)
     }
 
-    fn steps(&mut self, params: &[StepParams], held: &[f64], step: u64) -> Result<(), GpuError> {
+    fn steps(&mut self, params: &[StepParams], values: &[f64], step: u64) -> Result<(), GpuError> {
         // Every step of a block has the same h, so one resin step.
         self.set_resin(params[0].h)?;
-        self.run_block(params, held)?;
+        self.run_block(params, values)?;
         self.check_faults(step)
     }
 }

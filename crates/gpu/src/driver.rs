@@ -112,7 +112,9 @@ pub fn run(
     let mass = explicit.mass();
     let constrained = drape_time::constrained_components(model);
     let movable: Vec<bool> = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
-    let weight: Vec<Vector3<f64>> = model.mass.iter().map(|m| model.gravity * *m).collect();
+    // The external forces at the state's time (the weight and the loads),
+    // as the CPU driver holds them after a step.
+    let mut f_ext = vec![Vector3::zeros(); n];
     let mut guard = Guard::new(model, settings.guard.clone(), end);
     let mut stepper = Stepper::start(engine, explicit, state).map_err(|e| run_error(e, state))?;
     let kinetic0: f64 = (0..n)
@@ -204,11 +206,12 @@ pub fn run(
             record.tool_force[0] = sums[7];
         }
         if at_frame || at_end || at_check {
+            drape_time::external_forces(model, state.time, &mut f_ext);
             energy = energies_at(
                 &EnergyInputs {
                     model_strain: strain_energy(model, state),
                     mass,
-                    weight: &weight,
+                    f_ext: &f_ext,
                     constrained: &constrained,
                     damping: settings.damping,
                     kinetic0,
@@ -231,7 +234,7 @@ pub fn run(
             }
             if at_frame {
                 for (i, (r, c)) in reactions.iter_mut().zip(&constrained).enumerate() {
-                    let quasi_static = snapshot.f_int[i] - weight[i];
+                    let quasi_static = snapshot.f_int[i] - f_ext[i];
                     *r = Vector3::from_fn(|k, _| if c[k] { quasi_static[k] } else { 0.0 });
                 }
                 observer.frame(&Frame {
@@ -285,7 +288,8 @@ pub fn run(
 struct EnergyInputs<'a> {
     model_strain: f64,
     mass: &'a [f64],
-    weight: &'a [Vector3<f64>],
+    /// The external forces at the state's time.
+    f_ext: &'a [Vector3<f64>],
     constrained: &'a [[bool; 3]],
     damping: f64,
     kinetic0: f64,
@@ -304,7 +308,7 @@ fn energies_at(inp: &EnergyInputs<'_>, state: &State, s: &Snapshot, sums: [f64; 
             &NodeAtStep {
                 v: &state.v[i],
                 f_int: &s.f_int[i],
-                f_ext: &inp.weight[i],
+                f_ext: &inp.f_ext[i],
                 last_contact: &s.contact_force[i],
                 mass: inp.mass[i],
                 constrained: inp.constrained[i],

@@ -71,7 +71,10 @@ unsafe extern "C" {
         params: *const f64,
         x: *const f64,
         v: *const f64,
-        f_ext: *const f64,
+        weight: *const f64,
+        load_ptr: *const i64,
+        load_of: *const u32,
+        loads: *const f64,
         f_int: *const f64,
         mass: *const f64,
         fixed: *const u8,
@@ -337,7 +340,7 @@ impl<'m> HostStep<'m> {
         Ok(())
     }
 
-    fn update(&mut self, p: StepParams, held: &[f64], step: u64) -> Result<(), GpuError> {
+    fn update(&mut self, p: StepParams, values: &[f64], step: u64) -> Result<(), GpuError> {
         let f = &self.flat;
         let params = p.values();
         let tool = if f.tool.is_empty() {
@@ -345,21 +348,27 @@ impl<'m> HostStep<'m> {
         } else {
             f.tool.as_ptr()
         };
-        assert_eq!(
-            held.len(),
-            f.prescribed.len(),
-            "a step's prescribed coordinates"
-        );
+        assert_eq!(values.len(), f.step_width(), "a step's values");
+        let (held, loads) = values.split_at(f.prescribed.len());
+        let loads = if loads.is_empty() {
+            std::ptr::null()
+        } else {
+            loads.as_ptr()
+        };
         // SAFETY: every node array has 3n entries (fixed, moving and mass
-        // n, the sums SUMS·n), the params 10, the tool as step.h reads it,
-        // `held` one per moving component (`moving` indexes it).
+        // n, load_ptr n + 1, the sums SUMS·n), the params 10, the tool as
+        // step.h reads it, `held` one per moving component (`moving`
+        // indexes it), `loads` three per load (`load_of` indexes it).
         let fault = unsafe {
             drape_host_node_step(
                 f.nodes as i64,
                 params.as_ptr(),
                 self.x.as_ptr(),
                 self.v.as_ptr(),
-                f.f_ext.as_ptr(),
+                f.weight.as_ptr(),
+                f.load_ptr.as_ptr(),
+                f.load_of.as_ptr(),
+                loads,
                 self.f_int.as_ptr(),
                 f.mass.as_ptr(),
                 f.fixed.as_ptr(),
@@ -501,11 +510,11 @@ impl Engine for HostStep<'_> {
         self.forces(dt, false, 0)
     }
 
-    fn steps(&mut self, params: &[StepParams], held: &[f64], step: u64) -> Result<(), GpuError> {
-        let m = self.flat.prescribed.len();
+    fn steps(&mut self, params: &[StepParams], values: &[f64], step: u64) -> Result<(), GpuError> {
+        let w = self.flat.step_width();
         for (k, p) in params.iter().enumerate() {
             let at = step + k as u64 + 1;
-            self.update(*p, &held[k * m..(k + 1) * m], at)?;
+            self.update(*p, &values[k * w..(k + 1) * w], at)?;
             self.forces(p.h, true, at)?;
         }
         Ok(())

@@ -45,7 +45,6 @@ pub fn unsupported(model: &Model) -> Vec<String> {
             .any(|t| matches!(t.surface, Surface::Mesh(_))),
         "a triangle-mesh tool (geometry from an STL or OBJ file)",
     );
-    no(f.loads, "nodal loads ([[loads]])");
     no(f.pressure, "pressure ([[pressure]])");
     no(model.plies.len() > 1, "a stack of plies ([[plies]])");
     no(
@@ -202,8 +201,15 @@ pub(crate) struct Flat {
     pub moving: Vec<i32>,
     /// The moving components, whose coordinates each step is handed.
     pub prescribed: PrescribedMotions,
+    /// Node i's nodal loads `load_of[load_ptr[i]..load_ptr[i + 1]]`, in the
+    /// model's order (each step is handed their forces).
+    pub load_ptr: Vec<i64>,
+    pub load_of: Vec<u32>,
+    /// How many nodal loads the model has.
+    pub loads: usize,
     pub x0: Vec<f64>,
-    pub f_ext: Vec<f64>,
+    /// Each node's weight (the external force without the loads).
+    pub weight: Vec<f64>,
     /// The tool as `kernels/step.h` reads it (`DRAPE_TOOL_*`); empty for a
     /// model without one.
     pub tool: Vec<f64>,
@@ -448,6 +454,12 @@ impl Flat {
             }
             fixed[i] |= 8 << k;
         }
+        let owners = model
+            .loads
+            .iter()
+            .enumerate()
+            .flat_map(|(l, load)| load.nodes.iter().map(move |&i| (i, l as u32)));
+        let (load_ptr, load_of) = drape_model::node_slots(n, owners);
         // Weight from the physical mass (drape-time's external forces).
         let weight: Vec<Vector3<f64>> = model.mass.iter().map(|m| model.gravity * *m).collect();
         Ok(Self {
@@ -463,8 +475,11 @@ impl Flat {
             fixed,
             moving,
             prescribed,
+            load_ptr: load_ptr.iter().map(|&p| p as i64).collect(),
+            load_of,
+            loads: model.loads.len(),
             x0: split(&model.x0),
-            f_ext: split(&weight),
+            weight: split(&weight),
             tool: match (model.tools.first(), contact) {
                 (Some(tool), Some(c)) => {
                     encode_tool(tool, c.offset, c.fault_tolerance, c.max_travel)
@@ -477,6 +492,12 @@ impl Flat {
                 (None, _) => Vec::new(),
             },
         })
+    }
+
+    /// Values handed per step (`Engine::steps`' `values`): each moving
+    /// component's coordinate, then each nodal load's force.
+    pub fn step_width(&self) -> usize {
+        self.prescribed.len() + 3 * self.loads
     }
 
     /// Every membrane batch's history, value-major, from `state`.

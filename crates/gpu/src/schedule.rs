@@ -168,11 +168,12 @@ pub trait Engine {
     fn start_forces(&mut self, dt: f64) -> Result<(), GpuError>;
     /// A step of each of `params` (the same h): each the update, the
     /// contact, then the forces at the new positions with the histories
-    /// advanced. `held`: each step's coordinates of the components a
-    /// boundary motion moves (`drape_time::PrescribedMotions`' order),
-    /// step k's at `[k·m, (k + 1)·m)`. `step` is the state's step count
-    /// before them, to name a failure.
-    fn steps(&mut self, params: &[StepParams], held: &[f64], step: u64) -> Result<(), GpuError>;
+    /// advanced. `values`: step k's at `[k·w, (k + 1)·w)`, w = m + 3·L:
+    /// the coordinates of the m components a boundary motion moves at the
+    /// step's end (`drape_time::PrescribedMotions`' order), then the force
+    /// of each of the model's L nodal loads at its start. `step` is the
+    /// state's step count before them, to name a failure.
+    fn steps(&mut self, params: &[StepParams], values: &[f64], step: u64) -> Result<(), GpuError>;
 }
 
 /// What [`run_steps`] did.
@@ -215,10 +216,10 @@ pub(crate) struct Stepper {
     batch: BatchSteps,
     block: Vec<StepParams>,
     /// The components a boundary motion moves, their coordinates after
-    /// the last step, and the block's (`Engine::steps`' `held`).
+    /// the last step, and the block's values (`Engine::steps`' `values`).
     prescribed: PrescribedMotions,
     held_now: Vec<f64>,
-    held: Vec<f64>,
+    values: Vec<f64>,
 }
 
 impl Stepper {
@@ -266,7 +267,7 @@ impl Stepper {
             truss_factor: explicit.step_inputs().truss_factor,
             batch: BatchSteps::default(),
             block: Vec::with_capacity(block),
-            held: Vec::with_capacity(block * held_now.len()),
+            values: Vec::with_capacity(block * (held_now.len() + 3 * model.loads.len())),
             prescribed,
             held_now,
         })
@@ -317,7 +318,7 @@ impl Stepper {
                 count += 1;
             }
             self.block.clear();
-            self.held.clear();
+            self.values.clear();
             for k in 0..count {
                 let before = if k == 0 { self.dt_prev } else { h };
                 let mut p = StepParams::new(self.damping, before, h);
@@ -330,13 +331,19 @@ impl Stepper {
                     self.tool_velocity = p.tool_velocity;
                 }
                 self.block.push(p);
-                // As the CPU driver's step: from the coordinate before it.
+                // As the CPU driver's step: from the coordinate before it;
+                // the loads as they were at its start.
+                let model = explicit.model();
                 self.prescribed
-                    .advance(explicit.model(), &mut self.held_now, state.time, h);
-                self.held.extend_from_slice(&self.held_now);
+                    .advance(model, &mut self.held_now, state.time, h);
+                self.values.extend_from_slice(&self.held_now);
+                for load in &model.loads {
+                    self.values
+                        .extend_from_slice(load.force_at(state.time).as_slice());
+                }
                 state.time = t_new;
             }
-            engine.steps(&self.block, &self.held, state.step)?;
+            engine.steps(&self.block, &self.values, state.step)?;
             state.step += count;
             self.steps += count;
             self.blocks += 1;

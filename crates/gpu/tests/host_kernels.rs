@@ -467,3 +467,64 @@ fn the_benchmark_fabrics_shear_locking_law_runs_as_on_the_cpu() {
     let (cpu, gpu) = both(&s, u64::MAX / 2);
     assert_same(&cpu, &gpu);
 }
+
+#[test]
+fn nodal_loads_with_their_amplitudes_run_as_on_the_cpu() {
+    // A sheet clamped on its left edge, its right edge pulled by a load
+    // per length on a ramp, its corners (also on that edge) pushed down by
+    // a second load on a table: a node with two loads sums them in the
+    // loads' order; the frames' reactions and energies use the loads at
+    // the frame's time.
+    let s = scene(
+        r#"
+gravity = [0, 0, -9810]
+[simulation]
+end_time = 0.02
+frames = 4
+mass_scaling_dt = 2e-5
+[fabric]
+material = "glass-serge-4x3"
+fibres = "trusses"
+blank = { width = 100, height = 60, cells = [10, 6] }
+[[boundary]]
+nodes = "left"
+motion = { kind = "fixed" }
+[[loads]]
+nodes = "right"
+force = [2.0, 0.0, 0.5]
+per_length = true
+amplitude = { kind = "ramp", duration = 0.01 }
+[[loads]]
+nodes = "corners"
+force = [0.0, 0.3, -1.0]
+amplitude = { kind = "table", points = [[0, 0], [0.005, 1], [0.02, 0.2]] }
+"#,
+    );
+    assert!(unsupported(&s.model).is_empty());
+    let model = &s.model;
+    let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
+    let (mut cpu_frames, mut gpu_frames) = (Frames::default(), Frames::default());
+    Explicit::new(model, s.settings.clone())
+        .expect("a driver")
+        .run(&mut cpu, &mut cpu_frames)
+        .expect("the CPU run");
+    let explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
+    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
+    drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("run");
+    assert_same(&cpu, &gpu);
+    // The loads matter: without them the edge hangs elsewhere.
+    let mut unloaded = model.clone();
+    unloaded.loads.clear();
+    let mut hanging = unloaded.initial_state();
+    Explicit::new(&unloaded, s.settings.clone())
+        .expect("a driver")
+        .run(&mut hanging, &mut drape_time::NoObserver)
+        .expect("the CPU run");
+    let right = model.node_set("right").expect("an edge")[2] as usize;
+    let moved = (cpu.x[right] - hanging.x[right]).norm();
+    assert!(moved > 0.1, "the loads moved the edge by {moved} mm");
+    let last = cpu_frames.energies.last().expect("frames");
+    assert!(last.external_work > 0.0, "{last:?}");
+    assert_same_energies(&cpu_frames, &gpu_frames);
+    assert_eq!(cpu_frames.reaction_x, gpu_frames.reaction_x);
+}

@@ -185,6 +185,13 @@ pub struct NodalLoad {
     pub amplitude: Amplitude,
 }
 
+impl NodalLoad {
+    /// The force on each of its nodes at time `t` (N).
+    pub fn force_at(&self, t: f64) -> Vector3<f64> {
+        self.force * self.amplitude.value(t)
+    }
+}
+
 /// The features a model uses, so that a driver runs only their passes
 /// (SPEC §7, "skip what a scene doesn't need").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]

@@ -491,14 +491,15 @@ pub(crate) fn first_node(n: usize, bad: impl Fn(usize) -> bool + Sync) -> Option
         .reduce(|| None, |a, b| a.or(b))
 }
 
-/// Gravity and the nodal loads at time `t` into `f_ext`.
-pub(crate) fn external_forces(model: &Model, t: f64, f_ext: &mut [Vector3<f64>]) {
+/// Gravity and the nodal loads at time `t` into `f_ext` (the follower
+/// pressures apart): the weight, then each load in its order.
+pub fn external_forces(model: &Model, t: f64, f_ext: &mut [Vector3<f64>]) {
     // Weight from the physical mass: mass scaling adds inertia only.
     for (f, m) in f_ext.iter_mut().zip(&model.mass) {
         *f = model.gravity * *m;
     }
     for load in &model.loads {
-        let f = load.force * load.amplitude.value(t);
+        let f = load.force_at(t);
         for &n in &load.nodes {
             f_ext[n as usize] += f;
         }

@@ -203,6 +203,11 @@ extern "C" __global__ void gather_node_step(long n, const long *ptr, const unsig
                                             const double *v, const double *weight,
                                             const long *load_ptr, const unsigned *load_of,
                                             int has_loads, const double *loads,
+                                            const long *p_ptr, const unsigned *p_slot,
+                                            const unsigned *p_nodes,
+                                            const unsigned char *p_count,
+                                            const unsigned *p_load, int has_pressure,
+                                            const double *scales,
                                             double *f_int, const double *mass,
                                             const unsigned char *fixed, const double *x0,
                                             const int *moving, const double *held,
@@ -216,7 +221,8 @@ extern "C" __global__ void gather_node_step(long n, const long *ptr, const unsig
     }
     drape_gather(i, ptr, node_slots, slots, slot_count, f_int, n);
     int kind = drape_node_step(i, n, params, x, v, weight, load_ptr, load_of,
-                               has_loads ? loads : 0, f_int, mass, fixed, x0, moving, held,
+                               has_loads ? loads : 0, p_ptr, p_slot, p_nodes, p_count, p_load,
+                               has_pressure ? scales : 0, f_int, mass, fixed, x0, moving, held,
                                has_tool ? tool : 0, x_new, v_new, contact_force, status, sums);
     if (kind) {
         atomicMin(fault + 2, (int)(4 * i + kind));

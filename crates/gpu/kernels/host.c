@@ -87,7 +87,10 @@ void drape_host_gather(long n, const long *ptr, const unsigned *node_slots, cons
 
 long drape_host_node_step(long n, const double *params, const double *x, const double *v,
                           const double *weight, const long *load_ptr, const unsigned *load_of,
-                          const double *loads, const double *f_int, const double *mass,
+                          const double *loads, const long *p_ptr, const unsigned *p_slot,
+                          const unsigned *p_nodes, const unsigned char *p_count,
+                          const unsigned *p_load, const double *scales, const double *f_int,
+                          const double *mass,
                           const unsigned char *fixed, const double *x0, const int *moving,
                           const double *held, const double *tool, double *x_new,
                           double *v_new, double *contact_force, unsigned char *status,
@@ -95,9 +98,10 @@ long drape_host_node_step(long n, const double *params, const double *x, const d
 {
     long first = -1;
     for (long i = 0; i < n; i++) {
-        int fault = drape_node_step(i, n, params, x, v, weight, load_ptr, load_of, loads, f_int,
-                                    mass, fixed, x0, moving, held, tool, x_new, v_new,
-                                    contact_force, status, sums);
+        int fault = drape_node_step(i, n, params, x, v, weight, load_ptr, load_of, loads, p_ptr,
+                                    p_slot, p_nodes, p_count, p_load, scales, f_int, mass, fixed,
+                                    x0, moving, held, tool, x_new, v_new, contact_force, status,
+                                    sums);
         if (fault && first < 0) {
             first = 4 * i + fault;
         }

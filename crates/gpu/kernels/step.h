@@ -960,17 +960,57 @@ DRAPE_FN void drape_works(long i, long n, const double *params, const double *ma
     sums[4 * n + i] += w_c;
 }
 
+/* The follower pressures on node i at positions x (drape_time::
+ * PressurePass::add_into): each of its slots' p a(t) A/k, the vector area
+ * A of the slot's element (pressure::vector_area), summed from zero in
+ * slot order. Slot s: its element's k nodes at p_nodes[4s..4s + k]
+ * (k = p_count[s]), its load's p a(t) at scales[p_load[s]]. */
+DRAPE_FN void drape_pressure(long i, const long *p_ptr, const unsigned *p_slot,
+                             const unsigned *p_nodes, const unsigned char *p_count,
+                             const unsigned *p_load, const double *scales, const double *x,
+                             double sum[3])
+{
+    sum[0] = 0.0;
+    sum[1] = 0.0;
+    sum[2] = 0.0;
+    for (long q = p_ptr[i]; q < p_ptr[i + 1]; q++) {
+        long s = p_slot[q];
+        const unsigned *e = p_nodes + 4 * s;
+        int k = p_count[s];
+        double a[3], b[3];
+        for (int c = 0; c < 3; c++) {
+            if (k == 4) {
+                a[c] = x[3 * (long)e[2] + c] - x[3 * (long)e[0] + c];
+                b[c] = x[3 * (long)e[3] + c] - x[3 * (long)e[1] + c];
+            } else {
+                a[c] = x[3 * (long)e[1] + c] - x[3 * (long)e[0] + c];
+                b[c] = x[3 * (long)e[2] + c] - x[3 * (long)e[0] + c];
+            }
+        }
+        double cross[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                           a[0] * b[1] - a[1] * b[0]};
+        double scale = scales[p_load[s]] / (double)k;
+        for (int c = 0; c < 3; c++) {
+            sum[c] += 0.5 * cross[c] * scale;
+        }
+    }
+}
+
 /* Node i's whole step: the update, the contact when there is a tool
  * (`tool` not null), the works. `held`: the step's prescribed coordinates
  * (drape_held); `weight`: each node's weight; `loads` (null for none):
  * each nodal load's force at the step's start, node i's loads
- * load_of[load_ptr[i] .. load_ptr[i + 1]] (drape_time::external_forces:
- * the weight, then the loads in their order). Returns the contact's fault
- * (0: none). */
+ * load_of[load_ptr[i] .. load_ptr[i + 1]]; `scales` (null for none): each
+ * pressure's p a(t) at the step's start, node i's pressure slots as
+ * drape_pressure reads them. The external force is drape_time::
+ * external_forces' (the weight, then the loads in their order) plus the
+ * pressures' sum. Returns the contact's fault (0: none). */
 DRAPE_FN int drape_node_step(long i, long n, const double *params, const double *x,
                              const double *v, const double *weight, const long *load_ptr,
-                             const unsigned *load_of, const double *loads,
-                             const double *f_int, const double *mass,
+                             const unsigned *load_of, const double *loads, const long *p_ptr,
+                             const unsigned *p_slot, const unsigned *p_nodes,
+                             const unsigned char *p_count, const unsigned *p_load,
+                             const double *scales, const double *f_int, const double *mass,
                              const unsigned char *fixed, const double *x0, const int *moving,
                              const double *held, const double *tool, double *x_new,
                              double *v_new, double *contact_force, unsigned char *status,
@@ -984,6 +1024,13 @@ DRAPE_FN int drape_node_step(long i, long n, const double *params, const double 
             f_ext[1] += loads[3 * l + 1];
             f_ext[2] += loads[3 * l + 2];
         }
+    }
+    if (scales) {
+        double sum[3];
+        drape_pressure(i, p_ptr, p_slot, p_nodes, p_count, p_load, scales, x, sum);
+        f_ext[0] += sum[0];
+        f_ext[1] += sum[1];
+        f_ext[2] += sum[2];
     }
     drape_update(i, n, x, v, f_ext, f_int, mass, fixed, x0, moving, held, params[0], params[1],
                  params[2], params[3], x_new, v_new);

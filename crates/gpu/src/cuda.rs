@@ -230,6 +230,13 @@ pub struct CudaStep<'m> {
     load_ptr: CudaSlice<i64>,
     load_of: CudaSlice<u32>,
     has_loads: i32,
+    /// Node i's pressure slots and theirs elements (`Flat`'s `p_*`).
+    p_ptr: CudaSlice<i64>,
+    p_slot: CudaSlice<u32>,
+    p_nodes: CudaSlice<u32>,
+    p_count: CudaSlice<u8>,
+    p_load: CudaSlice<u32>,
+    has_pressure: i32,
     /// Positions and velocities: [0] current, [1] the other buffer
     /// (swapped by `parity`).
     x: [CudaSlice<f64>; 2],
@@ -387,6 +394,12 @@ impl<'m> CudaStep<'m> {
             load_ptr: upload(s, &flat.load_ptr)?,
             load_of: upload(s, &flat.load_of)?,
             has_loads: i32::from(flat.loads > 0),
+            p_ptr: upload(s, &flat.p_ptr)?,
+            p_slot: upload(s, &flat.p_slot)?,
+            p_nodes: upload(s, &flat.p_nodes)?,
+            p_count: upload(s, &flat.p_count)?,
+            p_load: upload(s, &flat.p_load)?,
+            has_pressure: i32::from(flat.pressures > 0),
             x: [zeros(s, 3 * n)?, zeros(s, 3 * n)?],
             v: [zeros(s, 3 * n)?, zeros(s, 3 * n)?],
             f_int: zeros(s, 3 * n)?,
@@ -644,6 +657,8 @@ impl<'m> CudaStep<'m> {
         let (m, w) = (self.flat.prescribed.len(), self.flat.step_width());
         let held = self.values.slice(w * k..w * k + 1.max(m));
         let loads = self.values.slice(w * k + m..w * (k + 1) + 1);
+        let l3 = 3 * self.flat.loads;
+        let scales = self.values.slice(w * k + m + l3..w * (k + 1) + 1);
         let sc = self.flat.slot_count as i64;
         let mut b = self.stream.launch_builder(&self.kernels.gather_node_step);
         b.arg(&n)
@@ -659,6 +674,13 @@ impl<'m> CudaStep<'m> {
             .arg(&self.load_of)
             .arg(&self.has_loads)
             .arg(&loads)
+            .arg(&self.p_ptr)
+            .arg(&self.p_slot)
+            .arg(&self.p_nodes)
+            .arg(&self.p_count)
+            .arg(&self.p_load)
+            .arg(&self.has_pressure)
+            .arg(&scales)
             .arg(&mut self.f_int)
             .arg(&self.mass)
             .arg(&self.fixed)

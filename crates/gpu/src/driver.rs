@@ -115,6 +115,7 @@ pub fn run(
     // The external forces at the state's time (the weight and the loads),
     // as the CPU driver holds them after a step.
     let mut f_ext = vec![Vector3::zeros(); n];
+    let mut pressure = drape_time::PressurePass::new(model);
     let mut guard = Guard::new(model, settings.guard.clone(), end);
     let mut stepper = Stepper::start(engine, explicit, state).map_err(|e| run_error(e, state))?;
     let kinetic0: f64 = (0..n)
@@ -207,6 +208,7 @@ pub fn run(
         }
         if at_frame || at_end || at_check {
             drape_time::external_forces(model, state.time, &mut f_ext);
+            pressure.add_into(model, &state.x, state.time, &mut f_ext);
             energy = energies_at(
                 &EnergyInputs {
                     model_strain: strain_energy(model, state),

@@ -75,6 +75,12 @@ unsafe extern "C" {
         load_ptr: *const i64,
         load_of: *const u32,
         loads: *const f64,
+        p_ptr: *const i64,
+        p_slot: *const u32,
+        p_nodes: *const u32,
+        p_count: *const u8,
+        p_load: *const u32,
+        scales: *const f64,
         f_int: *const f64,
         mass: *const f64,
         fixed: *const u8,
@@ -349,16 +355,20 @@ impl<'m> HostStep<'m> {
             f.tool.as_ptr()
         };
         assert_eq!(values.len(), f.step_width(), "a step's values");
-        let (held, loads) = values.split_at(f.prescribed.len());
-        let loads = if loads.is_empty() {
-            std::ptr::null()
-        } else {
-            loads.as_ptr()
+        let (held, rest) = values.split_at(f.prescribed.len());
+        let (loads, scales) = rest.split_at(3 * f.loads);
+        let or_null = |v: &[f64]| {
+            if v.is_empty() {
+                std::ptr::null()
+            } else {
+                v.as_ptr()
+            }
         };
         // SAFETY: every node array has 3n entries (fixed, moving and mass
         // n, load_ptr n + 1, the sums SUMS·n), the params 10, the tool as
         // step.h reads it, `held` one per moving component (`moving`
-        // indexes it), `loads` three per load (`load_of` indexes it).
+        // indexes it), `loads` three per load (`load_of` indexes it), the
+        // pressure slots as drape_pressure reads them.
         let fault = unsafe {
             drape_host_node_step(
                 f.nodes as i64,
@@ -368,7 +378,13 @@ impl<'m> HostStep<'m> {
                 f.weight.as_ptr(),
                 f.load_ptr.as_ptr(),
                 f.load_of.as_ptr(),
-                loads,
+                or_null(loads),
+                f.p_ptr.as_ptr(),
+                f.p_slot.as_ptr(),
+                f.p_nodes.as_ptr(),
+                f.p_count.as_ptr(),
+                f.p_load.as_ptr(),
+                or_null(scales),
                 self.f_int.as_ptr(),
                 f.mass.as_ptr(),
                 f.fixed.as_ptr(),

@@ -6,7 +6,7 @@ use drape_constitutive::ResinLaw;
 use drape_contact::{ContactSettings, ProfileSegment, Surface, Tool};
 use drape_elements::{MembraneBatch, MembraneShape};
 use drape_model::{Model, State};
-use drape_time::{Explicit, PrescribedMotions};
+use drape_time::{Explicit, PrescribedMotions, PressurePass};
 use nalgebra::Vector3;
 
 use crate::GpuError;
@@ -45,7 +45,6 @@ pub fn unsupported(model: &Model) -> Vec<String> {
             .any(|t| matches!(t.surface, Surface::Mesh(_))),
         "a triangle-mesh tool (geometry from an STL or OBJ file)",
     );
-    no(f.pressure, "pressure ([[pressure]])");
     no(model.plies.len() > 1, "a stack of plies ([[plies]])");
     no(
         model.membranes.iter().any(|b| {
@@ -207,6 +206,16 @@ pub(crate) struct Flat {
     pub load_of: Vec<u32>,
     /// How many nodal loads the model has.
     pub loads: usize,
+    /// Node i's pressure slots `p_slot[p_ptr[i]..p_ptr[i + 1]]`
+    /// (`drape_time::PressurePass`'s order); per slot its element's nodes
+    /// (4, the last unused for a triangle), their count and its load.
+    pub p_ptr: Vec<i64>,
+    pub p_slot: Vec<u32>,
+    pub p_nodes: Vec<u32>,
+    pub p_count: Vec<u8>,
+    pub p_load: Vec<u32>,
+    /// How many pressure loads the model has.
+    pub pressures: usize,
     pub x0: Vec<f64>,
     /// Each node's weight (the external force without the loads).
     pub weight: Vec<f64>,
@@ -460,6 +469,19 @@ impl Flat {
             .enumerate()
             .flat_map(|(l, load)| load.nodes.iter().map(move |&i| (i, l as u32)));
         let (load_ptr, load_of) = drape_model::node_slots(n, owners);
+        let pass = PressurePass::new(model);
+        let (p_ptr, p_slot) = if pass.is_empty() {
+            (&[0usize][..], &[][..])
+        } else {
+            pass.node_slot_lists()
+        };
+        let (mut p_nodes, mut p_count, mut p_load) = (Vec::new(), Vec::new(), Vec::new());
+        for &(l, e) in pass.slots() {
+            let nodes = model.pressure[l as usize].element(e as usize);
+            p_nodes.extend((0..4).map(|a| nodes.get(a).copied().unwrap_or(0)));
+            p_count.push(nodes.len() as u8);
+            p_load.push(l);
+        }
         // Weight from the physical mass (drape-time's external forces).
         let weight: Vec<Vector3<f64>> = model.mass.iter().map(|m| model.gravity * *m).collect();
         Ok(Self {
@@ -478,6 +500,12 @@ impl Flat {
             load_ptr: load_ptr.iter().map(|&p| p as i64).collect(),
             load_of,
             loads: model.loads.len(),
+            p_ptr: p_ptr.iter().map(|&p| p as i64).collect(),
+            p_slot: p_slot.to_vec(),
+            p_nodes,
+            p_count,
+            p_load,
+            pressures: model.pressure.len(),
             x0: split(&model.x0),
             weight: split(&weight),
             tool: match (model.tools.first(), contact) {
@@ -495,9 +523,10 @@ impl Flat {
     }
 
     /// Values handed per step (`Engine::steps`' `values`): each moving
-    /// component's coordinate, then each nodal load's force.
+    /// component's coordinate, each nodal load's force, then each
+    /// pressure's p·a(t).
     pub fn step_width(&self) -> usize {
-        self.prescribed.len() + 3 * self.loads
+        self.prescribed.len() + 3 * self.loads + self.pressures
     }
 
     /// Every membrane batch's history, value-major, from `state`.

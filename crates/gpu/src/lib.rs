@@ -20,8 +20,9 @@
 //! What it covers: the paper's element (fibre trusses with the crimp law,
 //! the buckled column and their dashpots, resin quads and triangles with
 //! Prony relaxation, or membranes with the fibres embedded; the
-//! shear-locking law), yarn bending, holding springs, gravity and nodal
-//! loads (each step handed their forces at its start), boundary
+//! shear-locking law), yarn bending, holding springs, gravity, nodal
+//! loads and follower pressures (each step handed their values at its
+//! start), boundary
 //! conditions (fixed, or moved by a displacement, a velocity or a picture
 //! frame: the host works out each step's prescribed coordinates as the CPU
 //! driver does, [`drape_time::PrescribedMotions`], and hands them over
@@ -30,7 +31,7 @@
 //! prescribed displacement) with Coulomb friction: the shipped hemisphere,
 //! picture-frame, bias-extension and imported-plate scenes. A model with
 //! anything else is refused by [`unsupported`], naming what (a second
-//! tool, a force-driven or a mesh tool, pressure, plies).
+//! tool, a force-driven or a mesh tool, plies).
 //!
 //! ```
 //! use drape_gpu::unsupported;

@@ -168,11 +168,12 @@ pub trait Engine {
     fn start_forces(&mut self, dt: f64) -> Result<(), GpuError>;
     /// A step of each of `params` (the same h): each the update, the
     /// contact, then the forces at the new positions with the histories
-    /// advanced. `values`: step k's at `[k·w, (k + 1)·w)`, w = m + 3·L:
-    /// the coordinates of the m components a boundary motion moves at the
-    /// step's end (`drape_time::PrescribedMotions`' order), then the force
-    /// of each of the model's L nodal loads at its start. `step` is the
-    /// state's step count before them, to name a failure.
+    /// advanced. `values`: step k's at `[k·w, (k + 1)·w)`, w = m + 3·L +
+    /// P: the coordinates of the m components a boundary motion moves at
+    /// the step's end (`drape_time::PrescribedMotions`' order), the force
+    /// of each of the model's L nodal loads and the p·a(t) of each of its P
+    /// pressures at the step's start. `step` is the state's step count
+    /// before them, to name a failure.
     fn steps(&mut self, params: &[StepParams], values: &[f64], step: u64) -> Result<(), GpuError>;
 }
 
@@ -267,7 +268,9 @@ impl Stepper {
             truss_factor: explicit.step_inputs().truss_factor,
             batch: BatchSteps::default(),
             block: Vec::with_capacity(block),
-            values: Vec::with_capacity(block * (held_now.len() + 3 * model.loads.len())),
+            values: Vec::with_capacity(
+                block * (held_now.len() + 3 * model.loads.len() + model.pressure.len()),
+            ),
             prescribed,
             held_now,
         })
@@ -340,6 +343,9 @@ impl Stepper {
                 for load in &model.loads {
                     self.values
                         .extend_from_slice(load.force_at(state.time).as_slice());
+                }
+                for p in &model.pressure {
+                    self.values.push(p.pressure_at(state.time));
                 }
                 state.time = t_new;
             }

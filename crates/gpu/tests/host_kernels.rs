@@ -528,3 +528,56 @@ amplitude = { kind = "table", points = [[0, 0], [0.005, 1], [0.02, 0.2]] }
     assert_same_energies(&cpu_frames, &gpu_frames);
     assert_eq!(cpu_frames.reaction_x, gpu_frames.reaction_x);
 }
+
+#[test]
+fn a_vacuum_pressure_drapes_a_ply_on_a_dome_as_on_the_cpu() {
+    // The shipped conforming ply's mould (a dome), the ply pressed onto it
+    // by a follower pressure (a vacuum bag) on a smooth step: each node's
+    // share of its elements' current vector areas, in the pressure pass's
+    // order; the frames' energies take the pressure at their positions.
+    let s = scene(
+        r#"
+[simulation]
+end_time = 0.02
+frames = 4
+mass_scaling_dt = 2e-5
+[fabric]
+material = "carbon-prepreg-2x2"
+fibres = "trusses"
+blank = { width = 120, height = 120, cells = [12, 12] }
+[[tools]]
+name = "dome"
+geometry = { kind = "sphere", center = [0, 0, -80.5], radius = 80 }
+friction = 0.2
+[[pressure]]
+value = 0.02
+towards = "dome"
+amplitude = { kind = "smooth_step", duration = 0.02 }
+[[springs]]
+nodes = "corners"
+stiffness = 1.0
+"#,
+    );
+    assert!(
+        unsupported(&s.model).is_empty(),
+        "{:?}",
+        unsupported(&s.model)
+    );
+    let model = &s.model;
+    let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
+    let (mut cpu_frames, mut gpu_frames) = (Frames::default(), Frames::default());
+    Explicit::new(model, s.settings.clone())
+        .expect("a driver")
+        .run(&mut cpu, &mut cpu_frames)
+        .expect("the CPU run");
+    let explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
+    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
+    drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("run");
+    assert_same(&cpu, &gpu);
+    // Pressed down over the dome: a corner, beyond it, went down.
+    let drop = model.x0[0].z - cpu.x[0].z;
+    assert!(drop > 1.0, "the corner went down {drop} mm");
+    let last = cpu_frames.energies.last().expect("frames");
+    assert!(last.external_work > 0.0, "{last:?}");
+    assert_same_energies(&cpu_frames, &gpu_frames);
+}

@@ -103,6 +103,11 @@ impl PressureLoad {
             .sum()
     }
 
+    /// The pressure p·a(t) at time `t` (MPa).
+    pub fn pressure_at(&self, t: f64) -> f64 {
+        self.value * self.amplitude.value(t)
+    }
+
     /// The force on each node of element `e` at positions `x` and
     /// amplitude value `a`: p·a·A/k (N).
     pub fn nodal_force(&self, e: usize, x: &[Vector3<f64>], a: f64) -> Vector3<f64> {

@@ -78,4 +78,6 @@ pub use observer::{
 };
 pub use ply_check::ply_overlap_tolerance;
 pub use profile::{Pass, ProfileClock, StepProfile};
-pub use shared::{PrescribedMotions, constrained_components, external_forces, strain_energy};
+pub use shared::{
+    PrescribedMotions, PressurePass, constrained_components, external_forces, strain_energy,
+};

@@ -511,8 +511,10 @@ pub fn external_forces(model: &Model, t: f64, f_ext: &mut [Vector3<f64>]) {
 /// and each node sums its elements' slots in ascending order, so the forces
 /// do not depend on the thread count. Built once; an evaluation allocates
 /// nothing. A model without pressure has an empty pass that adds nothing.
+/// Public for a driver stepped elsewhere (drape-gpu), which reads its
+/// slots and sums them in the same order.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct PressurePass {
+pub struct PressurePass {
     /// Per slot: (load, element of the load).
     elements: Vec<(u32, u32)>,
     /// Each slot's force on each node of its element.
@@ -528,6 +530,7 @@ pub(crate) struct PressurePass {
 const PRESSURE_PIECE: usize = 2048;
 
 impl PressurePass {
+    /// The pass of `model`'s pressures.
     pub fn new(model: &Model) -> Self {
         let mut elements = Vec::new();
         let mut owners: Vec<(u32, u32)> = Vec::new();
@@ -558,6 +561,18 @@ impl PressurePass {
         self.elements.is_empty()
     }
 
+    /// Per slot, its load and the element of the load.
+    pub fn slots(&self) -> &[(u32, u32)] {
+        &self.elements
+    }
+
+    /// Each node's slots in the order it sums them: node i's are
+    /// `slots[ptr[i]..ptr[i + 1]]` of (`ptr`, `slots`); empty without
+    /// pressure.
+    pub fn node_slot_lists(&self) -> (&[usize], &[u32]) {
+        (&self.node_ptr, &self.node_slots)
+    }
+
     /// Adds the pressures' nodal forces at positions `x` and time `t` to
     /// `f_ext`.
     pub fn add_into(
@@ -572,7 +587,7 @@ impl PressurePass {
             return;
         }
         for (s, p) in self.scale.iter_mut().zip(&model.pressure) {
-            *s = p.value * p.amplitude.value(t);
+            *s = p.pressure_at(t);
         }
         let (elements, scale) = (&self.elements, &self.scale);
         self.slots

@@ -492,13 +492,6 @@ fn run(
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    if scene.spec.simulation.device == Device::Gpu && checkpoint_every.is_some() {
-        return Err(bad(format!(
-            "{}: a run on the GPU writes no checkpoints yet: leave out --checkpoint-every or \
-             run on the CPU",
-            scene_path.display()
-        )));
-    }
     let out = out.unwrap_or_else(|| default_out(scene_path, ""));
     drape::limits::check_output(&[&scene], &out)
         .map_err(|reason| bad(format!("{}: {reason}", scene_path.display())))?;

@@ -14,8 +14,8 @@ use drape_elements::{ElementError, KinematicsError};
 use drape_model::State;
 use drape_time::guard::{Guard, MIN_ENERGY_CHECKS};
 use drape_time::{
-    Control, Energies, Explicit, Frame, NodeAtStep, Observer, Progress, RunError, RunSummary,
-    node_energy_terms, strain_energy,
+    Control, DriverState, Energies, Explicit, Frame, NodeAtStep, Observer, Progress, RunError,
+    RunSummary, node_energy_terms, strain_energy,
 };
 use nalgebra::Vector3;
 
@@ -74,20 +74,27 @@ fn run_error(e: GpuError, state: &State) -> RunError {
     }
 }
 
-/// Σ of each running sum over the nodes (in node order).
-fn totals(s: &Snapshot, n: usize) -> [f64; 8] {
+/// Σ of each running sum over the nodes (in node order), after what a
+/// resumed run carries of the first seven (`carried`).
+fn totals(s: &Snapshot, n: usize, carried: &[f64; 7]) -> [f64; 8] {
     let mut out = [0.0; 8];
     for (k, o) in out.iter_mut().enumerate() {
-        *o = s.sums[k * n..(k + 1) * n].iter().sum();
+        let start = carried.get(k).copied().unwrap_or(0.0);
+        *o = s.sums[k * n..(k + 1) * n]
+            .iter()
+            .fold(start, |sum, x| sum + x);
     }
     out
 }
 
-/// Runs `explicit`'s model from `state` (at its start) to its end time with
-/// the steps on `engine`, handing `observer` the frames and progress the
-/// CPU driver would; returns the summary and the contact at the end. On an
-/// error `state` holds the last frame that passed every check (or the
-/// start).
+/// Runs `explicit`'s model from `state` to its end time with the steps on
+/// `engine`, handing `observer` the frames, progress and checkpoints the
+/// CPU driver would; returns the summary and the contact at the end. A
+/// run resumed from a checkpoint (`Explicit::resume_from`, the CPU
+/// driver's or this one's) continues with the same states, bit for bit,
+/// as one that never stopped; its works go on from the checkpoint's
+/// totals. On an error `state` holds the last frame that passed every
+/// check (or the start).
 pub fn run(
     explicit: &Explicit<'_>,
     engine: &mut dyn Engine,
@@ -97,16 +104,34 @@ pub fn run(
     let started = Instant::now();
     let model = explicit.model();
     let settings = explicit.settings();
-    if state.step != 0 {
-        return Err(RunError::Setup(
-            "resuming a run on the GPU is not done yet: resume it without --device gpu".into(),
-        ));
+    let resume = explicit.resume_state().cloned();
+    if let Some(r) = &resume {
+        if r.implicit.is_some() {
+            return Err(RunError::Setup(
+                "the checkpoint was written by the implicit driver".into(),
+            ));
+        }
+        if r.plies.is_some() || !r.truss_clearance.is_empty() {
+            return Err(RunError::Setup(
+                "the checkpoint carries a ply contact or confined yarns, which the GPU run does \
+                 not do: resume it on the CPU"
+                    .into(),
+            ));
+        }
     }
-    if settings.checkpoint_every.is_some() {
-        return Err(RunError::Setup(
-            "the GPU run writes no checkpoints yet: leave out --checkpoint-every".into(),
-        ));
-    }
+    // The works, friction and tool impulse the stopped run had summed.
+    let carried = resume.as_ref().map_or([0.0; 7], |r| {
+        let e = &r.energy;
+        [
+            e.internal_work,
+            e.external_work,
+            e.damping,
+            e.boundary_work,
+            e.contact_work,
+            r.friction_dissipation,
+            r.tools.first().map_or(0.0, |t| t.impulse),
+        ]
+    });
     let n = model.node_count();
     let end = settings.end_time;
     let mass = explicit.mass();
@@ -118,14 +143,20 @@ pub fn run(
     let mut pressure = drape_time::PressurePass::new(model);
     let mut guard = Guard::new(model, settings.guard.clone(), end);
     let mut stepper = Stepper::start(engine, explicit, state).map_err(|e| run_error(e, state))?;
-    let kinetic0: f64 = (0..n)
-        .map(|i| 0.5 * mass[i] * state.v[i].norm_squared())
-        .sum();
+    let kinetic0: f64 = match &resume {
+        Some(r) => r.kinetic0,
+        None => (0..n)
+            .map(|i| 0.5 * mass[i] * state.v[i].norm_squared())
+            .sum(),
+    };
     guard.begin(state);
     let mut record = RunContact {
-        tool_state: explicit
-            .contact()
-            .map_or_else(Vec::new, |c| c.tool_state.clone()),
+        tool_state: match &resume {
+            Some(r) => r.tools.clone(),
+            None => explicit
+                .contact()
+                .map_or_else(Vec::new, |c| c.tool_state.clone()),
+        },
         force: vec![Vector3::zeros(); n],
         status: vec![ContactStatus::Open; n],
         tool_of: vec![u32::MAX; n],
@@ -133,28 +164,36 @@ pub fn run(
         friction_dissipation: 0.0,
     };
     let mut reactions = vec![Vector3::zeros(); n];
-    let mut energy = Energies {
-        kinetic: kinetic0,
-        strain: strain_energy(model, state),
-        ..Energies::default()
+    let mut energy = match &resume {
+        Some(r) => r.energy,
+        None => Energies {
+            kinetic: kinetic0,
+            strain: strain_energy(model, state),
+            ..Energies::default()
+        },
     };
-    observer.frame(&Frame {
-        index: 0,
-        model,
-        state,
-        energy: &energy,
-        reactions: &reactions,
-        contact: record.view(&model.tools),
-    });
+    if state.step == 0 {
+        observer.frame(&Frame {
+            index: 0,
+            model,
+            state,
+            energy: &energy,
+            reactions: &reactions,
+            contact: record.view(&model.tools),
+        });
+    }
     let frame_dt = if settings.frames > 0 {
         end / settings.frames as f64
     } else {
         f64::INFINITY
     };
     let check_dt = end / settings.frames.max(MIN_ENERGY_CHECKS) as f64;
-    let (mut next_frame, mut next_check) = (1usize, 1.0f64);
+    // As the CPU driver counts them, from a resumed run's time too.
+    let mut next_frame = (state.time / frame_dt).floor() as usize + 1;
+    let mut next_check = (state.time / check_dt).floor() + 1.0;
     let mut stopped = false;
     let mut last_progress = Instant::now();
+    let mut checkpointed = state.step;
     while !stepper.at_end(state) {
         if settings.max_steps.is_some_and(|m| stepper.steps >= m) {
             stopped = true;
@@ -189,7 +228,7 @@ pub fn run(
             return Err(e);
         }
         // The contact as the frame shows it.
-        let sums = totals(&snapshot, n);
+        let sums = totals(&snapshot, n, &carried);
         record.force.clone_from(&snapshot.contact_force);
         for (i, s) in snapshot.status.iter().enumerate() {
             record.status[i] = match s {
@@ -205,6 +244,32 @@ pub fn run(
             ts.velocity = stepper.tool_velocity;
             ts.impulse = sums[6];
             record.tool_force[0] = sums[7];
+        }
+        // Before the checks, as the CPU driver hands it: what a restart
+        // needs, the works summed to the last half step.
+        if stepper.at_checkpoint(state) && state.step > checkpointed {
+            checkpointed = state.step;
+            observer.checkpoint(
+                state,
+                &DriverState {
+                    dt: stepper.dt,
+                    dt_prev: stepper.dt_prev,
+                    energy: Energies {
+                        internal_work: sums[0],
+                        external_work: sums[1],
+                        damping: sums[2],
+                        boundary_work: sums[3],
+                        contact_work: sums[4],
+                        ..Energies::default()
+                    },
+                    kinetic0,
+                    tools: record.tool_state.clone(),
+                    friction_dissipation: sums[5],
+                    implicit: None,
+                    truss_clearance: Vec::new(),
+                    plies: None,
+                },
+            );
         }
         if at_frame || at_end || at_check {
             drape_time::external_forces(model, state.time, &mut f_ext);

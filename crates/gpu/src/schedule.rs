@@ -198,8 +198,11 @@ pub struct StepRun {
 pub(crate) struct Stepper {
     end: f64,
     interval: u64,
+    /// Blocks end at the steps a checkpoint is taken at (`checkpoint_every`).
+    checkpoint: Option<u64>,
     damping: f64,
-    dt: f64,
+    /// The current stable step.
+    pub dt: f64,
     /// The last step taken (0 before the first).
     pub dt_prev: f64,
     /// The tool's displacement and velocity after the last step.
@@ -226,7 +229,9 @@ pub(crate) struct Stepper {
 impl Stepper {
     /// Starts `engine` at `state` as the CPU driver starts: the blank
     /// settled on the tools (its start-up checks said so), the forces at
-    /// the start with no time passing, the first stable step.
+    /// the start with no time passing, the first stable step; or, resumed
+    /// (`explicit.resume_state()`), its steps and tool where the stopped run
+    /// left them.
     pub fn start(
         engine: &mut dyn Engine,
         explicit: &Explicit<'_>,
@@ -234,7 +239,8 @@ impl Stepper {
     ) -> Result<Self, GpuError> {
         let settings = explicit.settings();
         let model = explicit.model();
-        if state.step == 0 {
+        let resume = explicit.resume_state();
+        if state.step == 0 && resume.is_none() {
             let free: Vec<bool> = drape_time::constrained_components(model)
                 .iter()
                 .map(|c| !c.iter().any(|&b| b))
@@ -243,9 +249,18 @@ impl Stepper {
         }
         engine.load(state)?;
         engine.start_forces(0.0)?;
-        let dt = explicit.stable_time_step(&state.x);
+        let (dt, dt_prev) = match resume {
+            Some(r) => (r.dt, r.dt_prev),
+            None => {
+                let dt = explicit.stable_time_step(&state.x);
+                (dt, if state.step == 0 { 0.0 } else { dt })
+            }
+        };
         let interval = settings.time_step_interval.max(1);
-        let tool = explicit.contact().and_then(|c| c.tool_state.first());
+        let tool = match resume {
+            Some(r) => r.tools.first(),
+            None => explicit.contact().and_then(|c| c.tool_state.first()),
+        };
         let prescribed = PrescribedMotions::new(model);
         let held_now: Vec<f64> = prescribed
             .components()
@@ -255,9 +270,10 @@ impl Stepper {
         Ok(Self {
             end: settings.end_time,
             interval,
+            checkpoint: settings.checkpoint_every.map(|k| k.max(1)),
             damping: settings.damping,
             dt,
-            dt_prev: if state.step == 0 { 0.0 } else { dt },
+            dt_prev,
             tool_displacement: tool.map_or(0.0, |t| t.displacement),
             tool_velocity: tool.map_or(0.0, |t| t.velocity),
             steps: 0,
@@ -282,9 +298,14 @@ impl Stepper {
         self.end - state.time <= 1e-6 * self.dt
     }
 
+    /// Whether `state` is at a step a checkpoint is taken at.
+    pub fn at_checkpoint(&self, state: &State) -> bool {
+        self.checkpoint.is_some_and(|k| state.step % k == 0)
+    }
+
     /// Steps until the first step whose time is at or past `until`, the
-    /// end time or `max_steps` steps in all, in blocks of equal steps that
-    /// end at the stable step's re-estimates.
+    /// end time, `max_steps` steps in all or a checkpoint's step, in blocks
+    /// of equal steps that end at the stable step's re-estimates.
     pub fn advance(
         &mut self,
         engine: &mut dyn Engine,
@@ -295,7 +316,11 @@ impl Stepper {
     ) -> Result<(), GpuError> {
         let tool = explicit.model().tools.first();
         let end = self.end;
-        while !self.at_end(state) && state.time < until && max_steps.is_none_or(|m| self.steps < m)
+        let first = state.step;
+        while !self.at_end(state)
+            && state.time < until
+            && max_steps.is_none_or(|m| self.steps < m)
+            && !(state.step > first && self.at_checkpoint(state))
         {
             if state.step > 0 && state.step % self.interval == 0 {
                 let started = Instant::now();
@@ -314,7 +339,8 @@ impl Stepper {
             // Δt (the time summed step by step, as the CPU driver sums it).
             let h = drape_time::step_length(end - state.time, dt);
             let limit = (self.interval - state.step % self.interval)
-                .min(max_steps.map_or(u64::MAX, |m| m - self.steps));
+                .min(max_steps.map_or(u64::MAX, |m| m - self.steps))
+                .min(self.checkpoint.map_or(u64::MAX, |k| k - state.step % k));
             let (mut count, mut time) = (1u64, state.time + h);
             while count < limit && h == dt && end - time >= 4.0 * dt && time < until {
                 time += h;

@@ -581,3 +581,83 @@ stiffness = 1.0
     assert!(last.external_work > 0.0, "{last:?}");
     assert_same_energies(&cpu_frames, &gpu_frames);
 }
+
+/// The checkpoints a run hands its observer.
+#[derive(Default)]
+struct Checkpoints(Vec<(State, drape_time::DriverState)>);
+
+impl drape_time::Observer for Checkpoints {
+    fn checkpoint(&mut self, state: &State, driver: &drape_time::DriverState) {
+        self.0.push((state.clone(), driver.clone()));
+    }
+}
+
+#[test]
+fn a_gpu_run_checkpoints_and_resumes_as_the_cpu_driver_does() {
+    // The punch through contact and friction; checkpoints every 2 999
+    // steps, of both drivers; each resumed on the other driver.
+    let mut s = shipped(
+        "hemisphere-0-90.toml",
+        &[
+            ("fabric.blank.cells", "[16, 16]"),
+            ("simulation.end_time", "0.3"),
+        ],
+    );
+    // Not a multiple of the stable step's re-estimates (every 20).
+    s.settings.checkpoint_every = Some(2999);
+    let model = &s.model;
+    let run_cpu = |state: &mut State, from: Option<drape_time::DriverState>| {
+        let mut explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
+        if let Some(d) = from {
+            explicit.resume_from(d);
+        }
+        let mut seen = Checkpoints::default();
+        explicit.run(state, &mut seen).expect("the CPU run");
+        seen
+    };
+    let run_gpu = |state: &mut State, from: Option<drape_time::DriverState>| {
+        let mut explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
+        if let Some(d) = from {
+            explicit.resume_from(d);
+        }
+        let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
+        let mut seen = Checkpoints::default();
+        drape_gpu::run(&explicit, &mut host, state, &mut seen).expect("the GPU run");
+        seen
+    };
+    let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
+    let cpu_points = run_cpu(&mut cpu, None).0;
+    let gpu_points = run_gpu(&mut gpu, None).0;
+    assert_same(&cpu, &gpu);
+    assert!(cpu_points.len() >= 2, "{} checkpoints", cpu_points.len());
+    assert_eq!(cpu_points.len(), gpu_points.len());
+    for ((cs, cd), (gs, gd)) in cpu_points.iter().zip(&gpu_points) {
+        assert_same(cs, gs);
+        assert_eq!((cd.dt, cd.dt_prev), (gd.dt, gd.dt_prev));
+        assert_eq!(cd.tools[0].displacement, gd.tools[0].displacement);
+        assert_eq!(cd.tools[0].velocity, gd.tools[0].velocity);
+        let scale = cd.energy.internal_work.abs().max(1e-12);
+        for (a, b) in [
+            (cd.energy.internal_work, gd.energy.internal_work),
+            (cd.energy.external_work, gd.energy.external_work),
+            (cd.energy.contact_work, gd.energy.contact_work),
+            (cd.friction_dissipation, gd.friction_dissipation),
+            (cd.tools[0].impulse, gd.tools[0].impulse),
+        ] {
+            assert!((a - b).abs() <= 1e-9 * scale.max(a.abs()), "{a:e} {b:e}");
+        }
+    }
+    // Each driver's checkpoint, resumed on the other, ends where both
+    // uninterrupted runs end.
+    let (state, driver) = gpu_points[1].clone();
+    let mut resumed = state;
+    run_cpu(&mut resumed, Some(driver));
+    assert_same(&cpu, &resumed);
+    let (state, driver) = cpu_points[1].clone();
+    let mut resumed = state;
+    let later = run_gpu(&mut resumed, Some(driver)).0;
+    assert_same(&gpu, &resumed);
+    // And the resumed GPU run checkpoints at the same steps.
+    assert_eq!(later.len(), gpu_points.len() - 2);
+    assert_same(&later[0].0, &gpu_points[2].0);
+}

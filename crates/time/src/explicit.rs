@@ -510,6 +510,12 @@ impl<'m> Explicit<'m> {
         self.resume = Some(driver);
     }
 
+    /// What [`Self::resume_from`] was handed, until a run takes it: for a
+    /// driver stepped elsewhere (drape-gpu) that continues the same way.
+    pub fn resume_state(&self) -> Option<&DriverState> {
+        self.resume.as_ref()
+    }
+
     /// The contact pass as the last step left it (forces, statuses,
     /// tools' states), if the model has tools: what a frame written after
     /// [`Self::run`] returns (a run stopped between frames) shows.

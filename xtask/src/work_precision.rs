@@ -13,7 +13,9 @@
 //! resin as is, and with its Prony times scaled along), embedded fibres
 //! instead of trusses, one thread instead of two, and the implicit solver
 //! (on the shipped mesh and on 10 × 10, with the scene's mass scaling and
-//! on 10 × 10 without it, see [`plan`]) — is a list of scene overrides, exactly as
+//! on 10 × 10 without it, see [`plan`]), and the GPU (the shipped setting
+//! and a finer mass-scaling target; skipped, saying why, on a machine
+//! without a usable one) — is a list of scene overrides, exactly as
 //! `drape run SCENE --set key=value …` takes them, run by the `drape`
 //! binary one after the other, and compared with the reference:
 //!
@@ -234,6 +236,9 @@ struct Row {
     /// A row this drape may not have (the implicit solver): skipped, with
     /// the scene's reason, when the scene refuses its overrides.
     optional: bool,
+    /// A row on the GPU (`simulation.device = "gpu"`): skipped, saying
+    /// why, on a machine without a usable GPU.
+    gpu: bool,
 }
 
 fn implicit() -> (String, String) {
@@ -298,7 +303,19 @@ impl Row {
             threads: 2,
             default: false,
             optional: false,
+            gpu: false,
         }
+    }
+
+    /// The same setting on the GPU.
+    fn on_gpu(&self) -> Self {
+        let mut row = self.clone();
+        row.name = format!("{} gpu", self.name);
+        row.group = "GPU";
+        row.overrides.push(set("simulation.device", "\"gpu\""));
+        row.default = false;
+        row.gpu = true;
+        row
     }
 }
 
@@ -384,6 +401,7 @@ fn plan(
         let mut one = Row::new("threads", "10x10 ms2e-5 1 thread", base());
         one.threads = 1;
         rows.push(one);
+        rows.push(Row::new("GPU", QUICK_BASE, base()).on_gpu());
         for (name, solver) in [
             ("10x10 implicit ms2e-5", "condensed"),
             ("10x10 implicit active_set ms2e-5", "active_set"),
@@ -404,7 +422,20 @@ fn plan(
             Vec::new(),
         );
         row.default = true;
+        // The shipped setting on the GPU (skipped without one), and on
+        // the GPU at a finer mass-scaling target, which its speed buys.
+        let mut gpu = row.on_gpu();
+        gpu.name = format!("{n0}x{n0} ms{dt0:e} gpu");
         rows.push(row);
+        rows.push(gpu);
+        rows.push(
+            Row::new(
+                "GPU",
+                &format!("{n0}x{n0} ms5e-6"),
+                vec![cells(n0), mass_scaling(5e-6)],
+            )
+            .on_gpu(),
+        );
         // The shipped setting is the row above; the others name every
         // value they change, so that they mean the same whatever ships.
         let mut add = |group: &'static str, n: u32, dt: f64, suffix: &str, extra: Overrides| {
@@ -1085,6 +1116,21 @@ fn study(options: &Options, root: &Path, target: &Path) -> Result<(), String> {
     );
     let timeout = Duration::from_secs_f64(options.timeout_s);
     let measure = |row: &Row| -> Result<Measured, String> {
+        let no_gpu = if row.gpu {
+            drape_gpu::probe().err().map(|e| e.to_string())
+        } else {
+            None
+        };
+        if let Some(e) = no_gpu {
+            println!("{:<34} skipped: {e}", row.name);
+            return Ok(Measured {
+                row: row.clone(),
+                outcome: None,
+                skipped: Some(e),
+                errors: [f64::NAN; 4],
+                runs: 0,
+            });
+        }
         if let Err(e) = Scene::from_file(&scene, &row.overrides) {
             if row.optional {
                 let root = format!(

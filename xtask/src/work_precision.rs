@@ -1116,20 +1116,20 @@ fn study(options: &Options, root: &Path, target: &Path) -> Result<(), String> {
     );
     let timeout = Duration::from_secs_f64(options.timeout_s);
     let measure = |row: &Row| -> Result<Measured, String> {
-        let no_gpu = if row.gpu {
-            drape_gpu::probe().err().map(|e| e.to_string())
-        } else {
-            None
-        };
-        if let Some(e) = no_gpu {
-            println!("{:<34} skipped: {e}", row.name);
-            return Ok(Measured {
+        let skipped = |reason: String| {
+            println!("{:<34} skipped: {reason}", row.name);
+            Ok(Measured {
                 row: row.clone(),
                 outcome: None,
-                skipped: Some(e),
+                skipped: Some(reason),
                 errors: [f64::NAN; 4],
                 runs: 0,
-            });
+            })
+        };
+        if row.gpu
+            && let Err(e) = drape_gpu::probe()
+        {
+            return skipped(e.to_string());
         }
         if let Err(e) = Scene::from_file(&scene, &row.overrides) {
             if row.optional {
@@ -1141,15 +1141,7 @@ fn study(options: &Options, root: &Path, target: &Path) -> Result<(), String> {
                         .unwrap_or(Path::new(""))
                         .display()
                 );
-                let e = e.to_string().replace(&root, "");
-                println!("{:<34} skipped: {e}", row.name);
-                return Ok(Measured {
-                    row: row.clone(),
-                    outcome: None,
-                    skipped: Some(e),
-                    errors: [f64::NAN; 4],
-                    runs: 0,
-                });
+                return skipped(e.to_string().replace(&root, ""));
             }
             return Err(format!("row `{}`: {e}", row.name));
         }

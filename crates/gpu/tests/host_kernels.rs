@@ -396,22 +396,30 @@ motion = { kind = "displacement", value = [0, 0, 5], amplitude = { kind = "table
     assert_same(&cpu, &gpu);
 }
 
+/// Whole runs of `scene` by the CPU driver and by the GPU driver on the
+/// kernels' CPU build, the same states at the end (checked): the CPU's
+/// state, and each run's frames.
+fn whole_runs(scene: &Scene) -> (State, Frames, Frames) {
+    let model = &scene.model;
+    let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
+    let (mut cpu_frames, mut gpu_frames) = (Frames::default(), Frames::default());
+    Explicit::new(model, scene.settings.clone())
+        .expect("a driver")
+        .run(&mut cpu, &mut cpu_frames)
+        .expect("the CPU run");
+    let explicit = Explicit::new(model, scene.settings.clone()).expect("a driver");
+    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
+    drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("the GPU run");
+    assert_same(&cpu, &gpu);
+    (cpu, cpu_frames, gpu_frames)
+}
+
 #[test]
 fn a_whole_bias_extension_through_the_gpu_driver_gives_the_cpu_drivers_energies() {
     // The pulled end's work is the boundary work: the energies of a run
     // that only a prescribed motion drives.
     let s = shipped("bias-extension.toml", &[("simulation.frames", "3")]);
-    let model = &s.model;
-    let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
-    let (mut cpu_frames, mut gpu_frames) = (Frames::default(), Frames::default());
-    Explicit::new(model, s.settings.clone())
-        .expect("a driver")
-        .run(&mut cpu, &mut cpu_frames)
-        .expect("the CPU run");
-    let explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
-    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
-    drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("run");
-    assert_same(&cpu, &gpu);
+    let (_, cpu_frames, gpu_frames) = whole_runs(&s);
     let last = cpu_frames.energies.last().expect("frames");
     assert!(last.boundary_work > 0.0 && last.strain > 0.0, "{last:?}");
     assert_same_energies(&cpu_frames, &gpu_frames);
@@ -502,16 +510,7 @@ amplitude = { kind = "table", points = [[0, 0], [0.005, 1], [0.02, 0.2]] }
     );
     assert!(unsupported(&s.model).is_empty());
     let model = &s.model;
-    let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
-    let (mut cpu_frames, mut gpu_frames) = (Frames::default(), Frames::default());
-    Explicit::new(model, s.settings.clone())
-        .expect("a driver")
-        .run(&mut cpu, &mut cpu_frames)
-        .expect("the CPU run");
-    let explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
-    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
-    drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("run");
-    assert_same(&cpu, &gpu);
+    let (cpu, cpu_frames, gpu_frames) = whole_runs(&s);
     // The loads matter: without them the edge hangs elsewhere.
     let mut unloaded = model.clone();
     unloaded.loads.clear();
@@ -564,16 +563,7 @@ stiffness = 1.0
         unsupported(&s.model)
     );
     let model = &s.model;
-    let (mut cpu, mut gpu) = (model.initial_state(), model.initial_state());
-    let (mut cpu_frames, mut gpu_frames) = (Frames::default(), Frames::default());
-    Explicit::new(model, s.settings.clone())
-        .expect("a driver")
-        .run(&mut cpu, &mut cpu_frames)
-        .expect("the CPU run");
-    let explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
-    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
-    drape_gpu::run(&explicit, &mut host, &mut gpu, &mut gpu_frames).expect("run");
-    assert_same(&cpu, &gpu);
+    let (cpu, cpu_frames, gpu_frames) = whole_runs(&s);
     // Pressed down over the dome: a corner, beyond it, went down.
     let drop = model.x0[0].z - cpu.x[0].z;
     assert!(drop > 1.0, "the corner went down {drop} mm");

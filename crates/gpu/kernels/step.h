@@ -308,8 +308,8 @@ DRAPE_FN int drape_membrane_kinematics(long e, int nodes_per, int p, long count,
         ok &= (length - length) == 0.0 && length > 1e-12;
     }
     if (resin->locking != 0.0) {
-        double u[2][3], len[2], cos_gamma;
-        ok &= drape_locking_fibres(f, u, len, &cos_gamma);
+        double u[2][3], len[2], sin_gamma;
+        ok &= drape_locking_fibres(f, u, len, &sin_gamma);
     }
     return ok;
 }
@@ -318,10 +318,11 @@ DRAPE_FN int drape_membrane_kinematics(long e, int nodes_per, int p, long count,
  * point, which is the scalar path's arithmetic): U in closed form, the
  * rotated strain increment from the committed U, the resin's stress
  * update (its history advanced in place when `commit`), P = F U^-1 tau
- * U^-1 h_m, with embedded fibres plus t_f tau_f/lambda n (x) N_k for each
- * family (MembraneBatch::point_response), and its share (P grad N_a) A
- * of each node's force into share[a]. area: point p's at [p*count + e]; history: value i of point p
- * at [(p*stride + i)*count + e]. */
+ * U^-1 h_m, plus with embedded fibres t_f tau_f/lambda n (x) N_k for each
+ * family and with the shear-locking law its stress
+ * (MembraneBatch::point_response), and its share (P grad N_a) A of each
+ * node's force into share[a]. area: point p's at [p*count + e];
+ * history: value i of point p at [(p*stride + i)*count + e]. */
 DRAPE_FN void drape_membrane_point(long e, int nodes_per, int p, long count,
                                    const DrapeResinStep *resin, const double *grad,
                                    const double *area, double *history, long stride,
@@ -406,9 +407,8 @@ DRAPE_FN void drape_membrane_point(long e, int nodes_per, int p, long count,
     }
     if (resin->locking != 0.0) {
         /* LockingPoint::add_stress: dW/da_k = phi g_k, phi = h tau_s /
-         * cos gamma, g_k = (u_other - c u_k)/|a_k|. */
-        /* The point passed drape_membrane_kinematics, so the fibres are
-         * sound. */
+         * cos gamma, g_k = (u_other - c u_k)/|a_k|. The point passed
+         * drape_membrane_kinematics, so its fibres are sound. */
         double u[2][3], len[2], c = 0.0;
         drape_locking_fibres(f, u, len, &c);
         double gamma = asin(c);

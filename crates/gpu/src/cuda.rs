@@ -230,7 +230,7 @@ pub struct CudaStep<'m> {
     load_ptr: CudaSlice<i64>,
     load_of: CudaSlice<u32>,
     has_loads: i32,
-    /// Node i's pressure slots and theirs elements (`Flat`'s `p_*`).
+    /// Node i's pressure slots and their elements (`Flat`'s `p_*`).
     p_ptr: CudaSlice<i64>,
     p_slot: CudaSlice<u32>,
     p_nodes: CudaSlice<u32>,

@@ -217,7 +217,8 @@ pub(crate) struct Flat {
     /// How many pressure loads the model has.
     pub pressures: usize,
     pub x0: Vec<f64>,
-    /// Each node's weight (the external force without the loads).
+    /// Each node's weight (the external force without the loads and
+    /// pressures).
     pub weight: Vec<f64>,
     /// The tool as `kernels/step.h` reads it (`DRAPE_TOOL_*`); empty for a
     /// model without one.

@@ -51,6 +51,41 @@ nodes = "left"
 motion = { kind = "fixed" }
 "#;
 
+/// Nodal loads on `SHEET`: a line load on a ramp, its corners on a table.
+const LOADS: &str = r#"
+[[loads]]
+nodes = "right"
+force = [2.0, 0.0, 0.5]
+per_length = true
+amplitude = { kind = "ramp", duration = 0.01 }
+[[loads]]
+nodes = "corners"
+force = [0.0, 0.3, -1.0]
+amplitude = { kind = "table", points = [[0, 0], [0.005, 1], [0.02, 0.2]] }
+"#;
+
+/// A ply pressed onto a dome by a follower pressure (a vacuum bag).
+const VACUUM: &str = r#"
+[simulation]
+end_time = 0.02
+mass_scaling_dt = 2e-5
+[fabric]
+material = "carbon-prepreg-2x2"
+fibres = "trusses"
+blank = { width = 120, height = 120, cells = [12, 12] }
+[[tools]]
+name = "dome"
+geometry = { kind = "sphere", center = [0, 0, -80.5], radius = 80 }
+friction = 0.2
+[[pressure]]
+value = 0.02
+towards = "dome"
+amplitude = { kind = "smooth_step", duration = 0.02 }
+[[springs]]
+nodes = "corners"
+stiffness = 1.0
+"#;
+
 /// The shipped `scenes/hemisphere-0-90.toml` (punch, friction, bending)
 /// with `cells` cells a side and its other `overrides`.
 fn hemisphere(cells: usize, overrides: &[(&str, &str)]) -> Scene {
@@ -174,6 +209,16 @@ fn main() {
             "glass sheet, clamped edge",
             Scene::parse(SHEET, Path::new("sheet.toml"), &[]).expect("scene"),
             600,
+        ),
+        (
+            "glass sheet with nodal loads",
+            Scene::parse(&format!("{SHEET}{LOADS}"), Path::new("loads.toml"), &[]).expect("scene"),
+            600,
+        ),
+        (
+            "ply vacuum-bagged on a dome",
+            Scene::parse(VACUUM, Path::new("vacuum.toml"), &[]).expect("scene"),
+            1000,
         ),
         ("hemisphere-0-90", shipped("hemisphere-0-90"), 20_000),
         ("hemisphere-45", shipped("hemisphere-45"), 20_000),

@@ -230,6 +230,23 @@ impl Checkpoint {
         Ok(scene)
     }
 
+    /// Continues the run on `device` (`drape run --resume DIR --device
+    /// D`): the scene's `simulation.device`, kept among the overrides too,
+    /// so that the scene file still reads as the run's scene. Both drivers
+    /// carry the same [`DriverState`]: a run resumed on the other device
+    /// goes on from the same state (its last bits then differ as the two
+    /// devices' math functions do).
+    pub fn switch_device(&mut self, device: Device) {
+        self.scene.simulation.device = device;
+        self.overrides.retain(|(k, _)| k != "simulation.device");
+        let name = match device {
+            Device::Cpu => "cpu",
+            Device::Gpu => "gpu",
+        };
+        self.overrides
+            .push(("simulation.device".to_owned(), name.to_owned()));
+    }
+
     /// Whether the scene file now says something else than the scene the
     /// run started with (read with the same overrides); `None` when it
     /// cannot be read or parsed any more, which also means it changed.

@@ -62,7 +62,9 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
         /// Where the explicit steps run: cpu (the default) or gpu (an
-        /// NVIDIA GPU; the same as --set simulation.device=gpu).
+        /// NVIDIA GPU; the same as --set simulation.device=gpu). With
+        /// --resume, continue the stopped run on that device instead of
+        /// the one it ran on.
         #[arg(long, value_name = "DEVICE")]
         device: Option<String>,
         /// Write a restart file (checkpoint.json) every N steps; a run that
@@ -313,10 +315,7 @@ fn main() -> ExitCode {
             checkpoint_every,
             resume,
         } => with_threads(threads, || match (resume, scene) {
-            (Some(_), _) if device.is_some() => Err(bad(
-                "--device is for a new run: a resumed run continues where it ran",
-            )),
-            (Some(dir), _) => resume_run(&dir, checkpoint_every),
+            (Some(dir), _) => resume_run(&dir, checkpoint_every, device.as_deref()),
             (None, Some(scene)) => {
                 let mut set = set;
                 if let Some(d) = device {
@@ -516,7 +515,15 @@ fn read_summary(dir: &Path) -> Option<Summary> {
     serde_json::from_str(&text).ok()
 }
 
-fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
+fn resume_run(dir: &Path, checkpoint_every: Option<u64>, device: Option<&str>) -> Result<ExitCode> {
+    let device = match device {
+        None => None,
+        Some("cpu") => Some(Device::Cpu),
+        Some("gpu") => Some(Device::Gpu),
+        Some(other) => {
+            return Err(bad(format!("--device {other}: expected `cpu` or `gpu`")));
+        }
+    };
     if !dir.is_dir() {
         return Err(bad(format!(
             "{}: {}: --resume takes the output folder of a stopped run",
@@ -556,7 +563,10 @@ fn resume_run(dir: &Path, checkpoint_every: Option<u64>) -> Result<ExitCode> {
         }
         _ => {}
     }
-    let checkpoint = Checkpoint::read(dir).map_err(bad)?;
+    let mut checkpoint = Checkpoint::read(dir).map_err(bad)?;
+    if let Some(d) = device {
+        checkpoint.switch_device(d);
+    }
     let scene = checkpoint.scene().map_err(|e| {
         bad(format!(
             "{}: cannot resume: {e}",

@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use drape_contact::{ContactStatus, ContactView, ToolState};
 use drape_elements::{ElementError, KinematicsError};
-use drape_model::State;
+use drape_model::{Model, State};
 use drape_time::guard::{Guard, MIN_ENERGY_CHECKS};
 use drape_time::{
     Control, DriverState, Energies, Explicit, Frame, NodeAtStep, Observer, Progress, RunError,
@@ -137,10 +137,10 @@ pub fn run(
     let mass = explicit.mass();
     let constrained = drape_time::constrained_components(model);
     let movable: Vec<bool> = constrained.iter().map(|c| !c.iter().all(|&b| b)).collect();
-    // The external forces at the state's time (the weight and the loads),
-    // as the CPU driver holds them after a step.
-    let mut f_ext = vec![Vector3::zeros(); n];
-    let mut pressure = drape_time::PressurePass::new(model);
+    let mut externals = Externals {
+        f_ext: vec![Vector3::zeros(); n],
+        pressure: drape_time::PressurePass::new(model),
+    };
     let mut guard = Guard::new(model, settings.guard.clone(), end);
     let mut stepper = Stepper::start(engine, explicit, state).map_err(|e| run_error(e, state))?;
     let kinetic0: f64 = match &resume {
@@ -164,6 +164,13 @@ pub fn run(
         friction_dissipation: 0.0,
     };
     let mut reactions = vec![Vector3::zeros(); n];
+    let inputs = EnergyInputs {
+        model,
+        mass,
+        constrained: &constrained,
+        damping: settings.damping,
+        kinetic0,
+    };
     let mut energy = match &resume {
         Some(r) => r.energy,
         None => Energies {
@@ -194,6 +201,8 @@ pub fn run(
     let mut stopped = false;
     let mut last_progress = Instant::now();
     let mut checkpointed = state.step;
+    // The step `energy` was measured at.
+    let mut measured = state.step;
     while !stepper.at_end(state) {
         if settings.max_steps.is_some_and(|m| stepper.steps >= m) {
             stopped = true;
@@ -272,22 +281,9 @@ pub fn run(
             );
         }
         if at_frame || at_end || at_check {
-            drape_time::external_forces(model, state.time, &mut f_ext);
-            pressure.add_into(model, &state.x, state.time, &mut f_ext);
-            energy = energies_at(
-                &EnergyInputs {
-                    model_strain: strain_energy(model, state),
-                    mass,
-                    f_ext: &f_ext,
-                    constrained: &constrained,
-                    damping: settings.damping,
-                    kinetic0,
-                    h: stepper.dt_prev,
-                },
-                state,
-                &snapshot,
-                sums,
-            );
+            let f_ext = externals.at(model, state);
+            energy = energies_at(&inputs, f_ext, state, &snapshot, sums, stepper.dt_prev);
+            measured = state.step;
             if let Err(what) = guard.energy(&energy, state.time) {
                 let e = unstable(what);
                 guard.fall_back(state);
@@ -301,7 +297,7 @@ pub fn run(
             }
             if at_frame {
                 for (i, (r, c)) in reactions.iter_mut().zip(&constrained).enumerate() {
-                    let quasi_static = snapshot.f_int[i] - f_ext[i];
+                    let quasi_static = snapshot.f_int[i] - externals.f_ext[i];
                     *r = Vector3::from_fn(|k, _| if c[k] { quasi_static[k] } else { 0.0 });
                 }
                 observer.frame(&Frame {
@@ -332,6 +328,21 @@ pub fn run(
             }
         }
     }
+    if state.step != measured {
+        // Stopped between checks: the energies where it stopped, and only
+        // if they pass, as the CPU driver reports them.
+        let snapshot = engine.snapshot(state).map_err(|e| run_error(e, state))?;
+        let sums = totals(&snapshot, n, &carried);
+        let f_ext = externals.at(model, state);
+        energy = energies_at(&inputs, f_ext, state, &snapshot, sums, stepper.dt_prev);
+        guard
+            .energy(&energy, state.time)
+            .map_err(|what| RunError::Unstable {
+                step: state.step,
+                time: state.time,
+                what,
+            })?;
+    }
     if !stopped {
         let u: Vec<f64> = record.tool_state.iter().map(|t| t.displacement).collect();
         drape_time::completion::check_at_end(model, state, &u, None)?;
@@ -351,37 +362,56 @@ pub fn run(
     Ok((summary, record))
 }
 
+/// The external forces at a state's time (the weight, the loads and the
+/// follower pressures), as the CPU driver holds them after a step.
+struct Externals {
+    f_ext: Vec<Vector3<f64>>,
+    pressure: drape_time::PressurePass,
+}
+
+impl Externals {
+    fn at(&mut self, model: &Model, state: &State) -> &[Vector3<f64>] {
+        drape_time::external_forces(model, state.time, &mut self.f_ext);
+        self.pressure
+            .add_into(model, &state.x, state.time, &mut self.f_ext);
+        &self.f_ext
+    }
+}
+
 /// What [`energies_at`] reads besides the snapshot.
 struct EnergyInputs<'a> {
-    model_strain: f64,
+    model: &'a Model,
     mass: &'a [f64],
-    /// The external forces at the state's time.
-    f_ext: &'a [Vector3<f64>],
     constrained: &'a [[bool; 3]],
     damping: f64,
     kinetic0: f64,
-    /// The last step.
-    h: f64,
 }
 
 /// `Explicit::energies_at`: the works summed to n+½ plus each node's half
 /// increment at the forces of n+1 ([`node_energy_terms`], the CPU
-/// driver's own), summed node by node.
-fn energies_at(inp: &EnergyInputs<'_>, state: &State, s: &Snapshot, sums: [f64; 8]) -> Energies {
-    let n = state.x.len();
+/// driver's own), summed node by node; `f_ext` at the state's time, `h`
+/// the last step.
+fn energies_at(
+    inp: &EnergyInputs<'_>,
+    f_ext: &[Vector3<f64>],
+    state: &State,
+    s: &Snapshot,
+    sums: [f64; 8],
+    h: f64,
+) -> Energies {
     let mut sum = [0.0; 6];
-    for i in 0..n {
+    for (i, f_ext) in f_ext.iter().enumerate() {
         let terms = node_energy_terms(
             &NodeAtStep {
                 v: &state.v[i],
                 f_int: &s.f_int[i],
-                f_ext: &inp.f_ext[i],
+                f_ext,
                 last_contact: &s.contact_force[i],
                 mass: inp.mass[i],
                 constrained: inp.constrained[i],
             },
             inp.damping,
-            inp.h,
+            h,
         );
         for (total, t) in sum.iter_mut().zip(terms) {
             *total += t;
@@ -390,7 +420,7 @@ fn energies_at(inp: &EnergyInputs<'_>, state: &State, s: &Snapshot, sums: [f64; 
     let [kinetic, w_int, w_ext, w_damp, w_bc, w_c] = sum;
     let mut e = Energies {
         kinetic,
-        strain: inp.model_strain,
+        strain: strain_energy(inp.model, state),
         internal_work: sums[0] + w_int,
         external_work: sums[1] + w_ext,
         damping: sums[2] + w_damp,

@@ -651,3 +651,45 @@ fn a_gpu_run_checkpoints_and_resumes_as_the_cpu_driver_does() {
     assert_eq!(later.len(), gpu_points.len() - 2);
     assert_same(&later[0].0, &gpu_points[2].0);
 }
+
+#[test]
+fn a_gpu_run_stopped_between_checks_reports_its_energies_where_it_stopped() {
+    // 777 steps: before the first energy check (at 2 500 steps), as a
+    // Ctrl-C or a step budget stops a run anywhere.
+    let mut s = shipped(
+        "hemisphere-0-90.toml",
+        &[("fabric.blank.cells", "[16, 16]")],
+    );
+    s.settings.max_steps = Some(777);
+    let model = &s.model;
+    let mut cpu = model.initial_state();
+    let c = Explicit::new(model, s.settings.clone())
+        .expect("a driver")
+        .run(&mut cpu, &mut NoObserver)
+        .expect("the CPU run");
+    let explicit = Explicit::new(model, s.settings.clone()).expect("a driver");
+    let mut host = HostStep::new(&explicit).expect("a model the GPU steps");
+    let mut gpu = model.initial_state();
+    let (g, _) = drape_gpu::run(&explicit, &mut host, &mut gpu, &mut NoObserver).expect("run");
+    assert!(c.stopped && g.stopped);
+    assert_same(&cpu, &gpu);
+    let (c, g) = (c.energy, g.energy);
+    let scale = c
+        .internal_work
+        .abs()
+        .max(c.kinetic)
+        .max(c.external_work.abs());
+    assert!(c.external_work > 0.0, "{c:?}");
+    for (what, a, b) in [
+        ("kinetic", c.kinetic, g.kinetic),
+        ("strain", c.strain, g.strain),
+        ("internal work", c.internal_work, g.internal_work),
+        ("external work", c.external_work, g.external_work),
+        ("balance", c.balance_error, g.balance_error),
+    ] {
+        assert!(
+            (a - b).abs() <= 1e-9 * scale,
+            "{what}: CPU {a:e}, GPU {b:e}"
+        );
+    }
+}

@@ -232,7 +232,9 @@ pub fn run(
             what,
         };
         if let Err(what) = guard.nodes(&state.x, &state.v, &movable) {
-            let e = unstable(what);
+            // Where the node is against the tool, as the CPU driver says.
+            let u = [stepper.tool_displacement];
+            let e = unstable(what.near_tools(&model.tools, &u[..model.tools.len()], &state.x));
             guard.fall_back(state);
             return Err(e);
         }

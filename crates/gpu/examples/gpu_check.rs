@@ -133,7 +133,17 @@ fn compare(a: &State, b: &State) -> [f64; 3] {
     ]
 }
 
+/// Each node's contact force.
+type Forces = Vec<nalgebra::Vector3<f64>>;
+
 fn cpu_run(scene: &Scene, steps: Option<u64>) -> (State, f64) {
+    let (state, seconds, _) = cpu_run_with_contact(scene, steps);
+    (state, seconds)
+}
+
+/// [`cpu_run`], and the last step's contact force on each node (the
+/// multipliers' forces; empty without a tool).
+fn cpu_run_with_contact(scene: &Scene, steps: Option<u64>) -> (State, f64, Forces) {
     let mut settings = scene.settings.clone();
     settings.max_steps = steps;
     let mut state = scene.model.initial_state();
@@ -142,10 +152,17 @@ fn cpu_run(scene: &Scene, steps: Option<u64>) -> (State, f64) {
     explicit
         .run(&mut state, &mut NoObserver)
         .expect("the CPU run");
-    (state, started.elapsed().as_secs_f64())
+    let seconds = started.elapsed().as_secs_f64();
+    let forces = explicit
+        .contact()
+        .map_or_else(Vec::new, |c| c.force.clone());
+    (state, seconds, forces)
 }
 
-fn gpu_run(scene: &Scene, steps: Option<u64>, threads: u32) -> (State, f64, u64, u32) {
+/// `steps` steps on the GPU at `threads` per block: the state, the
+/// seconds, the blocks, the threads, and the last step's contact force on
+/// each node (empty without a tool).
+fn gpu_run(scene: &Scene, steps: Option<u64>, threads: u32) -> (State, f64, u64, u32, Forces) {
     let mut settings = scene.settings.clone();
     settings.max_steps = steps;
     let explicit = Explicit::new(&scene.model, settings.clone()).expect("a driver");
@@ -154,7 +171,13 @@ fn gpu_run(scene: &Scene, steps: Option<u64>, threads: u32) -> (State, f64, u64,
     let mut state = scene.model.initial_state();
     let started = Instant::now();
     let run = run_steps(&mut gpu, &explicit, &mut state, steps).expect("the GPU run");
-    (state, started.elapsed().as_secs_f64(), run.blocks, threads)
+    let seconds = started.elapsed().as_secs_f64();
+    let forces = if scene.model.tools.is_empty() {
+        Vec::new()
+    } else {
+        gpu.snapshot(&mut state).expect("a snapshot").contact_force
+    };
+    (state, seconds, run.blocks, threads, forces)
 }
 
 fn gpu_run_full(scene: &Scene) -> (State, f64, drape_gpu::StepRun, u32) {
@@ -180,11 +203,11 @@ fn main() {
 
     println!("\n## 1. Agreement with the CPU driver (largest difference / largest value)");
     println!(
-        "(bounded: positions 1e-9, velocities and histories 1e-6, over the first 1000 steps; \
+        "(bounded: positions 1e-9, velocities, histories and contact forces 1e-6, over the first 1000 steps; \
          the 20 000-step rows, through the punch's first contact, are for information)"
     );
-    println!("| scene | steps | positions | velocities | resin history |");
-    println!("|---|---|---|---|---|");
+    println!("| scene | steps | positions | velocities | resin history | contact forces |");
+    println!("|---|---|---|---|---|---|");
     let shipped = |name: &str| {
         Scene::from_file(Path::new(&format!("scenes/{name}.toml")), &[]).expect("a shipped scene")
     };
@@ -225,12 +248,19 @@ fn main() {
     ];
     let mut first_gpu = None;
     for (name, scene, steps) in &cases {
-        let (cpu, _) = cpu_run(scene, Some(*steps));
-        let (gpu, _, _, _) = gpu_run(scene, Some(*steps), 256);
+        let (cpu, _, cpu_forces) = cpu_run_with_contact(scene, Some(*steps));
+        let (gpu, _, _, _, gpu_forces) = gpu_run(scene, Some(*steps), 256);
         let [x, v, h] = compare(&cpu, &gpu);
-        println!("| {name} | {steps} | {x:.2e} | {v:.2e} | {h:.2e} |");
+        // The multipliers' forces (none without a tool).
+        let f = relative(&flat(&cpu_forces), &flat(&gpu_forces));
+        let forces = if cpu_forces.is_empty() {
+            "—".to_owned()
+        } else {
+            format!("{f:.2e}")
+        };
+        println!("| {name} | {steps} | {x:.2e} | {v:.2e} | {h:.2e} | {forces} |");
         if *steps <= 1000 {
-            failed |= !(x <= 1e-9 && v <= 1e-6 && h <= 1e-6);
+            failed |= !(x <= 1e-9 && v <= 1e-6 && h <= 1e-6 && f <= 1e-6);
         }
         first_gpu.get_or_insert(gpu);
     }
@@ -238,7 +268,7 @@ fn main() {
     println!("\n## 2. Repeatability (hemisphere blank, 1000 steps)");
     let reference = first_gpu.expect("a first run");
     for threads in [256, 64, 1024] {
-        let (again, _, _, threads) = gpu_run(&cases[0].1, Some(1000), threads);
+        let (again, _, _, threads, _) = gpu_run(&cases[0].1, Some(1000), threads);
         let same =
             again.x == reference.x && again.v == reference.v && again.history == reference.history;
         println!(

@@ -693,3 +693,41 @@ fn a_gpu_run_stopped_between_checks_reports_its_energies_where_it_stopped() {
         );
     }
 }
+
+#[test]
+fn motions_loads_and_pressure_together_run_as_on_the_cpu() {
+    // Each step's values hold all three (prescribed coordinates, then the
+    // loads' forces, then the pressures' p·a(t)): each read at its place.
+    let s = scene(
+        r#"
+[simulation]
+end_time = 0.01
+frames = 2
+mass_scaling_dt = 2e-5
+[fabric]
+material = "carbon-prepreg-2x2"
+fibres = "trusses"
+blank = { width = 120, height = 120, cells = [12, 12] }
+[[tools]]
+name = "dome"
+geometry = { kind = "sphere", center = [0, 0, -80.5], radius = 80 }
+[[pressure]]
+value = 0.02
+towards = "dome"
+amplitude = { kind = "ramp", duration = 0.01 }
+[[loads]]
+nodes = "corners"
+force = [0.0, 0.0, 0.5]
+[[boundary]]
+nodes = "left"
+components = "x"
+motion = { kind = "displacement", value = [-2, 0, 0], amplitude = { kind = "smooth_step", duration = 0.01 } }
+"#,
+    );
+    let f = s.model.features();
+    assert!(f.prescribed_motion && f.loads && f.pressure);
+    let (cpu, cpu_frames, gpu_frames) = whole_runs(&s);
+    let left = s.model.node_set("left").expect("an edge")[4] as usize;
+    assert!((cpu.x[left].x - s.model.x0[left].x + 2.0).abs() < 1e-9);
+    assert_same_energies(&cpu_frames, &gpu_frames);
+}

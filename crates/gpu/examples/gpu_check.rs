@@ -20,6 +20,9 @@ use drape_io::scene::Scene;
 use drape_model::State;
 use drape_time::{Explicit, NoObserver};
 
+#[path = "../tests/common/scenes.rs"]
+mod scenes;
+
 /// The shipped `scenes/hemisphere-0-90.toml` without its punch (bending
 /// off, as the GPU step has none yet): `CELLS` cells a side.
 const BLANK: &str = r#"
@@ -49,41 +52,6 @@ blank = { width = 100, height = 60, cells = [10, 6] }
 [[boundary]]
 nodes = "left"
 motion = { kind = "fixed" }
-"#;
-
-/// Nodal loads on `SHEET`: a line load on a ramp, its corners on a table.
-const LOADS: &str = r#"
-[[loads]]
-nodes = "right"
-force = [2.0, 0.0, 0.5]
-per_length = true
-amplitude = { kind = "ramp", duration = 0.01 }
-[[loads]]
-nodes = "corners"
-force = [0.0, 0.3, -1.0]
-amplitude = { kind = "table", points = [[0, 0], [0.005, 1], [0.02, 0.2]] }
-"#;
-
-/// A ply pressed onto a dome by a follower pressure (a vacuum bag).
-const VACUUM: &str = r#"
-[simulation]
-end_time = 0.02
-mass_scaling_dt = 2e-5
-[fabric]
-material = "carbon-prepreg-2x2"
-fibres = "trusses"
-blank = { width = 120, height = 120, cells = [12, 12] }
-[[tools]]
-name = "dome"
-geometry = { kind = "sphere", center = [0, 0, -80.5], radius = 80 }
-friction = 0.2
-[[pressure]]
-value = 0.02
-towards = "dome"
-amplitude = { kind = "smooth_step", duration = 0.02 }
-[[springs]]
-nodes = "corners"
-stiffness = 1.0
 "#;
 
 /// The shipped `scenes/hemisphere-0-90.toml` (punch, friction, bending)
@@ -235,12 +203,12 @@ fn main() {
         ),
         (
             "glass sheet with nodal loads",
-            Scene::parse(&format!("{SHEET}{LOADS}"), Path::new("loads.toml"), &[]).expect("scene"),
+            Scene::parse(scenes::LOADED_SHEET, Path::new("loads.toml"), &[]).expect("scene"),
             600,
         ),
         (
             "ply vacuum-bagged on a dome",
-            Scene::parse(VACUUM, Path::new("vacuum.toml"), &[]).expect("scene"),
+            Scene::parse(scenes::VACUUM_DOME, Path::new("vacuum.toml"), &[]).expect("scene"),
             1000,
         ),
         ("hemisphere-0-90", shipped("hemisphere-0-90"), 20_000),

@@ -9,6 +9,9 @@ use drape_io::scene::Scene;
 use drape_model::State;
 use drape_time::{Explicit, NoObserver};
 
+#[path = "common/scenes.rs"]
+mod scenes;
+
 fn scene(text: &str) -> Scene {
     Scene::parse(text, Path::new("gpu-test.toml"), &[]).expect("a valid scene")
 }
@@ -220,21 +223,26 @@ fn assert_same_energies(cpu: &Frames, gpu: &Frames) {
             .max(c.boundary_work.abs())
             .max(c.kinetic)
             .max(1e-12);
-        for (what, a, b) in [
-            ("kinetic", c.kinetic, g.kinetic),
-            ("strain", c.strain, g.strain),
-            ("internal work", c.internal_work, g.internal_work),
-            ("external work", c.external_work, g.external_work),
-            ("boundary work", c.boundary_work, g.boundary_work),
-            ("contact work", c.contact_work, g.contact_work),
-            ("friction", c.friction_dissipation, g.friction_dissipation),
-            ("balance", c.balance_error, g.balance_error),
-        ] {
-            assert!(
-                (a - b).abs() <= 1e-9 * scale,
-                "{what}: CPU {a:e}, GPU {b:e}"
-            );
-        }
+        assert_close_energies(c, g, scale);
+    }
+}
+
+/// Each of the CPU's energies `c` and the GPU's `g` within 1e-9 of `scale`.
+fn assert_close_energies(c: &drape_time::Energies, g: &drape_time::Energies, scale: f64) {
+    for (what, a, b) in [
+        ("kinetic", c.kinetic, g.kinetic),
+        ("strain", c.strain, g.strain),
+        ("internal work", c.internal_work, g.internal_work),
+        ("external work", c.external_work, g.external_work),
+        ("boundary work", c.boundary_work, g.boundary_work),
+        ("contact work", c.contact_work, g.contact_work),
+        ("friction", c.friction_dissipation, g.friction_dissipation),
+        ("balance", c.balance_error, g.balance_error),
+    ] {
+        assert!(
+            (a - b).abs() <= 1e-9 * scale,
+            "{what}: CPU {a:e}, GPU {b:e}"
+        );
     }
 }
 
@@ -483,31 +491,7 @@ fn nodal_loads_with_their_amplitudes_run_as_on_the_cpu() {
     // a second load on a table: a node with two loads sums them in the
     // loads' order; the frames' reactions and energies use the loads at
     // the frame's time.
-    let s = scene(
-        r#"
-gravity = [0, 0, -9810]
-[simulation]
-end_time = 0.02
-frames = 4
-mass_scaling_dt = 2e-5
-[fabric]
-material = "glass-serge-4x3"
-fibres = "trusses"
-blank = { width = 100, height = 60, cells = [10, 6] }
-[[boundary]]
-nodes = "left"
-motion = { kind = "fixed" }
-[[loads]]
-nodes = "right"
-force = [2.0, 0.0, 0.5]
-per_length = true
-amplitude = { kind = "ramp", duration = 0.01 }
-[[loads]]
-nodes = "corners"
-force = [0.0, 0.3, -1.0]
-amplitude = { kind = "table", points = [[0, 0], [0.005, 1], [0.02, 0.2]] }
-"#,
-    );
+    let s = scene(scenes::LOADED_SHEET);
     assert!(unsupported(&s.model).is_empty());
     let model = &s.model;
     let (cpu, cpu_frames, gpu_frames) = whole_runs(&s);
@@ -534,29 +518,7 @@ fn a_vacuum_pressure_drapes_a_ply_on_a_dome_as_on_the_cpu() {
     // by a follower pressure (a vacuum bag) on a smooth step: each node's
     // share of its elements' current vector areas, in the pressure pass's
     // order; the frames' energies take the pressure at their positions.
-    let s = scene(
-        r#"
-[simulation]
-end_time = 0.02
-frames = 4
-mass_scaling_dt = 2e-5
-[fabric]
-material = "carbon-prepreg-2x2"
-fibres = "trusses"
-blank = { width = 120, height = 120, cells = [12, 12] }
-[[tools]]
-name = "dome"
-geometry = { kind = "sphere", center = [0, 0, -80.5], radius = 80 }
-friction = 0.2
-[[pressure]]
-value = 0.02
-towards = "dome"
-amplitude = { kind = "smooth_step", duration = 0.02 }
-[[springs]]
-nodes = "corners"
-stiffness = 1.0
-"#,
-    );
+    let s = scene(scenes::VACUUM_DOME);
     assert!(
         unsupported(&s.model).is_empty(),
         "{:?}",
@@ -680,18 +642,7 @@ fn a_gpu_run_stopped_between_checks_reports_its_energies_where_it_stopped() {
         .max(c.kinetic)
         .max(c.external_work.abs());
     assert!(c.external_work > 0.0, "{c:?}");
-    for (what, a, b) in [
-        ("kinetic", c.kinetic, g.kinetic),
-        ("strain", c.strain, g.strain),
-        ("internal work", c.internal_work, g.internal_work),
-        ("external work", c.external_work, g.external_work),
-        ("balance", c.balance_error, g.balance_error),
-    ] {
-        assert!(
-            (a - b).abs() <= 1e-9 * scale,
-            "{what}: CPU {a:e}, GPU {b:e}"
-        );
-    }
+    assert_close_energies(&c, &g, scale);
 }
 
 #[test]

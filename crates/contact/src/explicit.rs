@@ -794,7 +794,10 @@ impl ExplicitContact {
         }
         PhaseTimer::lap(&mut self.phases, ContactPhase::Projection);
         if self.constraints.is_empty() {
+            // A stack's ply pass may still press nodes onto a tool (its
+            // supports): their force is the tool's too.
             self.ply_pass(x, v, mass, movable, dt, tau, tool_mass_factor);
+            self.add_impulse(dt);
             return Ok(ContactStep::default());
         }
         let mut step = ContactStep::default();
@@ -879,14 +882,19 @@ impl ExplicitContact {
         if self.plies.is_some() {
             self.ply_friction(x, v, mass, movable, dt, tau);
         }
-        // Over the step to t_new, so that the impulse between two frames
-        // over their time apart is the mean force, exact for a constant one.
-        // (The tool's momentum moves by f·Δt_mean: the two sums differ by
-        // half the change of the step between the frames, times f.)
+        self.add_impulse(dt);
+        Ok(step)
+    }
+
+    /// Adds each tool's force over the step to its impulse: over the step
+    /// to t_new, so that the impulse between two frames over their time
+    /// apart is the mean force, exact for a constant one. (The tool's
+    /// momentum moves by f·Δt_mean: the two sums differ by half the change
+    /// of the step between the frames, times f.)
+    fn add_impulse(&mut self, dt: f64) {
         for (state, f) in self.tool_state.iter_mut().zip(&self.tool_force) {
             state.impulse += f * dt;
         }
-        Ok(step)
     }
 
     /// Adds to the constraint set every (node, tool) pair of the candidates

@@ -351,7 +351,8 @@ pub struct PlySummary {
     /// Largest accumulated slip of its nodes on the ply below (mm; 0 for
     /// the bottom ply).
     pub max_slip_mm: f64,
-    /// Largest contact pressure of a neighbouring ply on its nodes (MPa).
+    /// Largest contact pressure of the ply below on its nodes (MPa; 0 for
+    /// the bottom ply).
     pub max_pressure_mpa: f64,
     /// Largest depth of a node of it or of the ply below inside the other
     /// (mm; 0 for the bottom ply), over the run's checks so far (every

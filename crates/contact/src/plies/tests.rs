@@ -488,3 +488,59 @@ fn a_shortened_step_keeps_the_rows_give() {
         }
     }
 }
+
+/// A dormant row joins the solve once the corrections so far close it by
+/// more than the tolerance, in its order, with records that no sweep may
+/// pass over; one they leave open, or close by less, waits.
+#[test]
+fn a_dormant_row_closed_by_the_solve_joins_it() {
+    let row = |slave: u32, gap: f64| Constraint {
+        slave,
+        masters: [0, 1, 2],
+        w: [0.5, 0.25, 0.25],
+        normal: Vector3::z(),
+        gap,
+        mu: 0.0,
+        mass: 1.0,
+        inv: [1.0; 4],
+        slip_node: slave,
+        search: 0,
+        shift: 0.0,
+        compliance: 0.0,
+    };
+    // The face's nodes pushed up by 2e-3 mm (node 1 by 1e-3 more), the
+    // slaves not at all: each row closes by 2.25e-3 mm.
+    let mut dx = vec![Vector3::zeros(); 6];
+    dx[0].z = 2e-3;
+    dx[1].z = 3e-3;
+    dx[2].z = 2e-3;
+    let mut dormant = vec![row(3, 2.2e-3), row(4, 2.3e-3), row(5, 1e-3)];
+    let mut rows = vec![row(3, -1e-3)];
+    let (mut seen, mut last) = (vec![0.5], vec![0.25]);
+    let tolerance = 1e-5;
+    assert!(wake(
+        &mut dormant,
+        &mut rows,
+        &dx,
+        tolerance,
+        &mut seen,
+        &mut last
+    ));
+    // 2.2e-3 − 2.25e-3 and 1e-3 − 2.25e-3 are closed, 2.3e-3 is not.
+    let slaves = |r: &[Constraint]| r.iter().map(|c| c.slave).collect::<Vec<_>>();
+    assert_eq!(slaves(&rows), [3, 3, 5]);
+    assert_eq!(slaves(&dormant), [4]);
+    assert_eq!(seen, [0.5, f64::NEG_INFINITY, f64::NEG_INFINITY]);
+    assert_eq!(last, [0.25, 0.0, 0.0]);
+    // Within the tolerance: not closed.
+    let mut dormant = vec![row(3, 2.25e-3 - 0.5 * tolerance)];
+    assert!(!wake(
+        &mut dormant,
+        &mut rows,
+        &dx,
+        tolerance,
+        &mut seen,
+        &mut last
+    ));
+    assert_eq!(rows.len(), 3);
+}

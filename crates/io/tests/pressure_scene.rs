@@ -163,3 +163,74 @@ fn scene_json_round_trip(
         Scene::from_spec(serde_json::from_str(&json).unwrap(), Path::new("x.toml")).unwrap();
     (scene.model.pressure, again.model.pressure)
 }
+
+/// On a stack a pressure loads only its outer ply on the side it comes
+/// from: a bag over three plies on a floor presses the floor with 1 000 N,
+/// not 3 000 N, and one pushing up loads the bottom ply. A selection
+/// narrows within that ply, and one of another ply is an error naming it.
+#[test]
+fn a_pressure_on_a_stack_loads_its_outer_ply_on_the_side_it_comes_from() {
+    let stack = |pressure: &str| {
+        let text = format!(
+            r#"
+[simulation]
+end_time = 0.01
+
+[fabric]
+material = "glass-serge-4x3"
+fibres = "trusses"
+blank = {{ width = 100, height = 100, cells = [4, 4] }}
+
+[stack]
+[[stack.ply]]
+name = "a"
+[[stack.ply]]
+name = "b"
+orientation_deg = 90
+[[stack.ply]]
+name = "c"
+
+[[tools]]
+name = "floor"
+geometry = {{ kind = "plane", point = [0, 0, -1], normal = [0, 0, 1] }}
+
+[[pressure]]
+{pressure}
+"#
+        );
+        Scene::parse(&text, Path::new("bag.toml"), &[])
+    };
+    let loaded_ply = |scene: &Scene| {
+        let p = &scene.model.pressure[0];
+        let plies: Vec<usize> = (0..p.len())
+            .map(|e| {
+                let n = p.element(e)[0];
+                let ply = scene
+                    .model
+                    .plies
+                    .iter()
+                    .position(|ply| ply.nodes.contains(&n));
+                ply.expect("a ply's node")
+            })
+            .collect();
+        assert!(plies.windows(2).all(|w| w[0] == w[1]), "{plies:?}");
+        plies[0]
+    };
+    let down = stack("value = 0.1\ntowards = \"floor\"").unwrap();
+    assert_eq!(loaded_ply(&down), 2);
+    let f = total(&down);
+    assert!((f - Vector3::new(0.0, 0.0, -1000.0)).norm() < 1e-9, "{f:?}");
+    let up = stack("value = 0.1\nside = \"+\"").unwrap();
+    assert_eq!(loaded_ply(&up), 0);
+    assert!((total(&up) - Vector3::new(0.0, 0.0, 1000.0)).norm() < 1e-9);
+    // Two plies named: the outer one of them is loaded.
+    let named = stack("value = 0.1\nside = \"-\"\nnodes = [\"b\", \"c\"]").unwrap();
+    assert_eq!(loaded_ply(&named), 2);
+    assert!((total(&named) - Vector3::new(0.0, 0.0, -1000.0)).norm() < 1e-9);
+    let inner = stack("value = 0.1\ntowards = \"floor\"\nnodes = \"b\"").unwrap_err();
+    let message = inner.to_string();
+    assert!(
+        message.contains("pressure[0].nodes") && message.contains("top ply `c`"),
+        "{message}"
+    );
+}

@@ -163,7 +163,74 @@ fn pressure(
             facing < 0.0
         }
     };
+    if model.plies.len() > 1 {
+        return outer_ply_pressure(
+            at,
+            here,
+            model,
+            &plus,
+            selected.as_deref(),
+            flip,
+            p,
+            amplitude,
+        );
+    }
     Ok(if flip { load(true) } else { plus })
+}
+
+/// A `[[pressure]]` on a stack: on its outer ply on the side the pressure
+/// comes from, the top ply for one pushing down the stack and the bottom
+/// ply for one pushing up (`plus`: the load on every ply unflipped, for
+/// its direction). A bag presses the laminate, not each ply: loaded ply by
+/// ply, a stack of n plies pressed the tool under it n times as hard, and
+/// each interface by the plies above it. `selected` narrows the loaded
+/// elements within that ply.
+#[allow(clippy::too_many_arguments)]
+fn outer_ply_pressure(
+    at: &Locator<'_>,
+    here: &str,
+    model: &Model,
+    plus: &drape_model::PressureLoad,
+    selected: Option<&[u32]>,
+    flip: bool,
+    p: &PressureSpec,
+    amplitude: drape_model::Amplitude,
+) -> Result<drape_model::PressureLoad, SceneError> {
+    let up = model.stack_up();
+    let along_up: f64 = (0..plus.len())
+        .map(|e| drape_model::pressure::vector_area(plus.element(e), &model.x0).dot(&up))
+        .sum();
+    let pushes_up = (along_up > 0.0) != flip;
+    let (ply, which) = if pushes_up {
+        (model.plies.first(), "bottom")
+    } else {
+        (model.plies.last(), "top")
+    };
+    let ply = ply.expect("a stack has plies");
+    let mut chosen = vec![selected.is_none(); model.node_count()];
+    for &n in selected.unwrap_or(&[]) {
+        if let Some(c) = chosen.get_mut(n as usize) {
+            *c = true;
+        }
+    }
+    let nodes: Vec<u32> = ply.nodes.clone().filter(|&n| chosen[n as usize]).collect();
+    let load =
+        drape_model::PressureLoad::on_membranes(model, Some(&nodes), flip, p.value, amplitude);
+    if load.is_empty() {
+        return Err(at.error(
+            &format!("{here}.nodes"),
+            format!(
+                "on a stack a pressure acts on its outer ply on the side it comes from: this one \
+                 pushes {} the stack, onto its {which} ply `{}`, and the selection has no element \
+                 of that ply (name a set of `{}`, e.g. `{}.left`, or leave `nodes` out)",
+                if pushes_up { "up" } else { "down" },
+                ply.name,
+                ply.name,
+                ply.name
+            ),
+        ));
+    }
+    Ok(load)
 }
 
 /// The nodes `held`, grouped by their share of the blank's outline (mm):

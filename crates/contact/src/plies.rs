@@ -431,6 +431,19 @@ struct Constraint {
     compliance: f64,
 }
 
+impl Constraint {
+    /// The slave's correction `dx` relative to its face's point.
+    fn relative(&self, dx: &[Vector3<f64>]) -> Vector3<f64> {
+        dx[self.slave as usize]
+            - self
+                .masters
+                .iter()
+                .zip(&self.w)
+                .map(|(&j, w)| dx[j as usize] * *w)
+                .sum::<Vector3<f64>>()
+    }
+}
+
 /// A constraint's forces at a pass, for the next pass to start from.
 #[derive(Debug, Clone, Copy, Default)]
 struct Warm {
@@ -1011,13 +1024,7 @@ impl PlyContact {
                 {
                     continue;
                 }
-                let rel = dx[c.slave as usize]
-                    - c.masters
-                        .iter()
-                        .zip(&c.w)
-                        .map(|(&j, w)| dx[j as usize] * *w)
-                        .sum::<Vector3<f64>>();
-                let g = c.gap + c.normal.dot(&rel) + c.compliance * c.mu / c.mass;
+                let g = c.gap + c.normal.dot(&c.relative(dx)) + c.compliance * c.mu / c.mass;
                 let mu = (c.mu - NORMAL_OMEGA * g * c.mass / (1.0 + c.compliance)).max(0.0);
                 let d = mu - c.mu;
                 last[k] = d.abs();
@@ -1397,13 +1404,7 @@ fn wake(
 ) -> bool {
     let before = rows.len();
     dormant.retain(|c| {
-        let rel = dx[c.slave as usize]
-            - c.masters
-                .iter()
-                .zip(&c.w)
-                .map(|(&j, w)| dx[j as usize] * *w)
-                .sum::<Vector3<f64>>();
-        let closed = c.gap + c.normal.dot(&rel) < -tolerance;
+        let closed = c.gap + c.normal.dot(&c.relative(dx)) < -tolerance;
         if closed {
             rows.push(*c);
         }

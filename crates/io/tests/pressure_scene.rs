@@ -10,6 +10,11 @@ use nalgebra::Vector3;
 /// A 100 × 100 mm blank in z = 0 over a floor at z = −1, with `pressure`
 /// appended (its first line is line 15).
 fn scene(pressure: &str) -> Result<Scene, SceneError> {
+    scene_of("", pressure)
+}
+
+/// [`scene`] with `stack` (whole lines) before the floor.
+fn scene_of(stack: &str, pressure: &str) -> Result<Scene, SceneError> {
     let text = format!(
         r#"
 [simulation]
@@ -20,7 +25,7 @@ material = "glass-serge-4x3"
 fibres = "trusses"
 blank = {{ width = 100, height = 100, cells = [4, 4] }}
 
-[[tools]]
+{stack}[[tools]]
 name = "floor"
 geometry = {{ kind = "plane", point = [0, 0, -1], normal = [0, 0, 1] }}
 
@@ -170,36 +175,9 @@ fn scene_json_round_trip(
 /// narrows within that ply, and one of another ply is an error naming it.
 #[test]
 fn a_pressure_on_a_stack_loads_its_outer_ply_on_the_side_it_comes_from() {
-    let stack = |pressure: &str| {
-        let text = format!(
-            r#"
-[simulation]
-end_time = 0.01
-
-[fabric]
-material = "glass-serge-4x3"
-fibres = "trusses"
-blank = {{ width = 100, height = 100, cells = [4, 4] }}
-
-[stack]
-[[stack.ply]]
-name = "a"
-[[stack.ply]]
-name = "b"
-orientation_deg = 90
-[[stack.ply]]
-name = "c"
-
-[[tools]]
-name = "floor"
-geometry = {{ kind = "plane", point = [0, 0, -1], normal = [0, 0, 1] }}
-
-[[pressure]]
-{pressure}
-"#
-        );
-        Scene::parse(&text, Path::new("bag.toml"), &[])
-    };
+    let plies = "[stack]\n[[stack.ply]]\nname = \"a\"\n[[stack.ply]]\nname = \"b\"\n\
+                 orientation_deg = 90\n[[stack.ply]]\nname = \"c\"\n\n";
+    let stack = |pressure: &str| scene_of(plies, pressure);
     let loaded_ply = |scene: &Scene| {
         let p = &scene.model.pressure[0];
         let plies: Vec<usize> = (0..p.len())

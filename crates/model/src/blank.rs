@@ -43,9 +43,12 @@
 //!   midpoint is not a node (an odd count), the two nearest nodes tie and
 //!   the lower id wins (smaller y on a vertical edge, smaller x on a
 //!   horizontal one).
-//! - `Meshing::Size(h)`: `round(extent/h)` cells, at least one; for the
-//!   diamond lattice `h` is the cell diagonal along x and the height must be
-//!   a whole number of the resulting diagonals.
+//! - `Meshing::Size(h)`: `h` is the length of an element's edge (a yarn
+//!   segment in a truss mesh), whatever the lattice, so plies of any
+//!   orientation meshed at one size have elements of one size:
+//!   `round(extent/h)` cells of a grid, at least one; the diamond lattice's
+//!   edge runs across its cell, so it has `round(width/(h·√2))` cell
+//!   diagonals along x, and the height must be a whole number of them.
 //! - A mesh of more than [`MAX_ELEMENTS`] elements is refused: such a
 //!   request is almost surely a unit mistake, and it would exhaust memory.
 
@@ -90,7 +93,8 @@ pub enum FibreRepresentation {
 pub enum Meshing {
     /// Cells along x and y.
     Cells([usize; 2]),
-    /// Target element size (mm).
+    /// Target element size (mm): the length of an element's edge, which
+    /// in a diamond lattice (a 45° truss mesh) is its cell diagonal over √2.
     Size(f64),
 }
 
@@ -300,7 +304,8 @@ impl RectangleBlank {
                 Ok((nx, ny))
             }
             Meshing::Size(h) => {
-                let nx = cells_for(self.width, h);
+                // The lattice's edge is its cell's side, d/√2.
+                let nx = cells_for(self.width, h * std::f64::consts::SQRT_2);
                 let d = self.width / nx as f64;
                 let ny = (self.height / d).round();
                 if ny < 1.0 || (ny * d - self.height).abs() > REL_TOL * self.height {
@@ -308,7 +313,7 @@ impl RectangleBlank {
                         "height",
                         self.height,
                         "a 45° truss mesh needs square cells: the height must be a whole multiple of the cell \
-                         diagonal width/round(width/size)",
+                         diagonal width/round(width/(size·√2)) (size is the elements' edge, the cell's side)",
                     ));
                 }
                 // Saturating conversion; an absurd count is refused later.
@@ -1028,17 +1033,52 @@ mod tests {
             FibreRepresentation::Embedded,
         );
         assert_eq!(check(&b).quads.len(), 1);
-        // Diamond: d = 100/4 = 25, height 50 = 2 diagonals.
+        // Diamond: an edge of 17 is a diagonal of 24.04, so
+        // d = 100/4 = 25, height 50 = 2 diagonals.
         let b = blank(
             100.0,
             50.0,
             45.0,
             ElementKind::Quad,
-            Meshing::Size(24.0),
+            Meshing::Size(17.0),
             FibreRepresentation::Trusses,
         );
         let m = check(&b);
         assert_eq!(m.x0.len(), 5 * 3 + 4 * 2);
+    }
+
+    /// One `element_size` gives the plies of a quasi-isotropic stack one
+    /// yarn segment length: the 0/90 grids' cell side and the ±45 diamond
+    /// lattices' (their cell diagonal over √2), each rounded to a whole
+    /// number of cells.
+    #[test]
+    fn plies_of_any_orientation_meshed_at_one_size_have_one_segment_length() {
+        for theta in [0.0, 45.0, 90.0, -45.0] {
+            let b = blank(
+                350.0,
+                350.0,
+                theta,
+                ElementKind::Quad,
+                Meshing::Size(14.6),
+                FibreRepresentation::Trusses,
+            );
+            let m = check(&b);
+            let (lo, hi) = m.trusses.iter().fold((f64::MAX, 0.0f64), |(lo, hi), t| {
+                let l = (m.x0[t.nodes[1] as usize] - m.x0[t.nodes[0] as usize]).norm();
+                (lo.min(l), hi.max(l))
+            });
+            // 0/90: 24 cells of 14.583 mm; ±45: 17 diagonals of
+            // 20.588 mm, an edge of 14.558 mm.
+            let expected = if theta == 0.0 || theta == 90.0 {
+                350.0 / 24.0
+            } else {
+                350.0 / 17.0 / std::f64::consts::SQRT_2
+            };
+            assert!(
+                (lo - expected).abs() < 1e-12 && (hi - expected).abs() < 1e-12,
+                "θ = {theta}: segments {lo}..{hi} mm, expected {expected}"
+            );
+        }
     }
 
     #[test]

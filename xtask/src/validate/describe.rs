@@ -27,8 +27,8 @@ pub fn describe(name: &str) -> Option<(&'static str, &'static str)> {
             "the single-ply runs, element by element (same mesh, stroke, mass scaling), the offset tools frictionless: RMS of the shear difference ≤ 0.5° (the issue's bound); per frame in a note, in the die's opening and on the flange, beside each single run against itself on a punch 1 µm larger (the noise floor)",
         ),
         "plies/hemisphere-four" => (
-            "four plies [0/45/90/−45] formed together on the hemisphere (as shipped; in full runs also with the ±45 plies at the 0/90 plies' element size), and the bottom ply alone, on 2 threads",
-            "the plies' distance from the positions: overlap ≤ 1 % of the thickness; no capped ply solve; full: wall time ≤ 5× one ply's, both stacks",
+            "four plies [0/45/90/−45] formed together on the hemisphere, every ply at one element size, and the bottom ply alone, on 2 threads",
+            "the plies' distance from the positions: overlap ≤ 1 % of the thickness; no capped ply solve; full: wall time ≤ 5× one ply's",
         ),
         "plies/pressed-stack" => (
             "two plies [0/90 + ±45] deep drawn under the shipped force-driven blank holder (μ_ply = 0.2)",
